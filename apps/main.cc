@@ -1,0 +1,56 @@
+// omma: compound-eye camera toolkit. The command is a table of subcommands over the library.
+#include <cstdio>
+#include <exception>
+#include <iostream>
+
+#include "apps/command.h"
+#include "omma/core/log.h"
+#include "omma/core/progress.h"
+
+namespace omma::app {
+
+void print_json(const nlohmann::json& j) {
+  std::cout << j.dump(2) << std::endl;
+}
+
+void set_json_mode(bool on) { omma::set_progress_enabled(!on); }
+
+// Pipeline order: rig files, dome design, simulation, ISP, calibration, panorama, engine.
+static const CommandEntry kCommands[] = {
+    {"rig", add_rig_command},           {"design", add_design_command},
+    {"coverage", add_coverage_command}, {"sweep", add_sweep_command},
+    {"optics", add_optics_command},     {"simulate", add_simulate_command},
+    {"link", add_link_command},         {"isp", add_isp_command},
+    {"calibrate", add_calibrate_command}, {"rig-diff", add_rig_diff_command},
+    {"pto", add_pto_command},           {"stitch", add_stitch_command},
+    {"eval", add_eval_command},         {"resolution", add_resolution_command},
+    {"run", add_run_command},           {"bench", add_bench_command},
+    {"demo", add_demo_command},
+};
+
+}  // namespace omma::app
+
+int main(int argc, char** argv) {
+  CLI::App app{"omma: design, calibrate and run compound-eye (multi-camera dome) panoramic cameras.\n"
+               "Conventions: dome axis +z, theta polar from +z, phi azimuth from +x; mm and degrees in\n"
+               "files and options; pixel centres at integer + 0.5. See README.md."};
+  app.require_subcommand(1);
+  bool verbose = false, quiet = false;
+  app.add_flag("-v,--verbose", verbose, "More log output (stderr)");
+  app.add_flag("-q,--quiet", quiet, "Only warnings and errors on stderr");
+  app.set_version_flag("--version", "omma 0.1.0");
+  for (const auto& c : omma::app::kCommands) c.add(app);
+  omma::init_logging(false, false);
+  app.parse_complete_callback([&] {
+    spdlog::set_level(verbose ? spdlog::level::debug : quiet ? spdlog::level::warn : spdlog::level::info);
+  });
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "omma: error: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,32 @@
+# omma_stage(NAME DEPS dep1 dep2 ...)
+# Builds library omma_NAME from every *.cc in the current folder except *_test.cc, and, when tests
+# are on, one GoogleTest executable omma_NAME_test from the *_test.cc files beside the sources
+# (COLMAP's foo.h / foo.cc / foo_test.cc layout). Helpers add files without touching CMake.
+function(omma_stage name)
+  cmake_parse_arguments(ARG "" "" "DEPS;TEST_DEPS" ${ARGN})
+  file(GLOB all_cc CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/*.cc)
+  file(GLOB test_cc CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/*_test.cc)
+  set(lib_cc ${all_cc})
+  if(test_cc)
+    list(REMOVE_ITEM lib_cc ${test_cc})
+  endif()
+  if(lib_cc)
+    add_library(omma_${name} STATIC ${lib_cc})
+    target_include_directories(omma_${name} PUBLIC ${PROJECT_SOURCE_DIR}/src)
+    target_link_libraries(omma_${name} PUBLIC ${ARG_DEPS})
+  else()
+    add_library(omma_${name} INTERFACE)
+    target_include_directories(omma_${name} INTERFACE ${PROJECT_SOURCE_DIR}/src)
+    target_link_libraries(omma_${name} INTERFACE ${ARG_DEPS})
+  endif()
+  if(OMMA_BUILD_TESTS AND test_cc)
+    add_executable(omma_${name}_test ${test_cc})
+    target_link_libraries(omma_${name}_test PRIVATE omma_${name} ${ARG_TEST_DEPS} GTest::gtest GTest::gtest_main)
+    target_compile_definitions(omma_${name}_test PRIVATE
+      OMMA_SOURCE_DIR="${PROJECT_SOURCE_DIR}"
+      OMMA_DATA_DIR="${PROJECT_SOURCE_DIR}/../shared/data"
+      OMMA_BINARY="$<TARGET_FILE:omma>")
+    gtest_discover_tests(omma_${name}_test WORKING_DIRECTORY ${PROJECT_BINARY_DIR} DISCOVERY_TIMEOUT 60
+                         PROPERTIES LABELS ${name})
+  endif()
+endfunction()

@@ -1,0 +1,18 @@
+#!/usr/bin/env bash
+# Installs the Debian packages omma needs, only those missing. Uses sudo when not root.
+set -euo pipefail
+pkgs=(cmake g++ ninja-build ccache pkg-config libopencv-dev libeigen3-dev libceres-dev libtbb-dev
+      libcli11-dev nlohmann-json3-dev libspdlog-dev libfmt-dev libgtest-dev libgmock-dev
+      libbenchmark-dev hugin-tools)
+missing=()
+for p in "${pkgs[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "omma: installing Debian packages: ${missing[*]}" >&2
+  sudo=""
+  [ "$(id -u)" -eq 0 ] || sudo="sudo"
+  export DEBIAN_FRONTEND=noninteractive
+  $sudo apt-get update -qq
+  $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >&2
+fi

@@ -1,0 +1,40 @@
+// Panorama output grids: which direction each output pixel looks at. Conventions: conventions.h.
+#pragma once
+
+#include <optional>
+#include <string>
+
+#include "omma/core/geometry.h"
+
+namespace omma {
+
+enum class Projection {
+  kEquirect,     // 360 x 90 deg: phi 0..360 left to right, theta 0 (dome axis) top .. 90 deg bottom
+  kVr180,        // 180 x 180 deg half-equirectangular, dome axis (+z) at the centre, right=+x, up=+y
+  kEquirectFull  // 360 x 180 deg: theta 0 top .. 180 deg bottom (full-sphere rigs)
+};
+
+Projection parse_projection(const std::string& name);  // "equirect", "vr180", "equirect-full"
+std::string to_string(Projection p);
+
+struct PanoGrid {
+  Projection projection = Projection::kVr180;
+  int width = 1080;
+  int height = 1080;
+
+  // Unit direction at continuous pixel coordinate (x, y); pixel centres are at integer + 0.5.
+  Vec3 direction(double x, double y) const;
+  Vec3 pixel_direction(int col, int row) const { return direction(col + 0.5, row + 0.5); }
+  // Continuous pixel coordinate of direction w, or nullopt if the grid does not contain w.
+  std::optional<Vec2> pixel(const Vec3& w) const;
+  // Solid angle of pixel (col,row) in steradians (for area-weighted statistics).
+  double pixel_solid_angle(int col, int row) const;
+};
+
+// Parses "WxH" (e.g. "1080x1080"); throws std::invalid_argument with a clear message.
+struct Size2 {
+  int width = 0, height = 0;
+};
+Size2 parse_size(const std::string& text);
+
+}  // namespace omma

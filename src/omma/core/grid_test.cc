@@ -1,0 +1,58 @@
+#include "omma/core/grid.h"
+
+#include <gtest/gtest.h>
+
+namespace omma {
+namespace {
+
+TEST(Grid, Vr180CentreIsDomeAxis) {
+  PanoGrid g{Projection::kVr180, 1080, 1080};
+  EXPECT_NEAR((g.direction(540, 540) - Vec3::UnitZ()).norm(), 0, 1e-12);
+  EXPECT_NEAR((g.direction(1080, 540) - Vec3::UnitX()).norm(), 0, 1e-12);  // right edge = +x
+  EXPECT_NEAR((g.direction(540, 0) - Vec3::UnitY()).norm(), 0, 1e-12);     // top edge = +y
+}
+
+TEST(Grid, EquirectTopRowIsDomeAxis) {
+  PanoGrid g{Projection::kEquirect, 1920, 512};
+  EXPECT_NEAR(g.direction(100, 0).z(), 1.0, 1e-12);
+  EXPECT_NEAR(g.direction(0, 512).z(), 0.0, 1e-12);
+  EXPECT_NEAR((g.direction(0, 512) - Vec3::UnitX()).norm(), 0, 1e-12);
+}
+
+TEST(Grid, RoundTripAllProjections) {
+  for (Projection p : {Projection::kVr180, Projection::kEquirect, Projection::kEquirectFull}) {
+    PanoGrid g{p, 640, 320};
+    for (int r = 3; r < 320; r += 37)
+      for (int c = 2; c < 640; c += 41) {
+        const Vec3 w = g.pixel_direction(c, r);
+        const auto px = g.pixel(w);
+        ASSERT_TRUE(px.has_value()) << to_string(p);
+        EXPECT_NEAR(px->x(), c + 0.5, 1e-9) << to_string(p);
+        EXPECT_NEAR(px->y(), r + 0.5, 1e-9) << to_string(p);
+      }
+  }
+}
+
+TEST(Grid, SolidAnglesSumToTheField) {
+  PanoGrid half{Projection::kEquirect, 360, 90};
+  PanoGrid vr{Projection::kVr180, 200, 200};
+  double a = 0, b = 0;
+  for (int r = 0; r < 90; ++r)
+    for (int c = 0; c < 360; ++c) a += half.pixel_solid_angle(c, r);
+  for (int r = 0; r < 200; ++r)
+    for (int c = 0; c < 200; ++c) b += vr.pixel_solid_angle(c, r);
+  EXPECT_NEAR(a, 2 * kPi, 1e-9);  // hemisphere
+  EXPECT_NEAR(b, 2 * kPi, 1e-9);
+}
+
+TEST(Grid, ParseSize) {
+  EXPECT_EQ(parse_size("1920x512").width, 1920);
+  EXPECT_EQ(parse_size("1920x512").height, 512);
+  EXPECT_THROW(parse_size("1920"), std::invalid_argument);
+  EXPECT_THROW(parse_size("-3x4"), std::invalid_argument);
+  EXPECT_THROW(parse_size("3x4junk"), std::invalid_argument);
+  EXPECT_THROW(parse_projection("fisheye"), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace omma

@@ -1,0 +1,66 @@
+// The rig model: a dome carrying N cameras, and its JSON file format.
+// Conventions (axes, angles, units, pixel centres): conventions.h. Files hold mm and degrees.
+//
+// Rig file (JSON):
+// {
+//   "format": "omma-rig", "version": 1, "name": "thesis-24",
+//   "dome": {"radius_mm": 5.0, "sphere": false, "method": "max-volume"},
+//   "cameras": [
+//     {"id": 0,
+//      "t": [0,0,1], "u": [0,1,0], "v": [-1,0,0],      // or "ypr_deg": [yaw, pitch, roll] (eq. 3.13)
+//      "position_mm": [0,0,5],
+//      "intrinsics": {"width": 250, "height": 250, "fu": 200, "fv": 200, "cu": 125, "cv": 125,
+//                     "k": [0,0,0,0,0], "aov_deg": 64}}, ...]
+// }
+// Loading validates everything and throws RigError naming the camera and field at fault.
+#pragma once
+
+#include <filesystem>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json_fwd.hpp>
+
+#include "omma/core/camera.h"
+
+namespace omma {
+
+class RigError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct DomeInfo {
+  double radius_mm = 5.0;    // outer radius of the dome the cameras sit on
+  bool sphere = false;       // full sphere (true) or hemisphere around +z (false)
+  std::string method;        // how the rig was designed (free text, e.g. "max-volume")
+};
+
+struct RigCamera {
+  int id = 0;
+  Frame frame;
+  Vec3 position_mm = Vec3::Zero();  // camera centre in the dome frame, mm
+  Intrinsics in;
+  CameraModel model() const { return CameraModel{frame, in}; }
+};
+
+struct Rig {
+  std::string name;
+  DomeInfo dome;
+  std::vector<RigCamera> cameras;
+
+  // Throws RigError if anything is inconsistent (see validate_camera).
+  void validate() const;
+};
+
+// Validates one camera: finite numbers, unit and orthogonal right-handed frame (tolerance 1e-3),
+// positive sizes and focal lengths, aov in (0, 180) degrees.
+void validate_camera(const RigCamera& cam);
+
+nlohmann::json rig_to_json(const Rig& rig);
+Rig rig_from_json(const nlohmann::json& j);  // validates
+Rig load_rig(const std::filesystem::path& path);  // validates; RigError with the path on failure
+void save_rig(const Rig& rig, const std::filesystem::path& path);  // atomic (temp file + rename)
+
+}  // namespace omma

@@ -1,0 +1,42 @@
+#include "tests/cli/cli_util.h"
+
+#include <fstream>
+#include <random>
+#include <sstream>
+#include <sys/wait.h>
+
+namespace omma::test {
+namespace fs = std::filesystem;
+
+nlohmann::json RunResult::json() const { return nlohmann::json::parse(out); }
+
+static std::string slurp(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+RunResult run_omma(const std::string& args, int timeout_s) {
+  const fs::path dir = temp_dir("run");
+  const std::string cmd = "timeout " + std::to_string(timeout_s) + " " OMMA_BINARY " " + args +
+                          " >" + (dir / "out").string() + " 2>" + (dir / "err").string() + " </dev/null";
+  const int status = std::system(cmd.c_str());
+  RunResult r;
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  r.out = slurp(dir / "out");
+  r.err = slurp(dir / "err");
+  fs::remove_all(dir);
+  return r;
+}
+
+fs::path temp_dir(const std::string& tag) {
+  std::random_device rd;
+  const fs::path p = fs::temp_directory_path() / ("omma-test-" + tag + "-" + std::to_string(rd()));
+  fs::create_directories(p);
+  return p;
+}
+
+std::string data_dir() { return OMMA_DATA_DIR; }
+
+}  // namespace omma::test

@@ -1,0 +1,26 @@
+// Helpers for command-line tests: run the built omma binary, capture stdout, stderr and exit code.
+#pragma once
+
+#include <filesystem>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+namespace omma::test {
+
+struct RunResult {
+  int exit_code = -1;
+  std::string out;  // stdout
+  std::string err;  // stderr
+  nlohmann::json json() const;  // parses `out` as exactly one JSON object (throws otherwise)
+};
+
+// Runs `omma ARGS` (ARGS is passed to /bin/sh, quote as needed) with a time limit in seconds.
+RunResult run_omma(const std::string& args, int timeout_s = 300);
+
+// A fresh empty temporary folder, removed by the caller (or left in /tmp).
+std::filesystem::path temp_dir(const std::string& tag);
+
+std::string data_dir();  // ../shared/data beside the source tree
+
+}  // namespace omma::test
