@@ -1,0 +1,63 @@
+#include "omma/core/frames.h"
+
+#include <fmt/format.h>
+#include <opencv2/imgproc.hpp>
+
+#include "omma/core/io.h"
+
+namespace omma {
+namespace fs = std::filesystem;
+
+std::string frame_filename(int id) { return fmt::format("cam_{:02d}.png", id); }
+std::string raw_frame_filename(int id) { return fmt::format("cam_{:02d}_raw.png", id); }
+
+static void check_size(const cv::Mat& m, const RigCamera& c, const fs::path& p) {
+  if (m.cols != c.in.width || m.rows != c.in.height)
+    throw IoError(fmt::format("frame '{}' is {}x{} but camera {} is {}x{} in the rig", p.string(), m.cols,
+                              m.rows, c.id, c.in.width, c.in.height));
+}
+
+std::vector<cv::Mat> load_frames(const fs::path& dir, const Rig& rig) {
+  if (!fs::is_directory(dir)) throw IoError("frames folder '" + dir.string() + "' does not exist");
+  std::vector<cv::Mat> frames;
+  for (const auto& c : rig.cameras) {
+    const fs::path p = dir / frame_filename(c.id);
+    cv::Mat m = read_image(p);
+    if (m.channels() == 1) cv::cvtColor(m, m, cv::COLOR_GRAY2BGR);
+    if (m.channels() == 4) cv::cvtColor(m, m, cv::COLOR_BGRA2BGR);
+    if (m.depth() != CV_8U && m.depth() != CV_16U)
+      throw IoError("frame '" + p.string() + "' must be 8- or 16-bit");
+    check_size(m, c, p);
+    frames.push_back(m);
+  }
+  return frames;
+}
+
+std::vector<cv::Mat> load_raw_frames(const fs::path& dir, const Rig& rig) {
+  if (!fs::is_directory(dir)) throw IoError("frames folder '" + dir.string() + "' does not exist");
+  std::vector<cv::Mat> frames;
+  for (const auto& c : rig.cameras) {
+    const fs::path p = dir / raw_frame_filename(c.id);
+    cv::Mat m = read_image(p);
+    if (m.type() != CV_16UC1)
+      throw IoError("raw frame '" + p.string() + "' must be a 16-bit single-channel Bayer image");
+    check_size(m, c, p);
+    frames.push_back(m);
+  }
+  return frames;
+}
+
+cv::Mat to_float01(const cv::Mat& image) {
+  cv::Mat out;
+  const double scale = image.depth() == CV_8U ? 1.0 / 255 : image.depth() == CV_16U ? 1.0 / 65535 : 1.0;
+  image.convertTo(out, CV_MAKETYPE(CV_32F, image.channels()), scale);
+  return out;
+}
+
+cv::Mat to_u8(const cv::Mat& image01) {
+  cv::Mat out;
+  image01.convertTo(out, CV_MAKETYPE(CV_8U, image01.channels()), 255.0);
+  return out;
+}
+
+}  // namespace omma

@@ -1,0 +1,36 @@
+// The camera-frames folder: the contract between the simulator, the ISP, the stitcher, the
+// calibrator and the engine's image-sequence sources.
+//
+//   DIR/cam_00.png, cam_01.png, ...   one RGB image per camera, named by camera id (2+ digits),
+//                                     8- or 16-bit, size = the camera's intrinsics width x height
+//   DIR/cam_00_raw.png, ...           optional: 16-bit single-channel RGGB Bayer, 10-bit values
+//   DIR/truth.png                     optional: the ideal panorama (simulator ground truth)
+//   DIR/rig.json, DIR/rig_true.json   optional: nominal rig, and the true (perturbed) rig
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "omma/core/rig.h"
+
+namespace omma {
+
+std::string frame_filename(int camera_id);      // "cam_07.png"
+std::string raw_frame_filename(int camera_id);  // "cam_07_raw.png"
+
+// Loads DIR/cam_XX.png for every camera of `rig`, in rig order, as stored (8U or 16U, 3 channels;
+// gray images are expanded to 3 channels). Throws IoError naming the file if one is missing,
+// unreadable, or not the size the rig says.
+std::vector<cv::Mat> load_frames(const std::filesystem::path& dir, const Rig& rig);
+// Same for the raw Bayer frames (CV_16UC1).
+std::vector<cv::Mat> load_raw_frames(const std::filesystem::path& dir, const Rig& rig);
+
+// 8U / 16U / 32F image -> CV_32F with the same channels, values in [0, 1].
+cv::Mat to_float01(const cv::Mat& image);
+// CV_32F [0, 1] -> CV_8U (rounded, saturated).
+cv::Mat to_u8(const cv::Mat& image01);
+
+}  // namespace omma

@@ -1,0 +1,30 @@
+#include "omma/pano/contributors.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace omma::pano {
+
+double orthographic_distance(const Vec3& q, const Vec3& c, const Vec3& w) {
+  const Vec3 d = q - c;
+  return (d - d.dot(w) * w).norm();
+}
+
+std::vector<Contributor> find_contributors(const Rig& rig, const Vec3& w_in, const SearchOptions& opt) {
+  const Vec3 w = w_in.normalized();
+  std::vector<Contributor> out;
+  for (size_t i = 0; i < rig.cameras.size(); ++i) {
+    const CameraModel cam = rig.cameras[i].model();
+    if (!cam.sees(w)) continue;  // eq. 2.3
+    const auto px = cam.project(w);
+    if (!px || !cam.inside(*px)) continue;
+    Contributor c;
+    c.camera = static_cast<int>(i);
+    c.px = *px;
+    c.r = std::max(opt.min_r_mm, orthographic_distance(opt.q, rig.cameras[i].position_mm, w));
+    out.push_back(c);
+  }
+  return out;
+}
+
+}  // namespace omma::pano
