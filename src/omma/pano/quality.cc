@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <limits>
+#include <vector>
 #include <stdexcept>
 
 #include <opencv2/imgproc.hpp>
@@ -44,24 +45,30 @@ double psnr_db(const cv::Mat& image, const cv::Mat& truth, const cv::Mat& mask) 
 }
 
 double ssim(const cv::Mat& image, const cv::Mat& truth) {
-  auto [x, y] = as_float_pair(image, truth);
+  auto [a, b] = as_float_pair(image, truth);
+  std::vector<cv::Mat> xs, ys;
+  cv::split(a, xs);
+  cv::split(b, ys);
   const double c1 = 0.01 * 0.01, c2 = 0.03 * 0.03;
   auto blur = [](const cv::Mat& m) {
     cv::Mat out;
     cv::GaussianBlur(m, out, cv::Size(11, 11), 1.5, 1.5, cv::BORDER_REFLECT);
     return out;
   };
-  const cv::Mat mx = blur(x), my = blur(y);
-  const cv::Mat mx2 = mx.mul(mx), my2 = my.mul(my), mxy = mx.mul(my);
-  const cv::Mat sx2 = blur(x.mul(x)) - mx2, sy2 = blur(y.mul(y)) - my2, sxy = blur(x.mul(y)) - mxy;
-  cv::Mat num = (2 * mxy + c1).mul(2 * sxy + c2);
-  cv::Mat den = (mx2 + my2 + c1).mul(sx2 + sy2 + c2);
-  cv::Mat map;
-  cv::divide(num, den, map);
-  const cv::Scalar m = cv::mean(map);
   double s = 0;
-  for (int c = 0; c < x.channels(); ++c) s += m[c];
-  return s / x.channels();
+  for (size_t ch = 0; ch < xs.size(); ++ch) {  // one channel at a time (Wang et al. 2004, eq. 13)
+    const cv::Mat& x = xs[ch];
+    const cv::Mat& y = ys[ch];
+    const cv::Mat mx = blur(x), my = blur(y);
+    const cv::Mat mx2 = mx.mul(mx), my2 = my.mul(my), mxy = mx.mul(my);
+    const cv::Mat sx2 = blur(x.mul(x)) - mx2, sy2 = blur(y.mul(y)) - my2, sxy = blur(x.mul(y)) - mxy;
+    const cv::Mat num = (2 * mxy + c1).mul(2 * sxy + c2);
+    const cv::Mat den = (mx2 + my2 + c1).mul(sx2 + sy2 + c2);
+    cv::Mat map;
+    cv::divide(num, den, map);
+    s += cv::mean(map)[0];
+  }
+  return s / static_cast<double>(xs.size());
 }
 
 EvalResult evaluate(const cv::Mat& image, const cv::Mat& truth, const cv::Mat& seam) {
