@@ -1,11 +1,14 @@
 #include "omma/pano/stitch.h"
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <stdexcept>
 #include <string>
 
 #include <fmt/format.h>
 #include <opencv2/imgproc.hpp>
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include "omma/core/frames.h"
@@ -55,6 +58,38 @@ cv::Vec3f sample_bilinear(const cv::Mat& img, const Vec2& px) {
          fy * ((1 - fx) * at(x0, y0 + 1) + fx * at(x0 + 1, y0 + 1));
 }
 
+namespace {
+
+// One output pixel: weights of the method (weights.h), bilinear samples, weighted sum.
+cv::Vec3f blend_pixel(const Rig& rig, const std::vector<cv::Mat>& frames, const StitchOptions& opt,
+                      const std::vector<Contributor>& cs,
+                      const std::array<const std::vector<Contributor>*, 4>& nb) {
+  std::vector<double> w = method_weights(rig, opt.method, cs, nb, opt.blend);
+  std::vector<cv::Vec3f> samples(cs.size());
+  for (size_t i = 0; i < cs.size(); ++i)
+    if (w[i] > 0) samples[i] = sample_bilinear(frames[cs[i].camera], cs[i].px);
+  if (opt.method == Method::kSad) {  // eq. 4.17-4.18 over the cameras with a non-zero prior
+    std::vector<Tap> taps;
+    std::vector<double> gray;
+    std::vector<size_t> index;
+    for (size_t i = 0; i < cs.size(); ++i) {
+      if (w[i] <= 0) continue;
+      taps.push_back({cs[i].camera, cs[i].px, w[i]});
+      gray.push_back(luma(samples[i]));
+      index.push_back(i);
+    }
+    const std::vector<double> ws = sad_weights(taps, gray, opt.blend.sad_epsilon);
+    std::fill(w.begin(), w.end(), 0.0);
+    for (size_t k = 0; k < index.size(); ++k) w[index[k]] = ws[k];
+  }
+  cv::Vec3d sum(0, 0, 0);
+  for (size_t i = 0; i < cs.size(); ++i)
+    if (w[i] > 0) sum += w[i] * cv::Vec3d(samples[i]);
+  return cv::Vec3f(sum);
+}
+
+}  // namespace
+
 cv::Mat stitch(const Rig& rig, const std::vector<cv::Mat>& frames_in, const StitchOptions& opt) {
   check_frames(rig, frames_in);
   const PanoGrid& grid = opt.grid;
@@ -65,57 +100,32 @@ cv::Mat stitch(const Rig& rig, const std::vector<cv::Mat>& frames_in, const Stit
 
   cv::Mat pano(grid.height, grid.width, CV_32FC3, cv::Scalar::all(0));
   Progress progress("stitch " + to_string(opt.method), grid.height, opt.progress);
-  tbb::parallel_for(0, grid.height, [&](int row) {
-    // Contributors of this row and, for the MRF family, of the rows above and below (eq. 4.8's
-    // 4-neighbourhood); plain and recomputed per row for readability.
-    auto row_contributors = [&](int r) {
-      std::vector<std::vector<Contributor>> cs(grid.width);
-      if (r < 0 || r >= grid.height) return cs;
-      for (int c = 0; c < grid.width; ++c)
-        cs[c] = find_contributors(rig, grid.pixel_direction(c, r), opt.blend.search);
-      return cs;
-    };
-    const auto here = row_contributors(row);
-    std::vector<std::vector<Contributor>> above, below;
-    if (needs_neighbours) {
-      above = row_contributors(row - 1);
-      below = row_contributors(row + 1);
+  // Work in blocks of rows. Each block finds the contributors (eq. 2.3, 5.21-5.26) of its rows and,
+  // for the MRF family, of the row above and below it (eq. 4.8's 4-neighbourhood), then blends.
+  tbb::parallel_for(tbb::blocked_range<int>(0, grid.height, 8), [&](const tbb::blocked_range<int>& block) {
+    const int first = needs_neighbours ? std::max(0, block.begin() - 1) : block.begin();
+    const int last = needs_neighbours ? std::min(grid.height, block.end() + 1) : block.end();
+    std::vector<std::vector<std::vector<Contributor>>> rows(last - first);
+    for (int r = first; r < last; ++r) {
+      auto& cs = rows[r - first];
+      cs.resize(grid.width);
+      for (int c = 0; c < grid.width; ++c) cs[c] = find_contributors(rig, grid.pixel_direction(c, r), opt.blend.search);
     }
-    for (int col = 0; col < grid.width; ++col) {
-      const auto& cs = here[col];
-      if (cs.empty()) continue;
-      std::array<const std::vector<Contributor>*, 4> nb{nullptr, nullptr, nullptr, nullptr};
-      if (needs_neighbours) {
-        const auto n = grid_neighbours(grid, col, row);  // left, right, up, down
-        if (n[0][0] >= 0) nb[0] = &here[n[0][0]];
-        if (n[1][0] >= 0) nb[1] = &here[n[1][0]];
-        if (n[2][0] >= 0) nb[2] = &above[n[2][0]];
-        if (n[3][0] >= 0) nb[3] = &below[n[3][0]];
-      }
-      std::vector<double> w = method_weights(rig, opt.method, cs, nb, opt.blend);
-      std::vector<cv::Vec3f> samples(cs.size());
-      for (size_t i = 0; i < cs.size(); ++i)
-        if (w[i] > 0 || opt.method == Method::kSad) samples[i] = sample_bilinear(frames[cs[i].camera], cs[i].px);
-      if (opt.method == Method::kSad) {  // eq. 4.17-4.18 over the cameras with a non-zero prior
-        std::vector<Tap> taps;
-        std::vector<double> gray;
-        std::vector<size_t> index;
-        for (size_t i = 0; i < cs.size(); ++i) {
-          if (w[i] <= 0) continue;
-          taps.push_back({cs[i].camera, cs[i].px, w[i]});
-          gray.push_back(luma(samples[i]));
-          index.push_back(i);
+    auto at = [&](int c, int r) -> const std::vector<Contributor>* { return &rows[r - first][c]; };
+    for (int row = block.begin(); row < block.end(); ++row) {
+      for (int col = 0; col < grid.width; ++col) {
+        const auto& cs = *at(col, row);
+        if (cs.empty()) continue;
+        std::array<const std::vector<Contributor>*, 4> nb{nullptr, nullptr, nullptr, nullptr};
+        if (needs_neighbours) {
+          const auto n = grid_neighbours(grid, col, row);  // left, right, up, down
+          for (int k = 0; k < 4; ++k)
+            if (n[k][0] >= 0) nb[k] = at(n[k][0], n[k][1]);
         }
-        const std::vector<double> ws = sad_weights(taps, gray, opt.blend.sad_epsilon);
-        std::fill(w.begin(), w.end(), 0.0);
-        for (size_t k = 0; k < index.size(); ++k) w[index[k]] = ws[k];
+        pano.at<cv::Vec3f>(row, col) = blend_pixel(rig, frames, opt, cs, nb);
       }
-      cv::Vec3d sum(0, 0, 0);
-      for (size_t i = 0; i < cs.size(); ++i)
-        if (w[i] > 0) sum += w[i] * cv::Vec3d(samples[i]);
-      pano.at<cv::Vec3f>(row, col) = cv::Vec3f(sum);
+      progress.step();
     }
-    progress.step();
   });
   progress.finish();
   return pano;
