@@ -151,6 +151,10 @@ Sampling make_sampling(double step_rad, bool sphere) {
   s.sphere = sphere;
   s.rows = static_cast<int>(std::ceil(s.theta_max() / step_rad - 1e-9)) + 1;
   s.cols = std::max(1, static_cast<int>(std::lround(2 * kPi / step_rad)));
+  for (int k = 0; k < s.cols; ++k) {
+    s.cos_phi.push_back(std::cos(s.phi(k)));
+    s.sin_phi.push_back(std::sin(s.phi(k)));
+  }
   return s;
 }
 
@@ -182,11 +186,8 @@ struct RowResult {
 std::vector<RowResult> scan(const Rig& rig, const Sampling& s, double distance, bool count,
                             bool rvir) {
   const std::vector<Cone> cones = make_cones(rig);
-  std::vector<double> cphi(s.cols), sphi(s.cols);
-  for (int k = 0; k < s.cols; ++k) {
-    cphi[k] = std::cos(s.phi(k));
-    sphi[k] = std::sin(s.phi(k));
-  }
+  const std::vector<double>& cphi = s.cos_phi;
+  const std::vector<double>& sphi = s.sin_phi;
   std::vector<RowResult> rows(s.rows);
   tbb::parallel_for(tbb::blocked_range<int>(0, s.rows), [&](const tbb::blocked_range<int>& range) {
     for (int j = range.begin(); j != range.end(); ++j) {
@@ -331,11 +332,8 @@ cv::Mat render_coverage_map(const cv::Mat& counts, const std::string& title) {
 double covering_radius(const std::vector<Vec3>& axes, const Sampling& s) {
   if (axes.empty()) return kPi;
   std::vector<double> row_min(s.rows, 1.0);
-  std::vector<double> cphi(s.cols), sphi(s.cols);
-  for (int k = 0; k < s.cols; ++k) {
-    cphi[k] = std::cos(s.phi(k));
-    sphi[k] = std::sin(s.phi(k));
-  }
+  const std::vector<double>& cphi = s.cos_phi;
+  const std::vector<double>& sphi = s.sin_phi;
   tbb::parallel_for(tbb::blocked_range<int>(0, s.rows), [&](const tbb::blocked_range<int>& range) {
     for (int j = range.begin(); j != range.end(); ++j) {
       const double th = s.theta(j), st = std::sin(th), ct = std::cos(th);
@@ -351,6 +349,54 @@ double covering_radius(const std::vector<Vec3>& axes, const Sampling& s) {
     }
   });
   return std::acos(std::clamp(*std::min_element(row_min.begin(), row_min.end()), -1.0, 1.0));
+}
+
+namespace {
+
+// Index of an axis within reach of w (cos_reach = cos(reach)), or -1. Tries `hint` first: the
+// neighbouring sample is usually covered by the same axis.
+inline int find_cover(const std::vector<Vec3>& axes, const Vec3& w, double cos_reach, int hint) {
+  if (hint >= 0 && w.dot(axes[hint]) >= cos_reach) return hint;
+  for (size_t i = 0; i < axes.size(); ++i)
+    if (w.dot(axes[i]) >= cos_reach) return static_cast<int>(i);
+  return -1;
+}
+
+// First row (from the pole) with an uncovered sample, or s.rows; rows scanned in order.
+int first_uncovered_row(const std::vector<Vec3>& axes, const Sampling& s, double reach,
+                        int from_row) {
+  if (axes.empty()) return 0;
+  const double cr = std::cos(reach);
+  int hint = -1;
+  for (int j = std::max(0, from_row); j < s.rows; ++j) {
+    const double th = s.theta(j), st = std::sin(th), ct = std::cos(th);
+    const int ncols = (st < 1e-12) ? 1 : s.cols;
+    for (int k = 0; k < ncols; ++k) {
+      const Vec3 w(st * s.cos_phi[k], st * s.sin_phi[k], ct);
+      hint = find_cover(axes, w, cr, hint);
+      if (hint < 0) return j;
+    }
+  }
+  return s.rows;
+}
+
+}  // namespace
+
+bool covers(const std::vector<Vec3>& axes, const Sampling& s, double reach) {
+  return first_uncovered_row(axes, s, reach, 0) == s.rows;
+}
+
+double first_uncovered_theta(const std::vector<Vec3>& axes, const Sampling& s, double reach,
+                             double from_theta) {
+  const int from = std::isinf(from_theta) ? s.rows
+                                          : static_cast<int>(std::floor(from_theta / s.step_rad));
+  const int j = first_uncovered_row(axes, s, reach, std::min(from, s.rows));
+  return j == s.rows ? kInfinity : s.theta(j);
+}
+
+double sampling_radius(const Sampling& s) {
+  // Half the diagonal of a sample cell (phi spacing on the sphere is sin(theta) step <= step).
+  return std::sqrt(0.5) * std::max(s.step_rad, 2 * kPi / s.cols);
 }
 
 }  // namespace omma::design

@@ -25,6 +25,7 @@ struct Sampling {
   double step_rad = deg2rad(0.1);
   bool sphere = false;
   int rows = 0, cols = 0;  // theta samples (pole and rim included), phi samples
+  std::vector<double> cos_phi, sin_phi;  // per column (filled by make_sampling)
   double theta_max() const { return sphere ? kPi : kPi / 2; }
   double theta(int row) const;  // row * step, the last row clamped to theta_max
   double phi(int col) const { return col * step_rad; }
@@ -73,5 +74,15 @@ cv::Vec3b coverage_color(int count, int max_count);
 // i.e. the largest angle from any sampled direction of the FOV to its nearest axis, in radians.
 // A radial rig with equal cameras covers distance R exactly when this is <= reach_angle(R).
 double covering_radius(const std::vector<Vec3>& axes, const Sampling& s);
+// Does every sample lie within `reach` (radians) of some axis? Stops at the first gap.
+bool covers(const std::vector<Vec3>& axes, const Sampling& s, double reach);
+// Polar angle (radians) of the first sample row, from the pole, holding a direction farther than
+// `reach` from every axis; +infinity when all are within reach ("theta_uc" of eq. 3.6). Rows
+// above from_theta are assumed covered (not scanned).
+double first_uncovered_theta(const std::vector<Vec3>& axes, const Sampling& s, double reach,
+                             double from_theta = 0);
+// Largest distance from any direction of the field of view to the nearest sample (radians):
+// a conservative check adds it to the sampled covering radius.
+double sampling_radius(const Sampling& s);
 
 }  // namespace omma::design

@@ -66,9 +66,9 @@ Design design_layered(const DesignParams& p);
 Design design_min_cameras(const DesignParams& p);
 Design design_max_volume(const DesignParams& p);
 Design design_cvt(const DesignParams& p);
-Design design(Method m, const DesignParams& p);
+Design design_rig(Method m, const DesignParams& p);
 
-// Only the camera count (faster; used by sweeps). Same result as design(m, p).rig.cameras.size().
+// Only the camera count (faster; used by sweeps). Same result as design_rig(m, p).rig.cameras.size().
 int cameras_needed(Method m, const DesignParams& p);
 
 }  // namespace omma::design
