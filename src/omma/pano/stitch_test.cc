@@ -52,9 +52,12 @@ TEST(PanoStitch, FarFieldSmoothSceneAllMethods) {
     const PanoGrid grid{p, p == Projection::kEquirect ? 256 : 128, p == Projection::kEquirect ? 64 : 128};
     const Scene s = far_field(testing::smooth_texture(), grid, 96);
     const auto r = run_all(s, p == Projection::kEquirect ? "smooth equirect" : "smooth vr180");
+    // Measured: equirect 55.4 dB for every method (limited by the texture's own singularity at the
+    // pole, row 0), vr180 79.9 dB; seam band 88-90 dB. Thresholds 2-3 dB below.
     for (const auto& [m, e] : r) {
-      EXPECT_GT(e.psnr_db, 40.0) << to_string(m);
-      EXPECT_GT(e.ssim, 0.99) << to_string(m);
+      EXPECT_GT(e.psnr_db, p == Projection::kEquirect ? 53.0 : 77.0) << to_string(m);
+      EXPECT_GT(e.seam_psnr_db, 85.0) << to_string(m);
+      EXPECT_GT(e.ssim, 0.998) << to_string(m);
     }
   }
 }
