@@ -147,7 +147,16 @@ TEST(PanoMaps, BoundaryMapHighAtParallaxEdgeLowOnFlatScene) {
   // Every method against the ideal panorama of the parallax scene (reported, see the note).
   Scene s{rig, parallax, truth, grid};
   const auto r = run_all(s, "parallax vr180");
-  for (const auto& [m, e] : r) EXPECT_GT(e.psnr_db, 20.0) << to_string(m);
+  for (const auto& [m, e] : r) EXPECT_GT(e.psnr_db, 26.0) << to_string(m);  // measured 27.96-29.85 dB
+  // Ghosting: PSNR on the edge band of the near object, per method.
+  for (Method m : all_methods()) {
+    StitchOptions opt;
+    opt.method = m;
+    opt.grid = grid;
+    opt.progress = false;
+    std::printf("parallax edge band     %-14s PSNR %6.2f dB\n", to_string(m).c_str(),
+                psnr_db(stitch(rig, parallax, opt), truth, edge));
+  }
 }
 
 TEST(PanoMaps, CoverageAndSingleCameraMaps) {
