@@ -1,12 +1,13 @@
 // Every method on the thesis's 24-camera prototype dome (design::thesis_prototype_rig) with far-field
 // photographs (noise-free minimal renderer of test_scene.h): PSNR / SSIM / seam PSNR against the
 // ideal panorama. The printed table is part of the point 7 (the simulator adds the colon).
-#include <cstdio>
-#include <map>
+#include "omma/design/prototype.h"
 
 #include <gtest/gtest.h>
 
-#include "omma/design/prototype.h"
+#include <cstdio>
+#include <map>
+
 #include "omma/pano/maps.h"
 #include "omma/pano/quality.h"
 #include "omma/pano/stitch.h"
@@ -15,7 +16,8 @@
 namespace omma::pano {
 namespace {
 
-std::map<Method, EvalResult> table(const Rig& rig, const cv::Mat& tex, const PanoGrid& grid, const char* label) {
+std::map<Method, EvalResult> table(const Rig& rig, const cv::Mat& tex, const PanoGrid& grid,
+                                   const char* label) {
   const auto frames = testing::render_frames(rig, tex);
   const cv::Mat truth = testing::render_truth(grid, tex);
   const cv::Mat seam = seam_mask(coverage_map(rig, grid), false);

@@ -1,11 +1,11 @@
 // Reference stitcher, maps and quality figures on rendered scenes with a known ideal panorama.
 #include "omma/pano/stitch.h"
 
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <cstdio>
 #include <map>
-
-#include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
 
 #include "omma/pano/maps.h"
@@ -126,7 +126,8 @@ TEST(PanoMaps, BoundaryMapHighAtParallaxEdgeLowOnFlatScene) {
   const double edge_par = cv::mean(b_par, edge)[0], edge_flat = cv::mean(b_flat, edge)[0];
   double max_flat = 0;
   cv::minMaxLoc(b_flat, nullptr, &max_flat);
-  std::printf("L_ob mean on the edge band: parallax %.3f, flat %.4f; flat max %.4f\n", edge_par, edge_flat, max_flat);
+  std::printf("L_ob mean on the edge band: parallax %.3f, flat %.4f; flat max %.4f\n", edge_par, edge_flat,
+              max_flat);
   EXPECT_GT(edge_par, 0.10);  // white sphere on a ~0.5 background: contrast ~0.5
   EXPECT_LT(edge_flat, 0.01);
   EXPECT_LT(max_flat, 0.05);
@@ -139,7 +140,8 @@ TEST(PanoMaps, BoundaryMapHighAtParallaxEdgeLowOnFlatScene) {
   EXPECT_EQ(overlay.at<cv::Vec3f>(0, 0), truth.at<cv::Vec3f>(0, 0));
 
   // eq. 4.19-4.21: parallax lowers the inter-camera PSNR.
-  const double icp_flat = inter_camera_psnr(rig, flat, grid), icp_par = inter_camera_psnr(rig, parallax, grid);
+  const double icp_flat = inter_camera_psnr(rig, flat, grid),
+               icp_par = inter_camera_psnr(rig, parallax, grid);
   std::printf("inter-camera PSNR: flat %.2f dB, parallax %.2f dB\n", icp_flat, icp_par);
   EXPECT_GT(icp_flat, 50.0);
   EXPECT_LT(icp_par, icp_flat - 15.0);

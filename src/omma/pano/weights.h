@@ -45,7 +45,7 @@ struct BlendParams {
 };
 
 struct Tap {
-  int camera = 0;   // index into rig.cameras
+  int camera = 0;          // index into rig.cameras
   Vec2 px = Vec2::Zero();  // continuous pixel coordinate in that camera (centres at integer + 0.5)
   double weight = 0;
 };
