@@ -1,13 +1,15 @@
 // omma stitch: camera frames -> panorama with the reference stitcher (thesis §2.4.2, ch. 4), plus
 // the object boundary map (eq. 4.12-4.16), the single-camera and coverage maps and the
 // inter-camera PSNR (eq. 4.19-4.21).
+#include "omma/pano/stitch.h"
+
+#include <fmt/format.h>
+
 #include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <iostream>
 #include <stdexcept>
-
-#include <fmt/format.h>
 
 #include "apps/command.h"
 #include "omma/core/frames.h"
@@ -16,7 +18,6 @@
 #include "omma/core/log.h"
 #include "omma/core/rig.h"
 #include "omma/pano/maps.h"
-#include "omma/pano/stitch.h"
 
 namespace omma::app {
 namespace {
@@ -40,7 +41,9 @@ void run_stitch(const StitchArgs& a) {
   grid.projection = parse_projection(a.projection);
   if (a.size.empty()) {
     grid.width = grid.projection == Projection::kVr180 ? 1080 : 1920;
-    grid.height = grid.projection == Projection::kVr180 ? 1080 : grid.projection == Projection::kEquirect ? 512 : 960;
+    grid.height = grid.projection == Projection::kVr180      ? 1080
+                  : grid.projection == Projection::kEquirect ? 512
+                                                             : 960;
   } else {
     const Size2 s = parse_size(a.size);
     grid.width = s.width;
@@ -66,14 +69,16 @@ void run_stitch(const StitchArgs& a) {
     boundary = pano::boundary_map(rig, frames, grid, opt.blend.search);
     overlay = pano::boundary_overlay(to_u8(pano_img), boundary, a.threshold);
   }
-  if (!a.single_camera.empty() || !a.coverage.empty()) coverage = pano::coverage_map(rig, grid, opt.blend.search);
+  if (!a.single_camera.empty() || !a.coverage.empty())
+    coverage = pano::coverage_map(rig, grid, opt.blend.search);
   if (!a.single_camera.empty()) single = pano::single_camera_map(coverage);
 
   write_image(a.out, to_u8(pano_img));
   if (!a.boundary.empty()) {
     write_image(a.boundary, to_u8(boundary));
-    write_image(a.boundary_overlay.empty() ? overlay_path_for(a.boundary) : std::filesystem::path(a.boundary_overlay),
-                overlay);
+    write_image(
+        a.boundary_overlay.empty() ? overlay_path_for(a.boundary) : std::filesystem::path(a.boundary_overlay),
+        overlay);
   } else if (!a.boundary_overlay.empty()) {
     write_image(a.boundary_overlay, overlay);
   }
@@ -82,11 +87,15 @@ void run_stitch(const StitchArgs& a) {
 
   nlohmann::json icp_json = std::isfinite(icp) ? nlohmann::json(icp) : nlohmann::json(nullptr);
   if (a.json) {
-    print_json({{"method", pano::to_string(method)}, {"width", grid.width}, {"height", grid.height}, {"ms", ms},
+    print_json({{"method", pano::to_string(method)},
+                {"width", grid.width},
+                {"height", grid.height},
+                {"ms", ms},
                 {"inter_camera_psnr_db", icp_json}});
   } else {
     std::cout << fmt::format("{}: {}x{} {} panorama by {} in {:.0f} ms, inter-camera PSNR {:.2f} dB\n", a.out,
-                             grid.width, grid.height, to_string(grid.projection), pano::to_string(method), ms, icp);
+                             grid.width, grid.height, to_string(grid.projection), pano::to_string(method), ms,
+                             icp);
   }
 }
 
@@ -109,18 +118,23 @@ void add_stitch_command(CLI::App& root) {
                   "equirect (360x90 deg, dome axis on the top row) or vr180 (180x180 deg, dome axis at the "
                   "centre)")
       ->capture_default_str();
-  cmd->add_option("--size", a.size, "Panorama size WxH in pixels [default: 1080x1080 vr180, 1920x512 equirect]");
-  cmd->add_option("--out", a.out, "Output panorama image (8-bit; format from the extension, e.g. .png)")->required();
+  cmd->add_option("--size", a.size,
+                  "Panorama size WxH in pixels [default: 1080x1080 vr180, 1920x512 equirect]");
+  cmd->add_option("--out", a.out, "Output panorama image (8-bit; format from the extension, e.g. .png)")
+      ->required();
   cmd->add_option("--boundary", a.boundary,
                   "Write the object boundary map L_ob (eq. 4.15, gray, 255 = 1.0) here, and the thresholded\n"
                   "map drawn in green over the panorama (eq. 4.16) beside it as <name>_overlay.<ext>");
-  cmd->add_option("--boundary-overlay", a.boundary_overlay, "Write the green boundary overlay to this path instead");
+  cmd->add_option("--boundary-overlay", a.boundary_overlay,
+                  "Write the green boundary overlay to this path instead");
   cmd->add_option("--threshold", a.threshold, "Boundary threshold th_ob on gray levels in [0,1] (eq. 4.16)")
       ->capture_default_str();
-  cmd->add_option("--single-camera", a.single_camera,
-                  "Write the single-camera map: white = seen by one camera only, black = seen by two or more\n"
-                  "(the seam band, usable as `omma eval --mask`), dark gray = seen by none");
-  cmd->add_option("--coverage", a.coverage, "Write the coverage map: number of cameras per direction (8-bit gray)");
+  cmd->add_option(
+      "--single-camera", a.single_camera,
+      "Write the single-camera map: white = seen by one camera only, black = seen by two or more\n"
+      "(the seam band, usable as `omma eval --mask`), dark gray = seen by none");
+  cmd->add_option("--coverage", a.coverage,
+                  "Write the coverage map: number of cameras per direction (8-bit gray)");
   cmd->add_flag("--json", a.json,
                 "Print one JSON object {method, width, height, ms, inter_camera_psnr_db} on stdout");
   cmd->callback([] { run_stitch(a); });

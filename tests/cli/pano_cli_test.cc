@@ -1,8 +1,8 @@
 // CLI tests for `omma stitch` and `omma eval` on a rendered far-field scene (15-camera test rig).
+#include <gtest/gtest.h>
+
 #include <filesystem>
 #include <fstream>
-
-#include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 
 #include "omma/pano/test_scene.h"
@@ -95,9 +95,11 @@ TEST(PanoCli, StitchRejectsBadInput) {
   std::ofstream(d / "cam_05.png") << "not a png";
   expect_fail(stitch_args(d, "nn", out), "cam_05.png");
   // An empty rig.
-  std::ofstream(d / "empty.json") << R"({"format": "omma-rig", "version": 1, "dome": {"radius_mm": 5}, "cameras": []})";
-  expect_fail("stitch --rig " + (d / "empty.json").string() + " --frames " + d.string() + " --out " + out.string(),
-              "no cameras");
+  std::ofstream(d / "empty.json")
+      << R"({"format": "omma-rig", "version": 1, "dome": {"radius_mm": 5}, "cameras": []})";
+  expect_fail(
+      "stitch --rig " + (d / "empty.json").string() + " --frames " + d.string() + " --out " + out.string(),
+      "no cameras");
   fs::remove_all(d);
 }
 

@@ -1,11 +1,11 @@
 #include "omma/pano/maps.h"
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
-
-#include <tbb/parallel_for.h>
 
 #include "omma/pano/stitch.h"
 

@@ -4,9 +4,8 @@
 // the gray level Y (BT.601 luma) in [0,1], as in §4.3.
 #pragma once
 
-#include <vector>
-
 #include <opencv2/core.hpp>
+#include <vector>
 
 #include "omma/core/grid.h"
 #include "omma/core/rig.h"
@@ -19,9 +18,9 @@ namespace omma::pano {
 cv::Mat coverage_map(const Rig& rig, const PanoGrid& grid, const SearchOptions& search = {});
 
 // Values of the single-camera map (Fig. 4.6c).
-inline constexpr unsigned char kSingleCamera = 255;   // seen by exactly one camera
-inline constexpr unsigned char kMultiCamera = 0;      // seen by two or more (the seam band)
-inline constexpr unsigned char kNoCamera = 64;        // seen by no camera
+inline constexpr unsigned char kSingleCamera = 255;  // seen by exactly one camera
+inline constexpr unsigned char kMultiCamera = 0;     // seen by two or more (the seam band)
+inline constexpr unsigned char kNoCamera = 64;       // seen by no camera
 // CV_8UC1 from a coverage map: kSingleCamera / kMultiCamera / kNoCamera.
 cv::Mat single_camera_map(const cv::Mat& coverage);
 // The seam band (directions seen by >= 2 cameras) as a CV_8UC1 mask (255 inside), from either a

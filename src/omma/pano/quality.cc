@@ -2,10 +2,9 @@
 
 #include <cmath>
 #include <limits>
-#include <vector>
-#include <stdexcept>
-
 #include <opencv2/imgproc.hpp>
+#include <stdexcept>
+#include <vector>
 
 #include "omma/core/frames.h"
 
@@ -15,8 +14,9 @@ namespace {
 std::pair<cv::Mat, cv::Mat> as_float_pair(const cv::Mat& a, const cv::Mat& b) {
   if (a.empty() || b.empty()) throw std::invalid_argument("empty image");
   if (a.size() != b.size())
-    throw std::invalid_argument("image sizes differ: " + std::to_string(a.cols) + "x" + std::to_string(a.rows) +
-                                " vs " + std::to_string(b.cols) + "x" + std::to_string(b.rows));
+    throw std::invalid_argument("image sizes differ: " + std::to_string(a.cols) + "x" +
+                                std::to_string(a.rows) + " vs " + std::to_string(b.cols) + "x" +
+                                std::to_string(b.rows));
   cv::Mat fa = to_float01(a), fb = to_float01(b);
   if (fa.channels() == 1 && fb.channels() == 3) cv::cvtColor(fa, fa, cv::COLOR_GRAY2BGR);
   if (fb.channels() == 1 && fa.channels() == 3) cv::cvtColor(fb, fb, cv::COLOR_GRAY2BGR);

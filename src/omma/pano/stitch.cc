@@ -1,15 +1,15 @@
 #include "omma/pano/stitch.h"
 
+#include <fmt/format.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <opencv2/imgproc.hpp>
 #include <stdexcept>
 #include <string>
-
-#include <fmt/format.h>
-#include <opencv2/imgproc.hpp>
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
 
 #include "omma/core/frames.h"
 #include "omma/core/progress.h"
@@ -19,17 +19,18 @@ namespace omma::pano {
 void check_frames(const Rig& rig, const std::vector<cv::Mat>& frames) {
   if (rig.cameras.empty()) throw std::invalid_argument("the rig has no cameras");
   if (frames.size() != rig.cameras.size())
-    throw std::invalid_argument(fmt::format("{} frames for a rig of {} cameras", frames.size(), rig.cameras.size()));
+    throw std::invalid_argument(
+        fmt::format("{} frames for a rig of {} cameras", frames.size(), rig.cameras.size()));
   for (size_t i = 0; i < frames.size(); ++i) {
     const auto& f = frames[i];
     const auto& in = rig.cameras[i].in;
     if (f.empty()) throw std::invalid_argument(fmt::format("frame of camera {} is empty", rig.cameras[i].id));
     if (f.cols != in.width || f.rows != in.height)
-      throw std::invalid_argument(fmt::format("frame of camera {} is {}x{}, the rig says {}x{}", rig.cameras[i].id,
-                                              f.cols, f.rows, in.width, in.height));
+      throw std::invalid_argument(fmt::format("frame of camera {} is {}x{}, the rig says {}x{}",
+                                              rig.cameras[i].id, f.cols, f.rows, in.width, in.height));
     if (f.channels() != 1 && f.channels() != 3)
-      throw std::invalid_argument(fmt::format("frame of camera {} has {} channels (need 1 or 3)",
-                                              rig.cameras[i].id, f.channels()));
+      throw std::invalid_argument(
+          fmt::format("frame of camera {} has {} channels (need 1 or 3)", rig.cameras[i].id, f.channels()));
   }
 }
 
@@ -95,8 +96,8 @@ cv::Mat stitch(const Rig& rig, const std::vector<cv::Mat>& frames_in, const Stit
   const PanoGrid& grid = opt.grid;
   if (grid.width <= 0 || grid.height <= 0) throw std::invalid_argument("panorama size must be positive");
   const std::vector<cv::Mat> frames = frames_to_float(frames_in);
-  const bool needs_neighbours = opt.method == Method::kMrf || opt.method == Method::kMrfSpherical ||
-                                opt.method == Method::kSad;
+  const bool needs_neighbours =
+      opt.method == Method::kMrf || opt.method == Method::kMrfSpherical || opt.method == Method::kSad;
 
   cv::Mat pano(grid.height, grid.width, CV_32FC3, cv::Scalar::all(0));
   Progress progress("stitch " + to_string(opt.method), grid.height, opt.progress);
@@ -109,7 +110,8 @@ cv::Mat stitch(const Rig& rig, const std::vector<cv::Mat>& frames_in, const Stit
     for (int r = first; r < last; ++r) {
       auto& cs = rows[r - first];
       cs.resize(grid.width);
-      for (int c = 0; c < grid.width; ++c) cs[c] = find_contributors(rig, grid.pixel_direction(c, r), opt.blend.search);
+      for (int c = 0; c < grid.width; ++c)
+        cs[c] = find_contributors(rig, grid.pixel_direction(c, r), opt.blend.search);
     }
     auto at = [&](int c, int r) -> const std::vector<Contributor>* { return &rows[r - first][c]; };
     for (int row = block.begin(); row < block.end(); ++row) {

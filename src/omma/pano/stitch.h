@@ -8,9 +8,8 @@
 // results are CV_32FC3 BGR in [0,1] (use omma::to_u8 to write 8-bit files).
 #pragma once
 
-#include <vector>
-
 #include <opencv2/core.hpp>
+#include <vector>
 
 #include "omma/core/grid.h"
 #include "omma/core/rig.h"

@@ -7,12 +7,11 @@
 
 #include <cmath>
 #include <filesystem>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
 
 #include "omma/core/frames.h"
 #include "omma/core/grid.h"
@@ -123,11 +122,12 @@ inline cv::Mat render_truth(const PanoGrid& grid, const cv::Mat& tex,
 }
 
 // Writes DIR/rig.json, DIR/cam_XX.png (8-bit) and, if given, DIR/truth.png.
-inline void write_frames_folder(const std::filesystem::path& dir, const Rig& rig, const std::vector<cv::Mat>& frames,
-                                const cv::Mat& truth = {}) {
+inline void write_frames_folder(const std::filesystem::path& dir, const Rig& rig,
+                                const std::vector<cv::Mat>& frames, const cv::Mat& truth = {}) {
   std::filesystem::create_directories(dir);
   save_rig(rig, dir / "rig.json");
-  for (size_t i = 0; i < frames.size(); ++i) write_image(dir / frame_filename(rig.cameras[i].id), to_u8(frames[i]));
+  for (size_t i = 0; i < frames.size(); ++i)
+    write_image(dir / frame_filename(rig.cameras[i].id), to_u8(frames[i]));
   if (!truth.empty()) write_image(dir / "truth.png", to_u8(truth));
 }
 

@@ -60,8 +60,8 @@ std::vector<double> method_weights(const Rig& rig, Method method, const std::vec
   if (cs.empty()) return weight;
   switch (method) {
     case Method::kNearest: {  // eq. 2.6-2.7
-      const auto best = std::min_element(cs.begin(), cs.end(),
-                                         [](const auto& a, const auto& b) { return a.r < b.r; });
+      const auto best =
+          std::min_element(cs.begin(), cs.end(), [](const auto& a, const auto& b) { return a.r < b.r; });
       weight[best - cs.begin()] = 1;
       break;
     }
@@ -76,7 +76,7 @@ std::vector<double> method_weights(const Rig& rig, Method method, const std::vec
         weight[i] = std::exp(-d * d / (2 * sigma * sigma)) / cs[i].r;
       }
       break;
-    case Method::kMrf:  // eq. 4.8-4.9
+    case Method::kMrf:           // eq. 4.8-4.9
     case Method::kMrfSpherical:  // eq. 4.10-4.11 combined with 4.8
     case Method::kSad: {         // prior of eq. 4.18 = the mrf posterior of §4.2.2
       const bool spherical = method == Method::kMrfSpherical;
