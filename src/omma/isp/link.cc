@@ -97,7 +97,7 @@ class Decoder {
     anchor_pos_ = double(size_t(cfg.row_gap_pp) * cpp_);
     anchor_idx_ = 0;
     stats_.bytes = size;
-    reset_frame();
+    row_.resize(size_t(cfg.width));
   }
 
   LinkStats run() {
@@ -158,18 +158,20 @@ class Decoder {
     return len;
   }
 
+  // Clears the frame. Only rows stored since the last reset are touched, so that inputs full of
+  // frame boundaries cost time in proportion to their length, not to frames x frame size.
   void reset_frame() {
-    frame_.width = cfg_.width;
-    frame_.height = cfg_.height;
-    frame_.pixels.assign(size_t(cfg_.width) * cfg_.height, 0);
-    frame_.row_ok.assign(size_t(cfg_.height), 0);
+    for (int r : stored_rows_) {
+      std::fill_n(frame_.pixels.begin() + long(r) * cfg_.width, cfg_.width, uint16_t(0));
+      frame_.row_ok[size_t(r)] = 0;
+    }
+    stored_rows_.clear();
     rows_seen_ = 0;
   }
 
   void finish_frame() {
     if (rows_seen_ > 0) {
-      long ok = 0;
-      for (uint8_t v : frame_.row_ok) ok += v;
+      const long ok = long(stored_rows_.size());
       if (ok > 0) {
         ++stats_.frames;
         stats_.rows_ok += ok;
@@ -218,16 +220,22 @@ class Decoder {
         fail = base;
         break;
       }
-      if (idx >= 0) frame_.pixels[size_t(idx) * cfg_.width + k] = uint16_t((word >> 1) & ((1u << cfg_.bits) - 1));
+      row_[size_t(k)] = uint16_t((word >> 1) & ((1u << cfg_.bits) - 1));
     }
     if (idx >= 0) {
       ++rows_seen_;
-      if (ok) {
+      if (ok) {  // damaged rows are not stored: they stay 0
+        if (frame_.pixels.empty()) {  // allocated at the first intact row
+          frame_.width = cfg_.width;
+          frame_.height = cfg_.height;
+          frame_.pixels.assign(size_t(cfg_.width) * cfg_.height, 0);
+          frame_.row_ok.assign(size_t(cfg_.height), 0);
+        }
+        std::copy(row_.begin(), row_.end(), frame_.pixels.begin() + long(idx) * cfg_.width);
+        if (!frame_.row_ok[size_t(idx)]) stored_rows_.push_back(idx);
         frame_.row_ok[size_t(idx)] = 1;
         anchor_pos_ = double(q);
         anchor_idx_ = idx;
-      } else if (!frame_.row_ok[size_t(idx)]) {
-        std::fill_n(frame_.pixels.begin() + long(idx) * cfg_.width, cfg_.width, uint16_t(0));
       }
     }
     return ok ? q + size_t(cfg_.width) * cpp_ : fail;
@@ -242,6 +250,8 @@ class Decoder {
   double anchor_pos_;
   int anchor_idx_;
   LinkFrame frame_;
+  std::vector<uint16_t> row_;       // the row being decoded
+  std::vector<int> stored_rows_;    // rows of frame_ written since the last reset
   long rows_seen_ = 0;
   LinkStats stats_;
 };
