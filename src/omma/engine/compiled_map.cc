@@ -30,21 +30,25 @@ uint64_t fnv1a(const std::string& s) {
   return h;
 }
 
-// Quantises weights (sum 1) to integers in 1/256 that sum to exactly 256 (largest remainder),
-// dropping taps that get 0.
-std::vector<int> quantise_weights(const std::vector<double>& w) {
-  std::vector<int> q(w.size());
-  std::vector<std::pair<double, size_t>> rem(w.size());
+// Quantises n <= 8 weights (sum 1) to integers in 1/256 that sum to exactly 256 (largest
+// remainder first); taps that get 0 are dropped by the caller.
+void quantise_weights(const double* w, int n, int* q) {
+  double rem[8];
   int sum = 0;
-  for (size_t i = 0; i < w.size(); ++i) {
+  for (int i = 0; i < n; ++i) {
     const double x = w[i] * 256.0;
     q[i] = static_cast<int>(std::floor(x));
-    rem[i] = {x - q[i], i};
+    rem[i] = x - q[i];
     sum += q[i];
   }
-  std::sort(rem.begin(), rem.end(), [](auto& a, auto& b) { return a.first > b.first; });
-  for (size_t k = 0; sum < 256 && k < rem.size(); ++k, ++sum) q[rem[k].second] += 1;
-  return q;
+  while (sum < 256) {
+    int best = 0;
+    for (int i = 1; i < n; ++i)
+      if (rem[i] > rem[best]) best = i;
+    q[best] += 1;
+    rem[best] = -1;
+    ++sum;
+  }
 }
 
 struct PixelTaps {
@@ -140,35 +144,67 @@ CompiledMap compile_map(const Rig& rig, const MapOptions& opt) {
   const int W = map.width, H = map.height;
   std::vector<PixelTaps> px(size_t(W) * H);
   const StoreLayout& L = map.layout;
-  tbb::parallel_for(tbb::blocked_range<int>(0, H, 4), [&](const tbb::blocked_range<int>& r) {
-    std::vector<double> w;
-    for (int row = r.begin(); row < r.end(); ++row)
-      for (int col = 0; col < W; ++col) {
+  // Tiles of kTile x kTile output pixels; each tile calls static_taps with the rig of the cameras
+  // whose cone of view (eq. 2.3) can reach the tile (with a margin for the 4-neighbourhood of mrf):
+  // the taps are the same as with the full rig, at a fraction of the cost.
+  constexpr int kTile = 16;
+  const int tiles_x = (W + kTile - 1) / kTile, tiles_y = (H + kTile - 1) / kTile;
+  std::vector<double> cam_half(sub.cameras.size());
+  for (size_t c = 0; c < sub.cameras.size(); ++c) cam_half[c] = sub.cameras[c].in.aov / 2;
+  tbb::parallel_for(0, tiles_x * tiles_y, [&](int tile) {
+    const int tx = tile % tiles_x, ty = tile / tiles_x;
+    const int c0 = tx * kTile, r0 = ty * kTile, c1 = std::min(W, c0 + kTile), r1 = std::min(H, r0 + kTile);
+    Rig tile_rig;
+    std::vector<int> tile_to_full;
+    if (opt.cull) {
+      tile_rig.name = sub.name;
+      tile_rig.dome = sub.dome;
+      const Vec3 wc = opt.grid.direction(0.5 * (c0 + c1), 0.5 * (r0 + r1));
+      double radius = 0;
+      for (double fy : {0.0, 0.5, 1.0})
+        for (double fx : {0.0, 0.5, 1.0}) {
+          const double x = std::clamp(c0 - 2 + fx * (c1 - c0 + 4), 0.0, double(W));
+          const double y = std::clamp(r0 - 2 + fy * (r1 - r0 + 4), 0.0, double(H));
+          radius = std::max(radius, angle_between(wc, opt.grid.direction(x, y)));
+        }
+      radius += deg2rad(2.0);
+      for (size_t c = 0; c < sub.cameras.size(); ++c)
+        if (angle_between(wc, sub.cameras[c].frame.t) <= cam_half[c] + radius) {
+          tile_rig.cameras.push_back(sub.cameras[c]);
+          tile_to_full.push_back(to_full[c]);
+        }
+    } else {
+      tile_rig = sub;
+      tile_to_full = to_full;
+    }
+    double w[8];
+    int q[8];
+    for (int row = r0; row < r1; ++row)
+      for (int col = c0; col < c1; ++col) {
         PixelTaps& out = px[size_t(row) * W + col];
-        if (sub.cameras.empty()) continue;
-        std::vector<pano::Tap> taps = pano::static_taps(sub, opt.grid, col, row, opt.method, opt.params);
+        if (tile_rig.cameras.empty()) continue;
+        std::vector<pano::Tap> taps = pano::static_taps(tile_rig, opt.grid, col, row, opt.method, opt.params);
         if (taps.size() > 8) {  // keep the 8 strongest (never happens with real rigs)
           std::partial_sort(taps.begin(), taps.begin() + 8, taps.end(),
                             [](auto& a, auto& b) { return a.weight > b.weight; });
           taps.resize(8);
         }
-        w.clear();
-        for (const auto& t : taps) w.push_back(t.weight);
+        const int n = static_cast<int>(taps.size());
         double sum = 0;
-        for (double x : w) sum += x;
+        for (int k = 0; k < n; ++k) sum += (w[k] = taps[k].weight);
         if (sum <= 0) continue;
-        for (double& x : w) x /= sum;
-        const std::vector<int> q = quantise_weights(w);
-        for (size_t k = 0; k < taps.size(); ++k) {
+        for (int k = 0; k < n; ++k) w[k] /= sum;
+        quantise_weights(w, n, q);
+        for (int k = 0; k < n; ++k) {
           if (q[k] == 0) continue;
-          const int cam = to_full[taps[k].camera];
+          const int cam = tile_to_full[taps[k].camera];
           const int cw = L.size[cam].width, ch = L.size[cam].height;
           // Bilinear neighbourhood with replicated edges (centres at integer + 0.5).
           auto axis = [](double p, int n, int& i0, int& f) {
             const double s = p - 0.5;
             double fl = std::floor(s);
             i0 = static_cast<int>(fl);
-            f = static_cast<int>(std::lround((s - fl) * 32));
+            f = static_cast<int>((s - fl) * 32 + 0.5);
             if (f == 32) { ++i0; f = 0; }
             if (i0 < 0) { i0 = 0; f = 0; }
             if (i0 >= n - 1) { i0 = n - 1; f = 0; }

@@ -73,6 +73,8 @@ struct MapOptions {
   // Cameras to use (rig order); empty = all. Inactive cameras get no taps; the weights are those
   // of the static method on the rig without them (renormalised among the others).
   std::vector<bool> active;
+  // Pass static_taps only the cameras whose cone can reach each 16x16 tile (same taps, faster).
+  bool cull = true;
 };
 
 struct CompiledMap {
