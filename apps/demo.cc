@@ -123,13 +123,13 @@ void run_demo(const DemoOptions& o) {
   set_json_mode(o.json);
   const auto t_start = std::chrono::steady_clock::now();
   const fs::path dir(o.out);
-  fs::create_directories(dir);
   const Rig rig = design::thesis_prototype_rig();
   const Size2 size = parse_size(o.size);
   const PanoGrid grid{parse_projection(o.projection), size.width, size.height};
+  const auto scene = sim::make_scene(o.scene);  // bad input fails here, before anything is written
+  fs::create_directories(dir);
 
   spdlog::info("demo: simulating the {}-camera dome in scene '{}'", rig.cameras.size(), o.scene);
-  const auto scene = sim::make_scene(o.scene);
   sim::SimulateOptions so;
   so.effects.seed = o.seed;
   so.truth_grid = grid;
