@@ -38,7 +38,7 @@ struct FarCost {
     T p0[3], p[3], px[2];
     for (int r = 0; r < 3; ++r) p0[r] = T(r_nom(r, 0)) * s[0] + T(r_nom(r, 1)) * s[1] + T(r_nom(r, 2)) * s[2];
     ceres::AngleAxisRotatePoint(delta, p0, p);
-    if (p[0] <= T(1e-6)) return false;
+    if (p[0] < T(1e-3)) p[0] = T(1e-3);  // behind the camera: clamp (see NearCost)
     project_camera_point(fcc, k, p, px);
     res[0] = px[0] - T(obs.x());
     res[1] = px[1] - T(obs.y());
@@ -57,7 +57,10 @@ struct NearCost {
     for (int i = 0; i < 3; ++i) w[i] = x[i] - x[3] * T(c[i]);
     for (int r = 0; r < 3; ++r) p0[r] = T(r_nom(r, 0)) * w[0] + T(r_nom(r, 1)) * w[1] + T(r_nom(r, 2)) * w[2];
     ceres::AngleAxisRotatePoint(delta, p0, p);
-    if (p[0] <= T(1e-9)) return false;
+    // Points at or behind the camera: clamp the depth (a large residual the robust loss caps)
+    // rather than failing the evaluation.
+    const T n = ceres::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]) + T(1e-12);
+    if (p[0] < T(1e-3) * n) p[0] = T(1e-3) * n;
     project_camera_point(fcc, k, p, px);
     res[0] = px[0] - T(obs.x());
     res[1] = px[1] - T(obs.y());
@@ -144,24 +147,27 @@ CalibrationResult calibrate_rig(const Rig& nominal, const std::vector<cv::Mat>& 
   const auto pairs = overlapping_pairs(nominal, deg2rad(opt.overlap_margin_deg));
   res.pairs = static_cast<int>(pairs.size());
   std::vector<PairMatches> pms;
-  int near_votes = 0, far_votes = 0;
+  long rot_total = 0, ess_total = 0;
   {
     Progress progress("calibrate: matching", pairs.size());
     for (const auto& [a, b] : pairs) {
       PairMatches pm = match_pair(nominal, a, b, feats[a], feats[b], opt.scene, opt.match);
       res.matches += pm.putative;
-      if (!pm.inliers.empty()) {
-        if (pm.prefers_near()) ++near_votes;
-        else ++far_votes;
-      }
+      rot_total += pm.rotation_inliers;
+      ess_total += pm.essential_inliers;
       pms.push_back(std::move(pm));
       progress.step();
     }
   }
   SceneModel scene = opt.scene;
   if (scene == SceneModel::kAuto) {
-    scene = near_votes > far_votes ? SceneModel::kNear : SceneModel::kFar;
+    // Parallax shows as matches that no rotation explains but an essential matrix does.
+    scene = ess_total > opt.near_ratio * rot_total ? SceneModel::kNear : SceneModel::kFar;
+    spdlog::info("calibrate: consensus over all pairs: rotation-only {}, essential matrix {} -> {} scene", rot_total,
+                 ess_total, to_string(scene));
     // All pairs use the one chosen model.
+    for (auto& pm : pms) pm.choose(scene, opt.match.min_inliers);
+  } else {
     for (auto& pm : pms) pm.choose(scene, opt.match.min_inliers);
   }
   res.scene = scene;
@@ -293,7 +299,12 @@ CalibrationResult calibrate_rig(const Rig& nominal, const std::vector<cv::Mat>& 
   if (!opt.estimate_focal) fcc_const.insert(fcc_const.end(), {0, 1});
   if (!opt.estimate_center) fcc_const.insert(fcc_const.end(), {2, 3});
 
-  for (int pass = 0; pass < 2; ++pass) {
+  // Pass 0: intrinsics held at nominal, rotations and scene points only (a good start: with all
+  // parameters free from the nominal start the near-field problem slides into a wrong valley
+  // where focal length trades against depth). Pass 1: everything free; then outliers are dropped;
+  // pass 2: final solve.
+  for (int pass = 0; pass < 3; ++pass) {
+    const bool intrinsics_free = pass > 0;
     ceres::Problem::Options popt;
     popt.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
     ceres::Problem problem(popt);
@@ -340,6 +351,10 @@ CalibrationResult calibrate_rig(const Rig& nominal, const std::vector<cv::Mat>& 
     for (int i = 0; i < n; ++i) {
       for (double* blk : {fcc_block(i), k_block(i)}) {
         if (!problem.HasParameterBlock(blk)) continue;
+        if (!intrinsics_free) {
+          problem.SetParameterBlockConstant(blk);
+          continue;
+        }
         const bool is_k = blk == k_block(i);
         const auto& cst = is_k ? k_const : fcc_const;
         if (cst.size() == (is_k ? 5u : 4u)) problem.SetParameterBlockConstant(blk);
@@ -360,13 +375,22 @@ CalibrationResult calibrate_rig(const Rig& nominal, const std::vector<cv::Mat>& 
     spdlog::info("calibrate: bundle adjustment pass {}: {} residual blocks, {} iterations, cost {:.4g} -> {:.4g}",
                  pass + 1, summary.num_residual_blocks, summary.iterations.size(), summary.initial_cost,
                  summary.final_cost);
-    if (pass == 0) {
+    if (pass < 2) {
+      // Outliers (wrong matches that passed RANSAC, e.g. along an epipolar line) would drag the
+      // intrinsics once they are free: drop them before. After pass 0 the intrinsics are still
+      // nominal, so the threshold adapts to the residual level (4 x median, at least outlier_px).
       std::vector<double> e2;
       evaluate(&e2);
+      double thr2 = opt.outlier_px * opt.outlier_px;
+      if (pass == 0 && !e2.empty()) {
+        std::vector<double> sorted = e2;
+        std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+        thr2 = std::max(thr2, 16 * sorted[sorted.size() / 2]);
+      }
       size_t idx = 0;
       for (size_t ti = 0; ti < tracks.size(); ++ti)
         for (size_t oi = 0; oi < tracks[ti].size(); ++oi, ++idx)
-          if (e2[idx] > opt.outlier_px * opt.outlier_px) keep[ti][oi] = 0, ++res.rejected;
+          if (keep[ti][oi] && e2[idx] > thr2) keep[ti][oi] = 0, ++res.rejected;
     }
   }
 

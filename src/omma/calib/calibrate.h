@@ -14,8 +14,8 @@
 //     5 mm dome, so a distant scene is seen along parallel rays: rotation-only.
 //   * near field (parallax, e.g. the 35 mm colon tube): a homogeneous point X = (P, h) on S^3 and
 //     the camera centres c_i FIXED at their nominal positions: w = P - h c_i (mm).
-//   The scene model is chosen per run (auto: near when the essential-matrix consensus clearly beats
-//   the rotation-only one in most camera pairs).
+//   The scene model is chosen per run (auto: near when the essential-matrix consensus, summed over
+//   all camera pairs, exceeds the rotation-only one by near_ratio).
 //
 // Gauge: in the far field the whole rig can rotate freely without changing any image, so a weak
 // prior |delta_i| / sigma (sigma = prior_rotation_deg) pulls the rotations towards the nominal
@@ -40,6 +40,8 @@ struct CalibrationOptions {
   FeatureOptions features;
   MatchOptions match;
   SceneModel scene = SceneModel::kAuto;
+  double near_ratio = 1.15;       // auto: near when the essential-matrix consensus over all pairs
+                                  // exceeds the rotation-only one by this factor
   double overlap_margin_deg = 0;  // pairs need nominal cones intersecting by more than this
 
   bool estimate_rotation = true;
