@@ -12,27 +12,27 @@ namespace omma::test {
 namespace {
 namespace fs = std::filesystem;
 
-// DIR/rig.json (nominal), DIR/rig_true.json (perturbed), DIR/frames/cam_XX.png rendered with the truth.
+// The thesis prototype rendered by the simulator with the manufacturing errors:
+// DIR/sim/{cam_XX.png, rig.json (nominal), rig_true.json (perturbed)}.
 fs::path make_far_field_case(const std::string& photo) {
   const fs::path dir = temp_dir("calib");
-  const Rig nominal = calib::testing::test_dome();
-  const Rig truth = calib::testing::perturb(nominal, {});
-  save_rig(nominal, dir / "rig.json");
-  save_rig(truth, dir / "rig_true.json");
-  const cv::Mat scene = calib::testing::load_scene(data_dir() + "/" + photo);
-  const auto frames = calib::testing::render_frames(truth, scene);
-  fs::create_directories(dir / "frames");
-  for (size_t i = 0; i < frames.size(); ++i)
-    cv::imwrite((dir / "frames" / frame_filename(truth.cameras[i].id)).string(), frames[i]);
+  const RunResult d = run_omma("design --method max-volume --cam-size 1x1x2 --out " + (dir / "proto.json").string());
+  EXPECT_EQ(d.exit_code, 0) << d.err;
+  const RunResult s = run_omma("simulate --rig " + (dir / "proto.json").string() + " --scene photo:" + data_dir() + "/" +
+                               photo + " --out " + (dir / "sim").string() +
+                               " --perturb orient=2,focal=0.03,center=5,k1=0.05 --projection equirect"
+                               " --truth-size 360x90 --supersample 2 --json");
+  EXPECT_EQ(s.exit_code, 0) << s.err;
   return dir;
 }
 
 TEST(CalibCli, CalibrateThenRigDiffMeetsTargets) {
   const fs::path dir = make_far_field_case("lake.jpg");
-  const RunResult r = run_omma("calibrate --rig " + (dir / "rig.json").string() + " --frames " +
-                               (dir / "frames").string() + " --out " + (dir / "cal.json").string() + " --json");
+  const RunResult r = run_omma("calibrate --rig " + (dir / "sim/rig.json").string() + " --frames " +
+                               (dir / "sim").string() + " --out " + (dir / "cal.json").string() + " --json");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto j = r.json();
+  EXPECT_EQ(j["scene"], "far");
   EXPECT_EQ(j["cameras"], 24);
   EXPECT_GT(j["matches"].get<int>(), 1000);
   EXPECT_GT(j["inliers"].get<int>(), 1000);
@@ -44,8 +44,8 @@ TEST(CalibCli, CalibrateThenRigDiffMeetsTargets) {
     EXPECT_LT(c["rms_px"].get<double>(), 0.6) << c.dump();
   }
   EXPECT_TRUE(fs::exists(dir / "cal.json"));
-  const RunResult d = run_omma("rig-diff " + (dir / "cal.json").string() + " " + (dir / "rig_true.json").string() +
-                               " --align --json");
+  const RunResult d = run_omma("rig-diff " + (dir / "cal.json").string() + " " +
+                               (dir / "sim/rig_true.json").string() + " --align --json");
   ASSERT_EQ(d.exit_code, 0) << d.err;
   const auto dj = d.json();
   std::printf("calibrated vs true: orientation median %.4f deg max %.4f, focal median %.5f, centre median %.3f px\n",
@@ -53,8 +53,8 @@ TEST(CalibCli, CalibrateThenRigDiffMeetsTargets) {
               dj["focal_error_rel"]["median"].get<double>(), dj["center_error_px"]["median"].get<double>());
   EXPECT_LT(dj["orientation_error_deg"]["median"].get<double>(), 0.1);
   EXPECT_LT(dj["focal_error_rel"]["median"].get<double>(), 0.005);
-  const RunResult n = run_omma("rig-diff " + (dir / "rig.json").string() + " " + (dir / "rig_true.json").string() +
-                               " --align --json");
+  const RunResult n = run_omma("rig-diff " + (dir / "sim/rig.json").string() + " " +
+                               (dir / "sim/rig_true.json").string() + " --align --json");
   ASSERT_EQ(n.exit_code, 0) << n.err;
   EXPECT_GT(n.json()["orientation_error_deg"]["median"].get<double>(), 0.5);  // the nominal rig is off
   fs::remove_all(dir);
