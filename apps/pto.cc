@@ -30,7 +30,12 @@ void add_pto_command(CLI::App& root) {
     set_json_mode(json_ex);
     const Rig rig = load_rig(rig_path);
     calib::PtoExportOptions opt;
-    opt.frames_dir = frames;
+    // Hugin resolves image names relative to the project file's folder.
+    if (!frames.empty()) {
+      namespace fs = std::filesystem;
+      opt.frames_dir = fs::relative(fs::absolute(frames), fs::absolute(pto_path).parent_path()).string();
+      if (opt.frames_dir.empty()) opt.frames_dir = fs::absolute(frames).string();
+    }
     opt.pano_width = pano_width;
     opt.interpolator = interpolator;
     if (pano_width < 8) throw std::invalid_argument("--pano-width must be at least 8");

@@ -142,6 +142,8 @@ PtoCamera pto_from_camera(const RigCamera& cam, LensFit* fit) {
   const double fpt = 0.5 * (lo + hi);
   solve_abc(fpt, &a, &b, &c);
   if (!in.has_distortion()) a = b = c = 0;
+  for (double* x : {&a, &b, &c})
+    if (std::abs(*x) < 1e-10) *x = 0;  // least-squares round-off of exactly-zero terms
   p.a = a, p.b = b, p.c = c;
   p.hfov_deg = rad2deg(2 * std::atan(in.width / 2.0 / fpt));
   if (fit) {
