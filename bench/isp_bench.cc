@@ -79,6 +79,27 @@ void BM_OpenCvBilinearSet(benchmark::State& state) {
 }
 BENCHMARK(BM_OpenCvBilinearSet)->UseRealTime()->Unit(benchmark::kMillisecond);
 
+// One frame on one thread (CPU cost per frame, for the fast path's tuning).
+void BM_IspFrame(benchmark::State& state) {
+  omma::isp::IspOptions o;
+  o.demosaic = Demosaic(state.range(0));
+  o.awb = Awb::kGrayWorld;
+  const cv::Mat& f = frames()[3];
+  for (auto _ : state) benchmark::DoNotOptimize(omma::isp::develop(f, o).data);
+  state.SetLabel(omma::isp::demosaic_name(o.demosaic) + "+grayworld");
+}
+BENCHMARK(BM_IspFrame)->ArgName("method")->DenseRange(0, 3)->Unit(benchmark::kMicrosecond);
+
+void BM_OpenCvBilinearFrame(benchmark::State& state) {
+  const cv::Mat& f = frames()[3];
+  cv::Mat out;
+  for (auto _ : state) {
+    cv::cvtColor(f, out, cv::COLOR_BayerBG2BGR);
+    benchmark::DoNotOptimize(out.data);
+  }
+}
+BENCHMARK(BM_OpenCvBilinearFrame)->Unit(benchmark::kMicrosecond);
+
 // The plain per-pixel reference (one thread), for scale.
 void BM_IspReferenceSet(benchmark::State& state) {
   omma::isp::IspOptions o;

@@ -47,6 +47,13 @@ cv::Mat mosaic_rggb(const cv::Mat& bgr);
 cv::Mat demosaic(const cv::Mat& raw, Demosaic method, int bits,
                  std::array<int64_t, 3>* sums = nullptr);
 
+// Fast path with planar output: planes[0..2] = B, G, R as CV_16UC1 (what develop() uses).
+void demosaic_planes(const cv::Mat& raw, Demosaic method, int bits, cv::Mat planes[3]);
+// The interleaved integer path for every method and bit depth (demosaic() uses the planar one for
+// bilinear and hybrid at <= 10 bits); exposed so that the tests can compare both with the reference.
+cv::Mat demosaic_interleaved(const cv::Mat& raw, Demosaic method, int bits,
+                             std::array<int64_t, 3>* sums = nullptr);
+
 // Plain per-pixel reference (slow, readable): identical output to demosaic().
 cv::Mat demosaic_reference(const cv::Mat& raw, Demosaic method, int bits);
 

@@ -43,6 +43,11 @@ TEST(Demosaic, FastEqualsReferenceOnRandomAndTexture) {
       const cv::Mat fast = demosaic(*raw, m, 10), ref = demosaic_reference(*raw, m, 10);
       ASSERT_EQ(fast.type(), CV_16UC3);
       EXPECT_EQ(cv::norm(fast, ref, cv::NORM_INF), 0.0) << demosaic_name(m);
+      // the interleaved integer path, and the 12-bit case (no int16 planar kernel)
+      EXPECT_EQ(cv::norm(demosaic_interleaved(*raw, m, 10), ref, cv::NORM_INF), 0.0) << demosaic_name(m);
+      const cv::Mat raw12 = *raw * 4;
+      EXPECT_EQ(cv::norm(demosaic(raw12, m, 12), demosaic_reference(raw12, m, 12), cv::NORM_INF), 0.0)
+          << demosaic_name(m);
     }
   // also at the smallest size (4x4: every pixel is a border pixel)
   const cv::Mat tiny = random_raw(4, 4, 10, 2);

@@ -37,6 +37,26 @@ cv::Mat to_bgr8(const cv::Mat& bgr16, int bits) {
   return out;
 }
 
+// One row of: v' = min(maxv, (v * gain + 2048) >> 12), then the 8 MSBs (a compile-time shift for
+// the 10-bit sensors, so that the loop vectorises).
+template <int kShift>
+void gain_row(const uint16_t* __restrict p, uint8_t* __restrict q, int n, uint32_t gain, uint32_t maxv) {
+  if (gain == 4096u) {
+    for (int x = 0; x < n; ++x) q[x] = uint8_t(p[x] >> kShift);
+    return;
+  }
+  for (int x = 0; x < n; ++x) {
+    const uint32_t v = (uint32_t(p[x]) * gain + 2048u) >> 12;
+    q[x] = uint8_t((v < maxv ? v : maxv) >> kShift);
+  }
+}
+void gain_row_any(const uint16_t* p, uint8_t* q, int n, uint32_t gain, uint32_t maxv, int shift) {
+  for (int x = 0; x < n; ++x) {
+    const uint32_t v = (uint32_t(p[x]) * gain + 2048u) >> 12;
+    q[x] = uint8_t((v < maxv ? v : maxv) >> shift);
+  }
+}
+
 void check_options(const cv::Mat& raw, const IspOptions& o) {
   check_bayer(raw, o.bits);
   if (o.bits < 8) throw std::invalid_argument("ISP needs raw values of at least 8 bits");
@@ -52,26 +72,32 @@ cv::Mat develop(const cv::Mat& raw_in, const IspOptions& o) {
   check_options(raw_in, o);
   const cv::Mat raw = vignetting(raw_in, o);
   const int maxv = (1 << o.bits) - 1;
-  std::array<int64_t, 3> sums{};
-  const cv::Mat rgb = demosaic(raw, o.demosaic, o.bits, &sums);
+  cv::Mat planes[3];  // B, G, R
+  demosaic_planes(raw, o.demosaic, o.bits, planes);
   WbGains g;
-  if (o.awb == Awb::kGrayWorld) g = gray_world_gains(sums);
-  else if (o.awb == Awb::kWhitePatch) g = white_patch_gains(rgb);
-  // Gains, clamp and the 8 MSBs in one pass.
-  const int shift = o.bits - 8;
-  cv::Mat out(rgb.size(), CV_8UC3);
-  const uint32_t gb = uint32_t(g.b_q12), gr = uint32_t(g.r_q12);
-  for (int y = 0; y < rgb.rows; ++y) {
-    const uint16_t* p = rgb.ptr<uint16_t>(y);
-    uint8_t* q = out.ptr<uint8_t>(y);
-    for (int x = 0; x < rgb.cols; ++x) {
-      const uint32_t b = std::min<uint32_t>(uint32_t(maxv), (p[3 * x] * gb + 2048u) >> 12);
-      const uint32_t r = std::min<uint32_t>(uint32_t(maxv), (p[3 * x + 2] * gr + 2048u) >> 12);
-      q[3 * x] = uint8_t(b >> shift);
-      q[3 * x + 1] = uint8_t(p[3 * x + 1] >> shift);
-      q[3 * x + 2] = uint8_t(r >> shift);
+  if (o.awb == Awb::kGrayWorld) {
+    std::array<int64_t, 3> sums{};
+    for (int c = 0; c < 3; ++c) sums[size_t(c)] = int64_t(cv::sum(planes[c])[0]);
+    g = gray_world_gains(sums);
+  } else if (o.awb == Awb::kWhitePatch) {
+    cv::Mat rgb;
+    cv::merge(planes, 3, rgb);
+    g = white_patch_gains(rgb);
+  }
+  // Gains, clamp and the 8 MSBs, plane by plane (vectorisable loops), then interleave.
+  const uint32_t gain[3] = {uint32_t(g.b_q12), 4096u, uint32_t(g.r_q12)};
+  cv::Mat out8[3];
+  for (int c = 0; c < 3; ++c) {
+    out8[c].create(raw.size(), CV_8UC1);
+    for (int y = 0; y < raw.rows; ++y) {
+      const uint16_t* p = planes[c].ptr<uint16_t>(y);
+      uint8_t* q = out8[c].ptr<uint8_t>(y);
+      if (o.bits == 10) gain_row<2>(p, q, raw.cols, gain[c], uint32_t(maxv));
+      else gain_row_any(p, q, raw.cols, gain[c], uint32_t(maxv), o.bits - 8);
     }
   }
+  cv::Mat out;
+  cv::merge(out8, 3, out);
   return out;
 }
 
