@@ -21,6 +21,7 @@ struct IspArgs {
   int bits = 10;
   int border = 8;
   bool rgb565 = false;
+  bool srgb = false;
   bool json = false;
 };
 
@@ -55,6 +56,7 @@ void run_isp(const IspArgs& a) {
   o.demosaic = isp::parse_demosaic(a.demosaic);
   o.awb = isp::parse_awb(a.awb);
   o.bits = a.bits;
+  o.srgb = a.srgb;
   const cv::Mat raw = read_image(a.in);
   if (raw.channels() != 1 || raw.depth() != CV_16U)
     throw std::invalid_argument("'" + a.in + "' is not a raw Bayer frame: expected a 16-bit single-channel "
@@ -90,6 +92,8 @@ void add_isp_command(CLI::App& root) {
       ->check(CLI::IsMember({"none", "grayworld", "whitepatch"}))->capture_default_str();
   cmd->add_option("--flat", a->flat, "Flat-field raw frame (white target, same size) for vignetting correction");
   cmd->add_option("--bits", a->bits, "Bit depth of the raw values")->check(CLI::Range(8, 16))->capture_default_str();
+  cmd->add_flag("--srgb", a->srgb,
+                "sRGB-encode the output (for linear raw such as the simulator's) instead of the 8 linear MSBs");
   cmd->add_flag("--rgb565", a->rgb565, "Write the RGB565-packed frame (16-bit single channel, §5.2) instead");
   cmd->add_option("--eval", a->eval, "Photograph to evaluate the demosaicing methods on (instead of --in)");
   cmd->add_option("--border", a->border, "Pixels left out on each side for --eval PSNR")

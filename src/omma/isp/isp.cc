@@ -22,19 +22,22 @@ cv::Mat vignetting(const cv::Mat& raw, const IspOptions& o) {
   return apply_flat_field(r16, o.flat_gain, (1 << o.bits) - 1);
 }
 
-// 8 most significant bits of a `bits`-bit value (§5.2).
-inline uint8_t to8(int v, int bits) {
-  return uint8_t(bits >= 8 ? v >> (bits - 8) : v << (8 - bits));
-}
-
-cv::Mat to_bgr8(const cv::Mat& bgr16, int bits) {
+cv::Mat to_bgr8(const cv::Mat& bgr16, int bits, bool srgb) {
+  const std::vector<uint8_t> lut = output_table(bits, srgb);
   cv::Mat out(bgr16.size(), CV_8UC3);
   for (int y = 0; y < bgr16.rows; ++y) {
     const uint16_t* p = bgr16.ptr<uint16_t>(y);
     uint8_t* o = out.ptr<uint8_t>(y);
-    for (int i = 0; i < 3 * bgr16.cols; ++i) o[i] = to8(p[i], bits);
+    for (int i = 0; i < 3 * bgr16.cols; ++i) o[i] = lut[p[i]];
   }
   return out;
+}
+
+void gain_row_lut(const uint16_t* p, uint8_t* q, int n, uint32_t gain, uint32_t maxv, const uint8_t* lut) {
+  for (int x = 0; x < n; ++x) {
+    const uint32_t v = (uint32_t(p[x]) * gain + 2048u) >> 12;
+    q[x] = lut[v < maxv ? v : maxv];
+  }
 }
 
 // One row of: v' = min(maxv, (v * gain + 2048) >> 12), then the 8 MSBs (a compile-time shift for
@@ -68,6 +71,22 @@ void check_options(const cv::Mat& raw, const IspOptions& o) {
 
 }  // namespace
 
+std::vector<uint8_t> output_table(int bits, bool srgb) {
+  if (bits < 8 || bits > 16) throw std::invalid_argument("output_table: bits must be 8..16");
+  const int n = 1 << bits;
+  std::vector<uint8_t> t(static_cast<size_t>(n));
+  for (int v = 0; v < n; ++v) {
+    if (!srgb) {
+      t[size_t(v)] = uint8_t(v >> (bits - 8));  // the 8 most significant bits (§5.2)
+    } else {
+      const double l = double(v) / double(n - 1);
+      const double e = l <= 0.0031308 ? 12.92 * l : 1.055 * std::pow(l, 1.0 / 2.4) - 0.055;
+      t[size_t(v)] = uint8_t(std::clamp(std::lround(255.0 * e), 0L, 255L));
+    }
+  }
+  return t;
+}
+
 cv::Mat develop(const cv::Mat& raw_in, const IspOptions& o) {
   check_options(raw_in, o);
   const cv::Mat raw = vignetting(raw_in, o);
@@ -86,13 +105,16 @@ cv::Mat develop(const cv::Mat& raw_in, const IspOptions& o) {
   }
   // Gains, clamp and the 8 MSBs, plane by plane (vectorisable loops), then interleave.
   const uint32_t gain[3] = {uint32_t(g.b_q12), 4096u, uint32_t(g.r_q12)};
+  std::vector<uint8_t> lut;
+  if (o.srgb) lut = output_table(o.bits, true);
   cv::Mat out8[3];
   for (int c = 0; c < 3; ++c) {
     out8[c].create(raw.size(), CV_8UC1);
     for (int y = 0; y < raw.rows; ++y) {
       const uint16_t* p = planes[c].ptr<uint16_t>(y);
       uint8_t* q = out8[c].ptr<uint8_t>(y);
-      if (o.bits == 10) gain_row<2>(p, q, raw.cols, gain[c], uint32_t(maxv));
+      if (o.srgb) gain_row_lut(p, q, raw.cols, gain[c], uint32_t(maxv), lut.data());
+      else if (o.bits == 10) gain_row<2>(p, q, raw.cols, gain[c], uint32_t(maxv));
       else gain_row_any(p, q, raw.cols, gain[c], uint32_t(maxv), o.bits - 8);
     }
   }
@@ -107,7 +129,7 @@ cv::Mat develop_reference(const cv::Mat& raw_in, const IspOptions& o) {
   cv::Mat rgb = demosaic_reference(raw, o.demosaic, o.bits);
   if (o.awb == Awb::kGrayWorld) apply_gains(rgb, gray_world_gains(rgb), (1 << o.bits) - 1);
   else if (o.awb == Awb::kWhitePatch) apply_gains(rgb, white_patch_gains_reference(rgb), (1 << o.bits) - 1);
-  return to_bgr8(rgb, o.bits);
+  return to_bgr8(rgb, o.bits, o.srgb);
 }
 
 std::vector<cv::Mat> develop_all(const std::vector<cv::Mat>& raws, const IspOptions& o) {

@@ -49,6 +49,7 @@ TEST(Isp, DevelopFastEqualsReferenceAllOptions) {
     for (Awb a : {Awb::kNone, Awb::kGrayWorld, Awb::kWhitePatch})
       for (bool with_flat : {false, true}) {
         IspOptions o;
+        o.srgb = with_flat;  // both output encodings
         o.demosaic = m;
         o.awb = a;
         if (with_flat) o.flat_gain = flat_field_gain(flat);
@@ -131,6 +132,16 @@ TEST(Isp, DevelopAllMatchesDevelop) {
   const auto all = develop_all(raws, o);
   ASSERT_EQ(all.size(), raws.size());
   for (size_t i = 0; i < raws.size(); ++i) EXPECT_EQ(cv::norm(all[i], develop(raws[i], o), cv::NORM_INF), 0.0);
+}
+
+TEST(Isp, OutputTables) {
+  const auto lin = output_table(10, false), srgb = output_table(10, true);
+  ASSERT_EQ(lin.size(), 1024u);
+  EXPECT_EQ(lin[1023], 255);
+  EXPECT_EQ(lin[4], 1);
+  EXPECT_EQ(srgb[0], 0);
+  EXPECT_EQ(srgb[1023], 255);
+  EXPECT_EQ(srgb[220], 128);  // linear 0.215 -> sRGB 0.5
 }
 
 TEST(Isp, PsnrOfKnownError) {
