@@ -95,6 +95,39 @@ TEST(IspCli, DevelopsSimulatorRawFrames) {
   fs::remove_all(dir);
 }
 
+TEST(IspCli, FlatFieldRemovesVignetting) {
+  const fs::path dir = temp_dir("ispflat");
+  const int W = 250, H = 250;
+  cv::Mat flat(H, W, CV_16UC1), scene(H, W, CV_16UC1);
+  for (int y = 0; y < H; ++y)
+    for (int x = 0; x < W; ++x) {
+      const double r2 = (std::pow(x + 0.5 - W / 2.0, 2) + std::pow(y + 0.5 - H / 2.0, 2)) / (W * W / 4.0);
+      const double fall = 1.0 / std::pow(1.0 + 0.4 * r2, 2);
+      flat.at<uint16_t>(y, x) = uint16_t(950 * fall);
+      scene.at<uint16_t>(y, x) = uint16_t(500 * fall);
+    }
+  cv::imwrite((dir / "flat.png").string(), flat);
+  cv::imwrite((dir / "scene.png").string(), scene);
+  auto ratio = [&](const std::string& extra) {
+    const fs::path out = dir / "out.png";
+    const RunResult r = run_omma("isp --in " + (dir / "scene.png").string() + " --awb none --out " +
+                                 out.string() + " " + extra);
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    const cv::Mat im = cv::imread(out.string(), cv::IMREAD_COLOR);
+    fs::remove(out);
+    return cv::mean(im(cv::Rect(4, 4, 30, 30)))[1] / cv::mean(im(cv::Rect(105, 105, 40, 40)))[1];
+  };
+  EXPECT_LT(ratio(""), 0.7);
+  EXPECT_NEAR(ratio("--flat " + (dir / "flat.png").string()), 1.0, 0.03);
+  cv::imwrite((dir / "small.png").string(), cv::Mat(100, 100, CV_16UC1, cv::Scalar(900)));
+  const RunResult bad = run_omma("isp --in " + (dir / "scene.png").string() + " --flat " +
+                                 (dir / "small.png").string() + " --out " + (dir / "o.png").string());
+  EXPECT_EQ(bad.exit_code, 1);
+  EXPECT_NE(bad.err.find("flat"), std::string::npos) << bad.err;
+  EXPECT_FALSE(fs::exists(dir / "o.png"));
+  fs::remove_all(dir);
+}
+
 TEST(IspCli, EvalPrintsTableA1Json) {
   const fs::path dir = temp_dir("ispeval");
   cv::Mat photo = cv::imread(data_dir() + "/lake.jpg", cv::IMREAD_COLOR);
