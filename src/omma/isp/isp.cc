@@ -99,9 +99,7 @@ cv::Mat develop(const cv::Mat& raw_in, const IspOptions& o) {
     for (int c = 0; c < 3; ++c) sums[size_t(c)] = int64_t(cv::sum(planes[c])[0]);
     g = gray_world_gains(sums);
   } else if (o.awb == Awb::kWhitePatch) {
-    cv::Mat rgb;
-    cv::merge(planes, 3, rgb);
-    g = white_patch_gains(rgb);
+    g = white_patch_gains_planes(planes);
   }
   // Gains, clamp and the 8 MSBs, plane by plane (vectorisable loops), then interleave.
   const uint32_t gain[3] = {uint32_t(g.b_q12), 4096u, uint32_t(g.r_q12)};
