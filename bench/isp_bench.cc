@@ -3,13 +3,13 @@
 // OpenCV's cvtColor bilinear Bayer conversion (16-bit in, no white balance) on the same frames,
 // also over the frames with oneTBB, in the same run. The target is >= 100 sets/s on 2 cores.
 // Also: the plain reference path, and the sensor-link decoder (one 250x250 frame).
-#include <filesystem>
-#include <vector>
-
 #include <benchmark/benchmark.h>
+#include <tbb/parallel_for.h>
+
+#include <filesystem>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
-#include <tbb/parallel_for.h>
+#include <vector>
 
 #include "omma/isp/isp.h"
 
@@ -72,7 +72,8 @@ void BM_OpenCvBilinearSet(benchmark::State& state) {
   const auto& in = frames();
   std::vector<cv::Mat> out(in.size());
   for (auto _ : state) {
-    tbb::parallel_for(size_t(0), in.size(), [&](size_t i) { cv::cvtColor(in[i], out[i], cv::COLOR_BayerBG2BGR); });
+    tbb::parallel_for(size_t(0), in.size(),
+                      [&](size_t i) { cv::cvtColor(in[i], out[i], cv::COLOR_BayerBG2BGR); });
     benchmark::DoNotOptimize(out.data());
   }
   set_counters(state);
@@ -118,7 +119,8 @@ void BM_LinkDecodeFrame(benchmark::State& state) {
     const auto st = omma::isp::decode_link(stream.bytes, c, [](const omma::isp::LinkFrame&) {});
     benchmark::DoNotOptimize(st.rows_ok);
   }
-  state.counters["frames_per_s"] = benchmark::Counter(double(state.iterations()), benchmark::Counter::kIsRate);
+  state.counters["frames_per_s"] =
+      benchmark::Counter(double(state.iterations()), benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_LinkDecodeFrame)->UseRealTime()->Unit(benchmark::kMillisecond);
 

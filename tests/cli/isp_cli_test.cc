@@ -1,11 +1,11 @@
 // CLI tests for `omma isp` and `omma link` (thesis §5.1, appendix A).
+#include <gtest/gtest.h>
+
 #include <filesystem>
 #include <fstream>
-#include <random>
-
-#include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <random>
 
 #include "tests/cli/cli_util.h"
 
@@ -74,7 +74,8 @@ TEST(IspCli, DevelopsSimulatorRawFrames) {
     ASSERT_FALSE(ref.empty());
     for (const char* m : {"bilinear", "cc"}) {
       const fs::path out = dir / (std::string(name) + "_" + m + ".png");
-      r = run_omma("isp --in " + raw.string() + " --demosaic " + m + " --awb none --srgb --out " + out.string());
+      r = run_omma("isp --in " + raw.string() + " --demosaic " + m + " --awb none --srgb --out " +
+                   out.string());
       ASSERT_EQ(r.exit_code, 0) << r.err;
       const cv::Mat got = cv::imread(out.string(), cv::IMREAD_COLOR);
       const cv::Rect roi(8, 8, ref.cols - 16, ref.rows - 16);
@@ -88,8 +89,10 @@ TEST(IspCli, DevelopsSimulatorRawFrames) {
       }
     }
   }
-  std::printf("simulator raw -> sRGB vs cam_XX.png: bilinear mean %.2f dB (worst %.2f), cc mean %.2f dB (worst %.2f)\n",
-              sum_bl / 4, worst_bl, sum_cc / 4, worst_cc);
+  std::printf(
+      "simulator raw -> sRGB vs cam_XX.png: bilinear mean %.2f dB (worst %.2f), cc mean %.2f dB (worst "
+      "%.2f)\n",
+      sum_bl / 4, worst_bl, sum_cc / 4, worst_cc);
   EXPECT_GT(worst_cc, 29.5);
   EXPECT_GT(sum_cc, sum_bl);
   fs::remove_all(dir);
@@ -145,7 +148,8 @@ TEST(IspCli, EvalPrintsTableA1Json) {
       EXPECT_LT(j["methods"][k][c].get<double>(), 80.0);
     }
   // our bilinear is OpenCV's bilinear; the gradient methods beat it
-  EXPECT_NEAR(j["methods"]["bilinear"]["r"].get<double>(), j["methods"]["opencv_bilinear"]["r"].get<double>(), 0.011);
+  EXPECT_NEAR(j["methods"]["bilinear"]["r"].get<double>(), j["methods"]["opencv_bilinear"]["r"].get<double>(),
+              0.011);
   EXPECT_GT(j["methods"]["cc"]["r"].get<double>(), j["methods"]["bilinear"]["r"].get<double>() + 2.0);
   fs::remove_all(dir);
 }
@@ -160,15 +164,16 @@ TEST(IspCli, BadInputsFailClearlyWithoutOutput) {
   struct Case {
     std::string in, expect;
   };
-  for (const Case& c : {Case{"odd.png", "even"}, Case{"rgb8.png", "16-bit single-channel"},
-                        Case{"deep.png", "bits"}, Case{"junk.png", "cannot read"},
-                        Case{"missing.png", "does not exist"}}) {
+  for (const Case& c :
+       {Case{"odd.png", "even"}, Case{"rgb8.png", "16-bit single-channel"}, Case{"deep.png", "bits"},
+        Case{"junk.png", "cannot read"}, Case{"missing.png", "does not exist"}}) {
     const RunResult r = run_omma("isp --in " + (dir / c.in).string() + " --out " + out.string());
     EXPECT_EQ(r.exit_code, 1) << c.in;
     EXPECT_NE(r.err.find(c.expect), std::string::npos) << c.in << ": " << r.err;
     EXPECT_FALSE(fs::exists(out)) << c.in;
   }
-  const RunResult m = run_omma("isp --in " + (dir / "odd.png").string() + " --demosaic nearest --out " + out.string());
+  const RunResult m =
+      run_omma("isp --in " + (dir / "odd.png").string() + " --demosaic nearest --out " + out.string());
   EXPECT_NE(m.exit_code, 0);
   EXPECT_FALSE(fs::exists(out));
   fs::remove_all(dir);
@@ -179,8 +184,8 @@ TEST(LinkCli, EncodeDecodeRoundTripAndDamage) {
   const cv::Mat raw = make_raw(250, 250);
   cv::imwrite((dir / "raw.png").string(), raw);
   // clean, 2 frames
-  RunResult e = run_omma("link encode " + (dir / "raw.png").string() + " " + (dir / "s.bin").string() +
-                         " --frames 2");
+  RunResult e =
+      run_omma("link encode " + (dir / "raw.png").string() + " " + (dir / "s.bin").string() + " --frames 2");
   ASSERT_EQ(e.exit_code, 0) << e.err;
   RunResult d = run_omma("link decode " + (dir / "s.bin").string() + " " + (dir / "f").string() + " --json");
   ASSERT_EQ(d.exit_code, 0) << d.err;
@@ -221,7 +226,8 @@ TEST(LinkCli, GarbageAndTruncatedFiles) {
     for (int i = 0; i < 300000; ++i) g.put(char(rng()));
   }
   std::ofstream(dir / "empty.bin").close();
-  RunResult r = run_omma("link decode " + (dir / "garbage.bin").string() + " " + (dir / "x").string() + " --json", 60);
+  RunResult r =
+      run_omma("link decode " + (dir / "garbage.bin").string() + " " + (dir / "x").string() + " --json", 60);
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("no frame found"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir / "x_000.png"));
@@ -233,7 +239,8 @@ TEST(LinkCli, GarbageAndTruncatedFiles) {
   EXPECT_NE(r.err.find("does not exist"), std::string::npos) << r.err;
   // truncated stream: the rows that arrived are kept, the rest counted as damaged
   cv::imwrite((dir / "raw.png").string(), make_raw(250, 250));
-  ASSERT_EQ(run_omma("link encode " + (dir / "raw.png").string() + " " + (dir / "s.bin").string()).exit_code, 0);
+  ASSERT_EQ(run_omma("link encode " + (dir / "raw.png").string() + " " + (dir / "s.bin").string()).exit_code,
+            0);
   fs::resize_file(dir / "s.bin", 100000);
   r = run_omma("link decode " + (dir / "s.bin").string() + " " + (dir / "t").string() + " --json");
   ASSERT_EQ(r.exit_code, 0) << r.err;

@@ -2,10 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <opencv2/imgproc.hpp>
 #include <stdexcept>
 #include <vector>
-
-#include <opencv2/imgproc.hpp>
 
 namespace omma::isp {
 
@@ -18,9 +17,12 @@ Awb parse_awb(const std::string& name) {
 
 std::string awb_name(Awb a) {
   switch (a) {
-    case Awb::kNone: return "none";
-    case Awb::kGrayWorld: return "grayworld";
-    case Awb::kWhitePatch: return "whitepatch";
+    case Awb::kNone:
+      return "none";
+    case Awb::kGrayWorld:
+      return "grayworld";
+    case Awb::kWhitePatch:
+      return "whitepatch";
   }
   return "?";
 }
@@ -151,8 +153,8 @@ cv::Mat flat_field_gain(const cv::Mat& flat_raw) {
 cv::Mat apply_flat_field(const cv::Mat& raw16, const cv::Mat& gain, int maxv) {
   if (raw16.type() != CV_16UC1 || gain.type() != CV_16UC1 || raw16.size() != gain.size())
     throw std::invalid_argument("flat-field gain is " + std::to_string(gain.cols) + "x" +
-                                std::to_string(gain.rows) + ", the raw frame " +
-                                std::to_string(raw16.cols) + "x" + std::to_string(raw16.rows) +
+                                std::to_string(gain.rows) + ", the raw frame " + std::to_string(raw16.cols) +
+                                "x" + std::to_string(raw16.rows) +
                                 " (both must be 16-bit single-channel of one size)");
   cv::Mat out(raw16.size(), CV_16UC1);
   for (int y = 0; y < raw16.rows; ++y) {

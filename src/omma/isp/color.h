@@ -8,9 +8,8 @@
 
 #include <array>
 #include <cstdint>
-#include <string>
-
 #include <opencv2/core.hpp>
+#include <string>
 
 namespace omma::isp {
 

@@ -1,10 +1,9 @@
 #include "omma/isp/demosaic.h"
 
 #include <cstdlib>
-#include <stdexcept>
-
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
+#include <stdexcept>
 
 namespace omma::isp {
 
@@ -13,16 +12,19 @@ Demosaic parse_demosaic(const std::string& name) {
   if (name == "hybrid") return Demosaic::kHybrid;
   if (name == "ah") return Demosaic::kAdamsHamilton;
   if (name == "cc") return Demosaic::kColourCorrelation;
-  throw std::invalid_argument("unknown demosaicing method '" + name +
-                              "' (use bilinear, hybrid, ah or cc)");
+  throw std::invalid_argument("unknown demosaicing method '" + name + "' (use bilinear, hybrid, ah or cc)");
 }
 
 std::string demosaic_name(Demosaic m) {
   switch (m) {
-    case Demosaic::kBilinear: return "bilinear";
-    case Demosaic::kHybrid: return "hybrid";
-    case Demosaic::kAdamsHamilton: return "ah";
-    case Demosaic::kColourCorrelation: return "cc";
+    case Demosaic::kBilinear:
+      return "bilinear";
+    case Demosaic::kHybrid:
+      return "hybrid";
+    case Demosaic::kAdamsHamilton:
+      return "ah";
+    case Demosaic::kColourCorrelation:
+      return "cc";
   }
   return "?";
 }
@@ -33,17 +35,17 @@ int opencv_bayer_code_ea() { return cv::COLOR_BayerBG2BGR_EA; }
 void check_bayer(const cv::Mat& raw, int bits) {
   if (raw.empty()) throw std::invalid_argument("raw Bayer frame is empty");
   if (raw.channels() != 1)
-    throw std::invalid_argument("raw Bayer frame must have 1 channel, got " +
-                                std::to_string(raw.channels()) +
-                                " (expected a 16-bit single-channel RGGB image with " +
-                                std::to_string(bits) + "-bit values)");
+    throw std::invalid_argument("raw Bayer frame must have 1 channel, got " + std::to_string(raw.channels()) +
+                                " (expected a 16-bit single-channel RGGB image with " + std::to_string(bits) +
+                                "-bit values)");
   if (raw.depth() != CV_16U && raw.depth() != CV_8U)
     throw std::invalid_argument("raw Bayer frame must be 16-bit (or 8-bit) unsigned, got OpenCV depth " +
                                 std::to_string(raw.depth()));
   if (raw.cols % 2 || raw.rows % 2 || raw.cols < 4 || raw.rows < 4)
-    throw std::invalid_argument("raw Bayer frame must have even width and height of at least 4 (RGGB "
-                                "2x2 cells), got " + std::to_string(raw.cols) + "x" +
-                                std::to_string(raw.rows));
+    throw std::invalid_argument(
+        "raw Bayer frame must have even width and height of at least 4 (RGGB "
+        "2x2 cells), got " +
+        std::to_string(raw.cols) + "x" + std::to_string(raw.rows));
   if (bits < 1 || bits > 16) throw std::invalid_argument("bits must be in 1..16");
   double mx = 0;
   cv::minMaxLoc(raw, nullptr, &mx);
@@ -113,10 +115,14 @@ std::array<int, 3> bilinear_ref(const Window& v, Site s) {
   const int diag = v(-1, -1) + v(-1, 1) + v(1, -1) + v(1, 1);  // R7 + R9 + R17 + R19
   const int horiz = v(0, -1) + v(0, 1), vert = v(-1, 0) + v(1, 0);
   switch (s) {
-    case kR: return {c, (cross + 2) >> 2, (diag + 2) >> 2};               // (5.2), (5.5), (5.8)
-    case kB: return {(diag + 2) >> 2, (cross + 2) >> 2, c};               // (5.1), (5.5), (5.7)
-    case kGr: return {(horiz + 1) >> 1, c, (vert + 1) >> 1};              // (5.3), (5.6), (5.9)
-    case kGb: return {(vert + 1) >> 1, c, (horiz + 1) >> 1};              // (5.4), (5.6), (5.10)
+    case kR:
+      return {c, (cross + 2) >> 2, (diag + 2) >> 2};  // (5.2), (5.5), (5.8)
+    case kB:
+      return {(diag + 2) >> 2, (cross + 2) >> 2, c};  // (5.1), (5.5), (5.7)
+    case kGr:
+      return {(horiz + 1) >> 1, c, (vert + 1) >> 1};  // (5.3), (5.6), (5.9)
+    case kGb:
+      return {(vert + 1) >> 1, c, (horiz + 1) >> 1};  // (5.4), (5.6), (5.10)
   }
   return {0, 0, 0};
 }
@@ -141,10 +147,14 @@ std::array<int, 3> hybrid_ref(const Window& v, Site s, int maxv) {
   const int along_row = div16(8 * horiz + 10 * c - 2 * far_h - 2 * diag + far_v);
   const int along_col = div16(8 * vert + 10 * c - 2 * far_v - 2 * diag + far_h);
   switch (s) {
-    case kR: return {c, g_at_rb, x_at_xb};
-    case kB: return {x_at_xb, g_at_rb, c};
-    case kGr: return {along_row, c, along_col};
-    case kGb: return {along_col, c, along_row};
+    case kR:
+      return {c, g_at_rb, x_at_xb};
+    case kB:
+      return {x_at_xb, g_at_rb, c};
+    case kGr:
+      return {along_row, c, along_col};
+    case kGb:
+      return {along_col, c, along_row};
   }
   return {0, 0, 0};
 }
@@ -233,8 +243,9 @@ cv::Mat demosaic_reference(const cv::Mat& raw_in, Demosaic method, int bits) {
     for (int y = 0; y < raw.rows; ++y)
       for (int x = 0; x < raw.cols; ++x) {
         const Window v{raw, y, x};
-        put(out, y, x, method == Demosaic::kBilinear ? bilinear_ref(v, site_at(y, x))
-                                                     : hybrid_ref(v, site_at(y, x), maxv));
+        put(out, y, x,
+            method == Demosaic::kBilinear ? bilinear_ref(v, site_at(y, x))
+                                          : hybrid_ref(v, site_at(y, x), maxv));
       }
     return out;
   }
@@ -251,13 +262,19 @@ cv::Mat demosaic_reference(const cv::Mat& raw_in, Demosaic method, int bits) {
       const Window v{raw, y, x}, g{green, y, x};
       const int c = v(0, 0), gc = g(0, 0);
       switch (site_at(y, x)) {
-        case kR: put(out, y, x, {c, gc, chroma_ah_ref(v, g, true, false, maxv)}); break;
-        case kB: put(out, y, x, {chroma_ah_ref(v, g, true, false, maxv), gc, c}); break;
+        case kR:
+          put(out, y, x, {c, gc, chroma_ah_ref(v, g, true, false, maxv)});
+          break;
+        case kB:
+          put(out, y, x, {chroma_ah_ref(v, g, true, false, maxv), gc, c});
+          break;
         case kGr:  // red left/right, blue up/down
-          put(out, y, x, {chroma_ah_ref(v, g, false, true, maxv), gc, chroma_ah_ref(v, g, false, false, maxv)});
+          put(out, y, x,
+              {chroma_ah_ref(v, g, false, true, maxv), gc, chroma_ah_ref(v, g, false, false, maxv)});
           break;
         case kGb:  // red up/down, blue left/right
-          put(out, y, x, {chroma_ah_ref(v, g, false, false, maxv), gc, chroma_ah_ref(v, g, false, true, maxv)});
+          put(out, y, x,
+              {chroma_ah_ref(v, g, false, false, maxv), gc, chroma_ah_ref(v, g, false, true, maxv)});
           break;
       }
     }
@@ -425,12 +442,12 @@ void ah_fast(const cv::Mat& pad, cv::Mat& out, bool cc, int maxv, std::array<int
     };
     if (y % 2 == 0) {
       for (int x = 0; x < W; x += 2) {
-        store(o + 3 * x, c[x], gc[x], diagonal(x), sb, sg, sr);                    // R site
+        store(o + 3 * x, c[x], gc[x], diagonal(x), sb, sg, sr);                             // R site
         store(o + 3 * (x + 1), along_row(x + 1), gc[x + 1], along_col(x + 1), sb, sg, sr);  // Gr
       }
     } else {
       for (int x = 0; x < W; x += 2) {
-        store(o + 3 * x, along_col(x), gc[x], along_row(x), sb, sg, sr);        // Gb
+        store(o + 3 * x, along_col(x), gc[x], along_row(x), sb, sg, sr);           // Gb
         store(o + 3 * (x + 1), diagonal(x + 1), gc[x + 1], c[x + 1], sb, sg, sr);  // B site
       }
     }
@@ -541,10 +558,18 @@ cv::Mat demosaic_interleaved(const cv::Mat& raw_in, Demosaic method, int bits, s
   cv::Mat out(raw.size(), CV_16UC3);
   std::array<int64_t, 3> s{};
   switch (method) {
-    case Demosaic::kBilinear: bilinear_fast(pad, out, s); break;
-    case Demosaic::kHybrid: hybrid_fast(pad, out, maxv, s); break;
-    case Demosaic::kAdamsHamilton: ah_fast(pad, out, false, maxv, s); break;
-    case Demosaic::kColourCorrelation: ah_fast(pad, out, true, maxv, s); break;
+    case Demosaic::kBilinear:
+      bilinear_fast(pad, out, s);
+      break;
+    case Demosaic::kHybrid:
+      hybrid_fast(pad, out, maxv, s);
+      break;
+    case Demosaic::kAdamsHamilton:
+      ah_fast(pad, out, false, maxv, s);
+      break;
+    case Demosaic::kColourCorrelation:
+      ah_fast(pad, out, true, maxv, s);
+      break;
   }
   if (sums) *sums = s;
   return out;

@@ -1,11 +1,11 @@
 #include "omma/isp/isp.h"
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
-#include <stdexcept>
-
 #include <opencv2/imgproc.hpp>
-#include <tbb/parallel_for.h>
+#include <stdexcept>
 
 #include "omma/core/io.h"
 
@@ -17,8 +17,10 @@ namespace {
 cv::Mat vignetting(const cv::Mat& raw, const IspOptions& o) {
   if (o.flat_gain.empty()) return raw;
   cv::Mat r16;
-  if (raw.depth() == CV_16U) r16 = raw;
-  else raw.convertTo(r16, CV_16U);
+  if (raw.depth() == CV_16U)
+    r16 = raw;
+  else
+    raw.convertTo(r16, CV_16U);
   return apply_flat_field(r16, o.flat_gain, (1 << o.bits) - 1);
 }
 
@@ -111,9 +113,12 @@ cv::Mat develop(const cv::Mat& raw_in, const IspOptions& o) {
     for (int y = 0; y < raw.rows; ++y) {
       const uint16_t* p = planes[c].ptr<uint16_t>(y);
       uint8_t* q = out8[c].ptr<uint8_t>(y);
-      if (o.srgb) gain_row_lut(p, q, raw.cols, gain[c], uint32_t(maxv), lut.data());
-      else if (o.bits == 10) gain_row<2>(p, q, raw.cols, gain[c], uint32_t(maxv));
-      else gain_row_any(p, q, raw.cols, gain[c], uint32_t(maxv), o.bits - 8);
+      if (o.srgb)
+        gain_row_lut(p, q, raw.cols, gain[c], uint32_t(maxv), lut.data());
+      else if (o.bits == 10)
+        gain_row<2>(p, q, raw.cols, gain[c], uint32_t(maxv));
+      else
+        gain_row_any(p, q, raw.cols, gain[c], uint32_t(maxv), o.bits - 8);
     }
   }
   cv::Mat out;
@@ -125,8 +130,10 @@ cv::Mat develop_reference(const cv::Mat& raw_in, const IspOptions& o) {
   check_options(raw_in, o);
   const cv::Mat raw = vignetting(raw_in, o);
   cv::Mat rgb = demosaic_reference(raw, o.demosaic, o.bits);
-  if (o.awb == Awb::kGrayWorld) apply_gains(rgb, gray_world_gains(rgb), (1 << o.bits) - 1);
-  else if (o.awb == Awb::kWhitePatch) apply_gains(rgb, white_patch_gains_reference(rgb), (1 << o.bits) - 1);
+  if (o.awb == Awb::kGrayWorld)
+    apply_gains(rgb, gray_world_gains(rgb), (1 << o.bits) - 1);
+  else if (o.awb == Awb::kWhitePatch)
+    apply_gains(rgb, white_patch_gains_reference(rgb), (1 << o.bits) - 1);
   return to_bgr8(rgb, o.bits, o.srgb);
 }
 
@@ -172,8 +179,8 @@ std::map<std::string, ChannelPsnr> evaluate_demosaic(const cv::Mat& photo, int b
   const cv::Mat ref = photo(cv::Rect(0, 0, photo.cols & ~1, photo.rows & ~1)).clone();
   const cv::Mat raw = mosaic_rggb(ref);  // 8-bit values in CV_16UC1
   std::map<std::string, ChannelPsnr> res;
-  for (Demosaic m : {Demosaic::kBilinear, Demosaic::kHybrid, Demosaic::kAdamsHamilton,
-                     Demosaic::kColourCorrelation}) {
+  for (Demosaic m :
+       {Demosaic::kBilinear, Demosaic::kHybrid, Demosaic::kAdamsHamilton, Demosaic::kColourCorrelation}) {
     cv::Mat out8;
     demosaic(raw, m, 8).convertTo(out8, CV_8U);
     res[demosaic_name(m)] = psnr_per_channel(out8, ref, border);
