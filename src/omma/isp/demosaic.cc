@@ -531,6 +531,110 @@ void linear_planar16(const cv::Mat& pad, bool hybrid, int maxv, cv::Mat planes[3
   }
 }
 
+inline int16_t abs16(int v) { return int16_t(v < 0 ? -v : v); }
+inline int16_t clamp16(int v, int16_t mx) { return int16_t(v < 0 ? 0 : (v > mx ? mx : v)); }
+
+// Adams-Hamilton / colour correlation for raw values of at most 10 bits, planar and vectorisable
+// (same arithmetic as green_ah_fast / ah_fast; every intermediate fits in int16: the largest,
+// LH + MH, is at most 3069 + 24552). Pass 1 computes the green estimate at every x of a row and
+// keeps it at the R/B sites; pass 2 computes the three chroma estimates at every x and picks.
+template <bool cc>
+void ah_planar16(const cv::Mat& pad, int maxv, cv::Mat planes[3]) {
+  const int W = pad.cols - 4, H = pad.rows - 4;
+  const int16_t mx = int16_t(maxv);
+  std::vector<int16_t> odd(static_cast<size_t>(W)), t0(static_cast<size_t>(W)), t1(static_cast<size_t>(W)),
+      t2(static_cast<size_t>(W));
+  for (int x = 0; x < W; ++x) odd[size_t(x)] = int16_t((x & 1) ? -1 : 0);
+  cv::Mat green(H, W, CV_16UC1);
+  for (int y = 0; y < H; ++y) {
+    const uint16_t* uu = pad.ptr<uint16_t>(y) + 2;
+    const uint16_t* u = pad.ptr<uint16_t>(y + 1) + 2;
+    const uint16_t* c = pad.ptr<uint16_t>(y + 2) + 2;
+    const uint16_t* d = pad.ptr<uint16_t>(y + 3) + 2;
+    const uint16_t* dd = pad.ptr<uint16_t>(y + 4) + 2;
+    int16_t* est = t0.data();
+#pragma GCC ivdep
+    for (int x = 0; x < W; ++x) {
+      const int B13 = c[x], G8 = u[x], G18 = d[x], G12 = c[x - 1], G14 = c[x + 1];
+      const int B3 = uu[x], B23 = dd[x], B11 = c[x - 2], B15 = c[x + 2];
+      int16_t LH = int16_t(abs16(G14 - G12) + abs16(2 * B13 - B11 - B15));
+      int16_t LV = int16_t(abs16(G18 - G8) + abs16(2 * B13 - B3 - B23));
+      if constexpr (cc) {
+        const int16_t kh0 = int16_t(2 * u[x - 1] - u[x - 2] - u[x]);
+        const int16_t kh1 = int16_t(2 * u[x + 1] - u[x] - u[x + 2]);
+        const int16_t kh2 = int16_t(2 * d[x - 1] - d[x - 2] - d[x]);
+        const int16_t kh3 = int16_t(2 * d[x + 1] - d[x] - d[x + 2]);
+        const int16_t kv0 = int16_t(2 * u[x - 1] - uu[x - 1] - c[x - 1]);
+        const int16_t kv1 = int16_t(2 * u[x + 1] - uu[x + 1] - c[x + 1]);
+        const int16_t kv2 = int16_t(2 * d[x - 1] - c[x - 1] - dd[x - 1]);
+        const int16_t kv3 = int16_t(2 * d[x + 1] - c[x + 1] - dd[x + 1]);
+        LH = int16_t(LH + abs16(kh0 - kh1) + abs16(kh0 - kh2) + abs16(kh0 - kh3) + abs16(kh1 - kh2) +
+                     abs16(kh1 - kh3) + abs16(kh2 - kh3));
+        LV = int16_t(LV + abs16(kv0 - kv1) + abs16(kv0 - kv2) + abs16(kv0 - kv3) + abs16(kv1 - kv2) +
+                     abs16(kv1 - kv3) + abs16(kv2 - kv3));
+      }
+      const int16_t GH4 = int16_t(2 * (G12 + G14) + 2 * B13 - B11 - B15);
+      const int16_t GV4 = int16_t(2 * (G8 + G18) + 2 * B13 - B3 - B23);
+      const int16_t gh = int16_t((GH4 + 2) >> 2), gv = int16_t((GV4 + 2) >> 2);
+      const int16_t gm = int16_t((GH4 + GV4 + 4) >> 3);
+      const int16_t g = LH < LV ? gh : (LH > LV ? gv : gm);
+      est[x] = clamp16(g, mx);
+    }
+    int16_t* gp = green.ptr<int16_t>(y);
+    const int16_t* m = odd.data();
+    if (y % 2 == 0) {  // R sites at even x
+#pragma GCC ivdep
+      for (int x = 0; x < W; ++x) gp[x] = int16_t((int16_t(c[x]) & m[x]) | (est[x] & ~m[x]));
+    } else {  // B sites at odd x
+#pragma GCC ivdep
+      for (int x = 0; x < W; ++x) gp[x] = int16_t((est[x] & m[x]) | (int16_t(c[x]) & ~m[x]));
+    }
+  }
+  cv::Mat gpad;
+  cv::copyMakeBorder(green, gpad, 1, 1, 1, 1, cv::BORDER_REFLECT_101);
+  for (int y = 0; y < H; ++y) {
+    const uint16_t* u = pad.ptr<uint16_t>(y + 1) + 2;
+    const uint16_t* c = pad.ptr<uint16_t>(y + 2) + 2;
+    const uint16_t* d = pad.ptr<uint16_t>(y + 3) + 2;
+    const int16_t* gu = gpad.ptr<int16_t>(y) + 1;
+    const int16_t* gc = gpad.ptr<int16_t>(y + 1) + 1;
+    const int16_t* gd = gpad.ptr<int16_t>(y + 2) + 1;
+    int16_t* row = t0.data();  // (A.7)
+    int16_t* col = t1.data();  // (A.6)
+    int16_t* dia = t2.data();  // (A.8)-(A.12)
+#pragma GCC ivdep
+    for (int x = 0; x < W; ++x) {
+      const int G13 = gc[x];
+      row[x] = clamp16((c[x - 1] + c[x + 1] + 2 * G13 - gc[x - 1] - gc[x + 1] + 1) >> 1, mx);
+      col[x] = clamp16((u[x] + d[x] + 2 * G13 - gu[x] - gd[x] + 1) >> 1, mx);
+      const int16_t dN = int16_t(abs16(u[x - 1] - d[x + 1]) + abs16(2 * G13 - gu[x - 1] - gd[x + 1]));
+      const int16_t dP = int16_t(abs16(u[x + 1] - d[x - 1]) + abs16(2 * G13 - gu[x + 1] - gd[x - 1]));
+      const int16_t N2 = int16_t(u[x - 1] + d[x + 1] + 2 * G13 - gu[x - 1] - gd[x + 1]);
+      const int16_t P2 = int16_t(u[x + 1] + d[x - 1] + 2 * G13 - gu[x + 1] - gd[x - 1]);
+      const int16_t vn = int16_t((N2 + 1) >> 1), vp = int16_t((P2 + 1) >> 1);
+      const int16_t vm = int16_t((N2 + P2 + 2) >> 2);
+      dia[x] = clamp16(dN < dP ? vn : (dN > dP ? vp : vm), mx);
+    }
+    int16_t* pb = planes[0].ptr<int16_t>(y);
+    int16_t* pg = planes[1].ptr<int16_t>(y);
+    int16_t* pr = planes[2].ptr<int16_t>(y);
+    const int16_t* m = odd.data();
+    std::copy(gc, gc + W, pg);
+    if (y % 2 == 0) {  // R at even x, Gr at odd x
+#pragma GCC ivdep
+      for (int x = 0; x < W; ++x) {
+        pr[x] = int16_t((row[x] & m[x]) | (int16_t(c[x]) & ~m[x]));
+        pb[x] = int16_t((col[x] & m[x]) | (dia[x] & ~m[x]));
+      }
+    } else {  // Gb at even x, B at odd x
+#pragma GCC ivdep
+      for (int x = 0; x < W; ++x) {
+        pr[x] = int16_t((dia[x] & m[x]) | (col[x] & ~m[x]));
+        pb[x] = int16_t((int16_t(c[x]) & m[x]) | (row[x] & ~m[x]));
+      }
+    }
+  }
+}
 }  // namespace
 
 void demosaic_planes(const cv::Mat& raw_in, Demosaic method, int bits, cv::Mat planes[3]) {
@@ -541,6 +645,16 @@ void demosaic_planes(const cv::Mat& raw_in, Demosaic method, int bits, cv::Mat p
     cv::copyMakeBorder(raw, pad, 2, 2, 2, 2, cv::BORDER_REFLECT_101);
     for (int c = 0; c < 3; ++c) planes[c].create(raw.size(), CV_16UC1);
     linear_planar16(pad, method == Demosaic::kHybrid, (1 << bits) - 1, planes);
+    return;
+  }
+  if (bits <= 10) {  // Adams-Hamilton and colour correlation
+    cv::Mat pad;
+    cv::copyMakeBorder(raw, pad, 2, 2, 2, 2, cv::BORDER_REFLECT_101);
+    for (int c = 0; c < 3; ++c) planes[c].create(raw.size(), CV_16UC1);
+    if (method == Demosaic::kColourCorrelation)
+      ah_planar16<true>(pad, (1 << bits) - 1, planes);
+    else
+      ah_planar16<false>(pad, (1 << bits) - 1, planes);
     return;
   }
   cv::Mat bgr = demosaic_interleaved(raw, method, bits);
@@ -580,7 +694,7 @@ cv::Mat demosaic_interleaved(const cv::Mat& raw_in, Demosaic method, int bits, s
 namespace omma::isp {
 
 cv::Mat demosaic(const cv::Mat& raw, Demosaic method, int bits, std::array<int64_t, 3>* sums) {
-  if (bits <= 10 && (method == Demosaic::kBilinear || method == Demosaic::kHybrid)) {
+  if (bits <= 10) {
     cv::Mat planes[3];
     demosaic_planes(raw, method, bits, planes);
     if (sums)

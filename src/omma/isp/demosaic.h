@@ -48,7 +48,7 @@ cv::Mat demosaic(const cv::Mat& raw, Demosaic method, int bits, std::array<int64
 // Fast path with planar output: planes[0..2] = B, G, R as CV_16UC1 (what develop() uses).
 void demosaic_planes(const cv::Mat& raw, Demosaic method, int bits, cv::Mat planes[3]);
 // The interleaved integer path for every method and bit depth (demosaic() uses the planar one for
-// bilinear and hybrid at <= 10 bits); exposed so that the tests can compare both with the reference.
+// every method at <= 10 bits); exposed so that the tests can compare both with the reference.
 cv::Mat demosaic_interleaved(const cv::Mat& raw, Demosaic method, int bits,
                              std::array<int64_t, 3>* sums = nullptr);
 
