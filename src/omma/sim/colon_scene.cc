@@ -22,6 +22,7 @@ constexpr double kPeriod = 240.0;  // mm, the tube repeats along z
 constexpr double kCell = 0.15;     // mm, table cell along z (and about along the circumference)
 constexpr double kMaxDistance = 400.0;
 constexpr double kBlock = 4.0;     // mm, z blocks of the slope bounds
+constexpr int kSkipBlocks = 4;     // the free-space skip looks this many blocks either way
 constexpr double kTwoPi = 2 * kPi;
 
 // Fast atan2 (max error about 1e-5 rad), result in [0, 2 pi).
@@ -97,6 +98,9 @@ class ColonScene final : public Scene {
     nphi_ = static_cast<int>(std::lround(kTwoPi * p.radius_mm / kCell));
     dz_ = kPeriod / nz_;
     dphi_ = kTwoPi / nphi_;
+    inv_dz_ = 1 / dz_;
+    inv_dphi_ = 1 / dphi_;
+    inv_nz_ = 1.0 / nz_;
     build_tables();
   }
 
@@ -124,13 +128,31 @@ class ColonScene final : public Scene {
     }
     rho_lo = std::max(rho_lo, 0.5);
     const double max_h = kBlock / std::max(adz, 1e-9);
+    const double max_skip = kSkipBlocks * kBlock / std::max(adz, 1e-9);
     double g = gap(o, d, s), s_prev = s, g_prev = g;
     while (true) {
       if (s > kMaxDistance) return {0, 0, 0};
       if (g <= 0) break;
-      const int k = block_of(o.z() + s * d.z());
+      const double z = o.z() + s * d.z();
+      const int k = block_of(z);
       const double L = 1.02 * (dxy * (1 + lphi_win_[k] / rho_lo) + lz_win_[k] * adz) + 1e-6;
-      const double h = std::min(std::max(g / L, 0.05 + 0.002 * s), max_h);
+      double h = std::min(std::max(g / L, 0.08 + 0.002 * s), max_h);
+      // Skip: while rho stays below the smallest radius of the blocks within kSkipBlocks, no hit.
+      const double px = o.x() + s * d.x(), py = o.y() + s * d.y();
+      const double rho2 = px * px + py * py, rw = rmin_skip_[k];
+      if (rho2 < rw * rw && a > 1e-12) {
+        const double b = px * d.x() + py * d.y();
+        const double t = (-b + std::sqrt(b * b - a * (rho2 - rw * rw))) / a;
+        h = std::max(h, std::min(t, max_skip));
+      } else if (rho2 < rw * rw) {
+        h = std::max(h, max_skip);
+      }
+      // Secant acceleration for grazing rays (g shrinking slowly): aim just past the predicted
+      // crossing, but never more than about a millimetre, so no fold or polyp can be jumped over.
+      if (s > s_prev && g < g_prev) {
+        const double rate = (g_prev - g) / (s - s_prev);
+        h = std::max(h, std::min(1.2 * g / rate, 1.0 + 0.01 * s));
+      }
       s_prev = s;
       g_prev = g;
       s += h;
@@ -139,7 +161,7 @@ class ColonScene final : public Scene {
     // Regula falsi (Illinois) between s_prev (g > 0, inside) and s (g <= 0, beyond the wall).
     double lo = s_prev, hi = s, glo = g_prev, ghi = g;
     int side = 0;
-    for (int i = 0; i < 8 && hi - lo > 2e-3; ++i) {
+    for (int i = 0; i < 8 && hi - lo > 5e-3; ++i) {
       const double m = (lo * ghi - hi * glo) / (ghi - glo);
       const double gm = gap(o, d, m);
       if (gm > 0) {
@@ -227,6 +249,12 @@ class ColonScene final : public Scene {
       }
     });
     // Bounds for the march.
+    slope_.resize(radius_.size());
+    for (int iz = 0; iz < nz_; ++iz)
+      for (int ip = 0; ip < nphi_; ++ip)
+        slope_[idx(iz, ip)] =
+            cv::Vec2f(static_cast<float>((radius_[idx(iz + 1, ip)] - radius_[idx(iz - 1, ip)]) / (2 * dz_)),
+                      static_cast<float>((radius_[idx(iz, ip + 1)] - radius_[idx(iz, ip - 1)]) / (2 * dphi_)));
     r_min_ = 1e9;
     for (float r : radius_) r_min_ = std::min(r_min_, static_cast<double>(r));
     r_min_ -= 0.01;
@@ -242,6 +270,15 @@ class ColonScene final : public Scene {
         lphi[b] = std::max(lphi[b], std::abs(radius_[idx(iz, ip + 1)] - r) / dphi_);
       }
     }
+    std::vector<double> rmin(nb, 1e9);
+    for (int iz = 0; iz < nz_; ++iz) {
+      const int b = std::min(nb - 1, static_cast<int>(iz * dz_ / kBlock));
+      for (int ip = 0; ip < nphi_; ++ip) rmin[b] = std::min(rmin[b], static_cast<double>(radius_[idx(iz, ip)]));
+    }
+    rmin_skip_.assign(nb, 1e9);
+    for (int b = 0; b < nb; ++b)
+      for (int j = -kSkipBlocks - 1; j <= kSkipBlocks + 1; ++j)
+        rmin_skip_[b] = std::min(rmin_skip_[b], rmin[(b + j + 2 * nb) % nb] - 0.01);
     lz_win_.assign(nb, 0);
     lphi_win_.assign(nb, 0);
     for (int b = 0; b < nb; ++b)
@@ -260,23 +297,31 @@ class ColonScene final : public Scene {
     return static_cast<size_t>(iz) * nphi_ + ip;
   }
 
-  // Bilinear lookup of a table at (z mm, phi rad).
-  template <typename T>
-  T lookup(const std::vector<T>& table, double z, double phi) const {
-    double u = z / dz_, v = phi / dphi_;
-    u -= nz_ * std::floor(u / nz_);
+  // Bilinear interpolation cell of (z mm, phi rad) in the periodic tables.
+  struct Cell {
+    size_t i00, i01, i10, i11;
+    float a, b;  // weights along z and phi
+  };
+  Cell cell(double z, double phi) const {
+    double u = z * inv_dz_;
+    u -= nz_ * std::floor(u * inv_nz_);
+    const double v = phi * inv_dphi_;
     const double fu = std::floor(u), fv = std::floor(v);
-    const int iu = static_cast<int>(fu), iv = static_cast<int>(fv);
-    const float a = static_cast<float>(u - fu), b = static_cast<float>(v - fv);
+    int iu = static_cast<int>(fu), iv = static_cast<int>(fv);
+    if (iu >= nz_) iu -= nz_;
+    if (iv >= nphi_) iv -= nphi_;
+    if (iv < 0) iv += nphi_;
     const int iu1 = iu + 1 == nz_ ? 0 : iu + 1;
-    const int iv0 = iv >= nphi_ ? iv - nphi_ : iv;
-    const int iv1 = iv0 + 1 >= nphi_ ? 0 : iv0 + 1;
-    const T* r0 = &table[static_cast<size_t>(std::min(iu, nz_ - 1)) * nphi_];
-    const T* r1 = &table[static_cast<size_t>(iu1) * nphi_];
-    return (r0[iv0] * (1 - b) + r0[iv1] * b) * (1 - a) + (r1[iv0] * (1 - b) + r1[iv1] * b) * a;
+    const int iv1 = iv + 1 == nphi_ ? 0 : iv + 1;
+    const size_t r0 = static_cast<size_t>(iu) * nphi_, r1 = static_cast<size_t>(iu1) * nphi_;
+    return {r0 + iv, r0 + iv1, r1 + iv, r1 + iv1, static_cast<float>(u - fu), static_cast<float>(v - fv)};
+  }
+  template <typename T>
+  T at(const std::vector<T>& t, const Cell& c) const {
+    return (t[c.i00] * (1 - c.b) + t[c.i01] * c.b) * (1 - c.a) + (t[c.i10] * (1 - c.b) + t[c.i11] * c.b) * c.a;
   }
 
-  double radius_at(double z, double phi) const { return lookup(radius_, z, phi); }
+  double radius_at(double z, double phi) const { return at(radius_, cell(z, phi)); }
 
   double gap(const Vec3& o, const Vec3& d, double s) const {
     const double x = o.x() + s * d.x(), y = o.y() + s * d.y(), z = o.z() + s * d.z();
@@ -285,30 +330,30 @@ class ColonScene final : public Scene {
 
   cv::Vec3f shade(const Vec3& p, const Vec3& light) const {
     const double phi = fast_phi(p.y(), p.x()), rho = std::hypot(p.x(), p.y());
-    const double dRdz = (radius_at(p.z() + dz_, phi) - radius_at(p.z() - dz_, phi)) / (2 * dz_);
-    double pp = phi + dphi_, pm = phi - dphi_;
-    if (pp >= kTwoPi) pp -= kTwoPi;
-    if (pm < 0) pm += kTwoPi;
-    const double dRdphi = (radius_at(p.z(), pp) - radius_at(p.z(), pm)) / (2 * dphi_);
+    const Cell c = cell(p.z(), phi);
+    const cv::Vec2f slope = at(slope_, c);  // dR/dz, dR/dphi
     // F = R(z, phi) - rho grows towards the axis; its gradient is the inward normal.
-    const Vec3 e_rho(std::cos(phi), std::sin(phi), 0), e_phi(-std::sin(phi), std::cos(phi), 0);
-    const Vec3 n = (dRdz * Vec3::UnitZ() + (dRdphi / rho) * e_phi - e_rho).normalized();
+    const double cp = std::cos(phi), sp = std::sin(phi);
+    const Vec3 e_rho(cp, sp, 0), e_phi(-sp, cp, 0);
+    const Vec3 n = (slope[0] * Vec3::UnitZ() + (slope[1] / rho) * e_phi - e_rho).normalized();
     const Vec3 to_light = light - p;
     const double dist = to_light.norm();
     const double cos_i = std::max(0.0, n.dot(to_light) / std::max(dist, 1e-9));
     const double falloff = (p_.light_distance_mm * p_.light_distance_mm) / std::max(dist * dist, 1.0);
     const double shading = p_.light_power * falloff * (0.85 * cos_i + 0.15);  // 0.15: interreflection
-    return lookup(albedo_, p.z(), phi) * static_cast<float>(shading);
+    return at(albedo_, c) * static_cast<float>(shading);
   }
 
   ColonParams p_;
   std::vector<Polyp> polyps_;
   int nz_ = 0, nphi_ = 0;
-  double dz_ = 0, dphi_ = 0;
+  double dz_ = 0, dphi_ = 0, inv_dz_ = 0, inv_dphi_ = 0, inv_nz_ = 0;
+  std::vector<cv::Vec2f> slope_;  // dR/dz (mm/mm), dR/dphi (mm/rad), central differences
   std::vector<float> radius_;
   std::vector<cv::Vec3f> albedo_;
   double r_min_ = 0;
-  std::vector<double> lz_win_, lphi_win_;  // slope bounds of R per z block (+-1 block window)
+  std::vector<double> lz_win_, lphi_win_;
+  std::vector<double> rmin_skip_;  // smallest R within +-(kSkipBlocks + 1) blocks  // slope bounds of R per z block (+-1 block window)
 
   int block_of(double z) const {
     const int nb = static_cast<int>(lz_win_.size());
