@@ -9,6 +9,8 @@
 #include <cmath>
 #include <cstdint>
 #include <vector>
+#include <memory>
+#include <mutex>
 
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
@@ -353,7 +355,7 @@ class ColonScene final : public Scene {
   std::vector<cv::Vec3f> albedo_;
   double r_min_ = 0;
   std::vector<double> lz_win_, lphi_win_;
-  std::vector<double> rmin_skip_;  // smallest R within +-(kSkipBlocks + 1) blocks  // slope bounds of R per z block (+-1 block window)
+  std::vector<double> rmin_skip_;  // smallest R within +-(kSkipBlocks + 1) blocks
 
   int block_of(double z) const {
     const int nb = static_cast<int>(lz_win_.size());
@@ -362,8 +364,34 @@ class ColonScene final : public Scene {
   }
 };
 
+// Building the tables takes about a second of CPU; the last colon built is kept and shared, so
+// tests, the demo and the engine pay it once per process.
+class SharedScene final : public Scene {
+ public:
+  explicit SharedScene(std::shared_ptr<const Scene> s) : s_(std::move(s)) {}
+  cv::Vec3f radiance(const Vec3& o, const Vec3& d, const Vec3& l) const override { return s_->radiance(o, d, l); }
+  std::string spec() const override { return s_->spec(); }
+
+ private:
+  std::shared_ptr<const Scene> s_;
+};
+
 }  // namespace
 
-std::unique_ptr<Scene> make_colon_scene(const ColonParams& params) { return std::make_unique<ColonScene>(params); }
+std::unique_ptr<Scene> make_colon_scene(const ColonParams& params) {
+  static std::mutex mutex;
+  static std::shared_ptr<const Scene> last;
+  static ColonParams last_params;
+  std::lock_guard lock(mutex);
+  const bool same = last && last_params.radius_mm == params.radius_mm &&
+                    last_params.light_distance_mm == params.light_distance_mm &&
+                    last_params.light_power == params.light_power && last_params.seed == params.seed;
+  if (!same) {
+    last = std::make_shared<const ColonScene>(params);
+    last_params = params;
+  }
+  return std::make_unique<SharedScene>(last);
+}
+
 
 }  // namespace omma::sim
