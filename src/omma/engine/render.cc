@@ -1,0 +1,194 @@
+#include "omma/engine/render.h"
+
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <memory>
+#include <stdexcept>
+
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#if defined(__x86_64__) || defined(__i386__)
+#include <immintrin.h>
+#define OMMA_X86 1
+#endif
+
+namespace omma::engine {
+namespace {
+
+constexpr uint32_t kIndexMask = (1u << kIndexBits) - 1;
+
+// Portable kernel: one output row. Same arithmetic as the SIMD kernel (bit-identical).
+void render_row_scalar(const CompiledMap& map, const uint8_t* store, size_t stride_bytes, int row,
+                       uint8_t* out) {
+  const uint8_t* count = map.count.data() + size_t(row) * map.width;
+  size_t k = map.row_start[row];
+  for (int col = 0; col < map.width; ++col, out += 3) {
+    int32_t acc[3] = {0, 0, 0};
+    for (int t = 0; t < count[col]; ++t, ++k) {
+      const uint32_t w = map.word[k];
+      const int32_t wt = int32_t(map.weight[k]) + 1;
+      const int32_t fx = (w >> 22) & 31, fy = w >> 27;
+      const uint8_t* a = store + size_t(w & kIndexMask) * 3;
+      const uint8_t* c = a + stride_bytes;
+      for (int ch = 0; ch < 3; ++ch) {
+        const int32_t top = a[ch] * (32 - fy) + c[ch] * fy;
+        const int32_t bot = a[ch + 3] * (32 - fy) + c[ch + 3] * fy;
+        acc[ch] += top * ((32 - fx) * wt) + bot * (fx * wt);
+      }
+    }
+    for (int ch = 0; ch < 3; ++ch) out[ch] = static_cast<uint8_t>((acc[ch] + (1 << 17)) >> 18);
+  }
+}
+
+#ifdef OMMA_X86
+// SSSE3 kernel. Per tap: two 8-byte loads (pixels a,b of row y and c,d of row y+1), interleave
+// rows, pmaddubsw with (32-fy, fy) -> vertical sums per channel of a/c and b/d, shuffle the a and b
+// halves into pairs, pmaddwd with ((32-fx) w, fx w) -> 32-bit channel sums.
+__attribute__((target("ssse3,sse4.1"))) void render_row_simd(const CompiledMap& map, const uint8_t* store,
+                                                             size_t stride_bytes, int row, uint8_t* out) {
+  const uint8_t* count = map.count.data() + size_t(row) * map.width;
+  const uint32_t* word = map.word.data();
+  const uint8_t* weight = map.weight.data();
+  size_t k = map.row_start[row];
+  // After unpack+maddubs, 16-bit lanes: [v0 v1 v2 v3 v4 v5 x x] = a0' a1' a2' b0' b1' b2'.
+  // Interleave to [a0' b0' a1' b1' a2' b2' 0 0] (bytes).
+  const __m128i pair = _mm_setr_epi8(0, 1, 6, 7, 2, 3, 8, 9, 4, 5, 10, 11, -1, -1, -1, -1);
+  const __m128i round = _mm_set1_epi32(1 << 17);
+  const __m128i pack = _mm_setr_epi8(0, 4, 8, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1);
+  const int W = map.width;
+  for (int col = 0; col < W; ++col, out += 3) {
+    __m128i acc = round;
+    const int n = count[col];
+    for (int t = 0; t < n; ++t, ++k) {
+      const uint32_t w = word[k];
+      const int32_t wt = int32_t(weight[k]) + 1;
+      const int32_t fx = (w >> 22) & 31, fy = w >> 27;
+      const uint8_t* a = store + size_t(w & kIndexMask) * 3;
+      const __m128i r0 = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(a));
+      const __m128i r1 = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(a + stride_bytes));
+      const __m128i il = _mm_unpacklo_epi8(r0, r1);
+      const __m128i vy = _mm_set1_epi16(static_cast<int16_t>((fy << 8) | (32 - fy)));
+      const __m128i v = _mm_maddubs_epi16(il, vy);
+      const __m128i hp = _mm_shuffle_epi8(v, pair);
+      const __m128i wx = _mm_set1_epi32(((fx * wt) << 16) | ((32 - fx) * wt));
+      acc = _mm_add_epi32(acc, _mm_madd_epi16(hp, wx));
+    }
+    const __m128i px = _mm_shuffle_epi8(_mm_srli_epi32(acc, 18), pack);
+    if (col + 1 < W) {
+      const uint32_t v32 = static_cast<uint32_t>(_mm_cvtsi128_si32(px));
+      std::memcpy(out, &v32, 4);  // the 4th byte is overwritten by the next pixel
+    } else {
+      const uint32_t v32 = static_cast<uint32_t>(_mm_cvtsi128_si32(px));
+      std::memcpy(out, &v32, 3);
+    }
+  }
+}
+#endif
+
+}  // namespace
+
+bool simd_available() {
+#ifdef OMMA_X86
+  static const bool ok = __builtin_cpu_supports("ssse3") && __builtin_cpu_supports("sse4.1");
+  return ok;
+#else
+  return false;
+#endif
+}
+
+void render(const CompiledMap& map, const FrameStore& store, cv::Mat& out, const RenderOptions& opt) {
+  if (store.layout().stride_px != map.layout.stride_px || store.layout().rows != map.layout.rows)
+    throw std::invalid_argument("render: frame store layout does not match the compiled map");
+  out.create(map.height, map.width, CV_8UC3);
+  const size_t stride_bytes = size_t(map.layout.stride_px) * 3;
+  const uint8_t* data = store.data();
+  const bool simd = opt.simd && simd_available();
+  auto rows = [&](int r0, int r1) {
+    for (int r = r0; r < r1; ++r) {
+      uint8_t* o = out.ptr<uint8_t>(r);
+#ifdef OMMA_X86
+      if (simd) {
+        render_row_simd(map, data, stride_bytes, r, o);
+        continue;
+      }
+#endif
+      render_row_scalar(map, data, stride_bytes, r, o);
+    }
+  };
+  if (opt.threads == 1) {
+    rows(0, map.height);
+    return;
+  }
+  auto body = [&] {
+    tbb::parallel_for(tbb::blocked_range<int>(0, map.height, 8),
+                      [&](const tbb::blocked_range<int>& r) { rows(r.begin(), r.end()); });
+  };
+  if (opt.threads <= 0) {
+    body();
+  } else {
+    static thread_local std::unique_ptr<tbb::task_arena> arena;
+    if (!arena || arena->max_concurrency() != opt.threads) arena = std::make_unique<tbb::task_arena>(opt.threads);
+    arena->execute(body);
+  }
+}
+
+cv::Mat reference_render(const Rig& rig, const MapOptions& opt, const std::vector<cv::Mat>& frames) {
+  if (frames.size() != rig.cameras.size())
+    throw std::invalid_argument("reference_render: need one frame per camera");
+  Rig sub = rig;
+  std::vector<int> to_full;
+  sub.cameras.clear();
+  for (size_t i = 0; i < rig.cameras.size(); ++i)
+    if (opt.active.empty() || opt.active[i]) {
+      sub.cameras.push_back(rig.cameras[i]);
+      to_full.push_back(int(i));
+    }
+  const PanoGrid& g = opt.grid;
+  cv::Mat out(g.height, g.width, CV_8UC3, cv::Scalar::all(0));
+  // Bilinear sample with replicated edges; centres at integer + 0.5.
+  auto sample = [](const cv::Mat& img, double x, double y, int ch) {
+    const double sx = x - 0.5, sy = y - 0.5;
+    const int x0 = int(std::floor(sx)), y0 = int(std::floor(sy));
+    const double fx = sx - x0, fy = sy - y0;
+    auto at = [&](int xi, int yi) {
+      xi = std::clamp(xi, 0, img.cols - 1);
+      yi = std::clamp(yi, 0, img.rows - 1);
+      return double(img.at<cv::Vec3b>(yi, xi)[ch]);
+    };
+    return (1 - fy) * ((1 - fx) * at(x0, y0) + fx * at(x0 + 1, y0)) +
+           fy * ((1 - fx) * at(x0, y0 + 1) + fx * at(x0 + 1, y0 + 1));
+  };
+  tbb::parallel_for(0, g.height, [&](int row) {
+    for (int col = 0; col < g.width; ++col) {
+      if (sub.cameras.empty()) continue;
+      const auto taps = pano::static_taps(sub, g, col, row, opt.method, opt.params);
+      double v[3] = {0, 0, 0};
+      for (const auto& t : taps) {
+        const cv::Mat& img = frames[to_full[t.camera]];
+        for (int ch = 0; ch < 3; ++ch) v[ch] += t.weight * sample(img, t.px.x(), t.px.y(), ch);
+      }
+      auto& o = out.at<cv::Vec3b>(row, col);
+      for (int ch = 0; ch < 3; ++ch) o[ch] = cv::saturate_cast<uint8_t>(v[ch]);
+    }
+  });
+  return out;
+}
+
+double psnr_u8(const cv::Mat& a, const cv::Mat& b) {
+  if (a.size() != b.size() || a.type() != b.type()) throw std::invalid_argument("psnr_u8: size/type mismatch");
+  cv::Mat d;
+  cv::absdiff(a, b, d);
+  d.convertTo(d, CV_64F);
+  const double mse = cv::mean(d.mul(d))[0] * d.channels() / d.channels();
+  cv::Scalar s = cv::mean(d.mul(d));
+  double m = 0;
+  for (int c = 0; c < a.channels(); ++c) m += s[c];
+  m /= a.channels();
+  (void)mse;
+  if (m <= 0) return std::numeric_limits<double>::infinity();
+  return 10 * std::log10(255.0 * 255.0 / m);
+}
+
+}  // namespace omma::engine

@@ -1,0 +1,241 @@
+#include "omma/engine/sources.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <mutex>
+#include <thread>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/videoio.hpp>
+
+#include "omma/core/frames.h"
+#include "omma/core/io.h"
+#include "omma/engine/synthetic.h"
+
+namespace omma::engine {
+namespace fs = std::filesystem;
+namespace {
+
+std::string lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::tolower(c); });
+  return s;
+}
+bool has_ext(const fs::path& p, std::initializer_list<const char*> exts) {
+  const std::string e = lower(p.extension().string());
+  for (const char* x : exts)
+    if (e == x) return true;
+  return false;
+}
+
+class ImageSequence : public CameraSource {
+ public:
+  ImageSequence(const fs::path& dir, double fps, bool loop) : dir_(dir), fps_(fps), loop_(loop) {
+    std::error_code ec;
+    for (const auto& e : fs::directory_iterator(dir, ec))
+      if (e.is_regular_file() && has_ext(e.path(), {".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff"}))
+        files_.push_back(e.path());
+    if (ec) throw SourceError("cannot read image-sequence folder " + dir.string() + ": " + ec.message());
+    if (files_.empty()) throw SourceError("image-sequence folder " + dir.string() + " holds no images");
+    std::sort(files_.begin(), files_.end());
+  }
+  bool read(cv::Mat& frame) override {
+    if (next_ >= files_.size()) {
+      if (!loop_) return false;
+      next_ = 0;
+    }
+    frame = read_image(files_[next_++]);  // throws IoError naming the file
+    return true;
+  }
+  double fps() const override { return fps_; }
+  std::string describe() const override { return dir_.string(); }
+
+ private:
+  fs::path dir_;
+  std::vector<fs::path> files_;
+  size_t next_ = 0;
+  double fps_;
+  bool loop_;
+};
+
+class Video : public CameraSource {
+ public:
+  Video(const std::string& spec, int device, const SourceOptions& opt) : spec_(spec), loop_(opt.loop) {
+    const bool ok = device >= 0 ? cap_.open(device, cv::CAP_V4L2) : cap_.open(spec, cv::CAP_FFMPEG);
+    if (!ok || !cap_.isOpened())
+      throw SourceError("cannot open " + std::string(device >= 0 ? "V4L2 device " : "video file ") + spec);
+    const double f = cap_.get(cv::CAP_PROP_FPS);
+    fps_ = (opt.force_fps || !(f > 0 && f < 1000)) ? opt.fps : f;
+    device_ = device >= 0;
+  }
+  bool read(cv::Mat& frame) override {
+    if (cap_.read(frame) && !frame.empty()) return true;
+    if (loop_ && !device_ && cap_.set(cv::CAP_PROP_POS_FRAMES, 0) && cap_.read(frame) && !frame.empty()) return true;
+    if (device_) throw SourceError("V4L2 device " + spec_ + " stopped delivering frames");
+    return false;
+  }
+  // Devices pace themselves; files are paced to their frame rate.
+  double fps() const override { return device_ ? 0 : fps_; }
+  std::string describe() const override { return spec_; }
+
+ private:
+  std::string spec_;
+  cv::VideoCapture cap_;
+  double fps_ = 30;
+  bool loop_, device_ = false;
+};
+
+class Still : public CameraSource {
+ public:
+  Still(cv::Mat f, double fps, int limit, bool fail, std::string what)
+      : frame_(std::move(f)), fps_(fps), limit_(limit), fail_(fail), what_(std::move(what)) {}
+  bool read(cv::Mat& frame) override {
+    if (limit_ > 0 && n_ >= limit_) {
+      if (fail_) throw SourceError(what_ + ": simulated camera failure after " + std::to_string(n_) + " frames");
+      return false;
+    }
+    ++n_;
+    frame = frame_;
+    return true;
+  }
+  double fps() const override { return fps_; }
+  std::string describe() const override { return what_; }
+
+ private:
+  cv::Mat frame_;
+  double fps_;
+  int limit_, n_ = 0;
+  bool fail_;
+  std::string what_;
+};
+
+// Views of a turning 360x180 photograph: camera c's remap table is computed once; turning the
+// world by yaw about the dome axis shifts the photograph's columns (cv::BORDER_WRAP).
+struct PanoScene {
+  cv::Mat pano;
+  std::vector<cv::Mat> maps;
+  double deg_per_s = 10;
+  std::chrono::steady_clock::time_point t0 = std::chrono::steady_clock::now();
+};
+
+class PanoView : public CameraSource {
+ public:
+  PanoView(std::shared_ptr<PanoScene> s, int cam, double fps, std::string spec)
+      : scene_(std::move(s)), cam_(cam), fps_(fps), spec_(std::move(spec)) {}
+  bool read(cv::Mat& frame) override {
+    const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - scene_->t0).count();
+    const double shift = scene_->deg_per_s * t / 360.0 * scene_->pano.cols;
+    std::vector<cv::Mat> xy;
+    cv::split(scene_->maps[cam_], xy);
+    xy[0] += shift;
+    cv::Mat map;
+    cv::merge(xy, map);
+    cv::remap(scene_->pano, frame, map, cv::noArray(), cv::INTER_LINEAR, cv::BORDER_WRAP);
+    return true;
+  }
+  double fps() const override { return fps_; }
+  std::string describe() const override { return spec_ + " camera " + std::to_string(cam_); }
+
+ private:
+  std::shared_ptr<PanoScene> scene_;
+  int cam_;
+  double fps_;
+  std::string spec_;
+};
+
+std::unique_ptr<CameraSource> open_one(const std::string& spec, const SourceOptions& opt) {
+  if (spec.rfind("sim:", 0) == 0)
+    throw SourceError("source '" + spec + "': the simulator source is not in this build yet (use pano:IMAGE)");
+  if (spec.rfind("link:", 0) == 0)
+    throw SourceError("source '" + spec + "': the raw sensor-link source is not in this build yet");
+  if (spec.rfind("v4l2:", 0) == 0 || spec.rfind("/dev/video", 0) == 0) {
+    const std::string num = spec.substr(spec.rfind("v4l2:", 0) == 0 ? 5 : 10);
+    int dev = -1;
+    try {
+      size_t pos = 0;
+      dev = std::stoi(num, &pos);
+      if (pos != num.size() || dev < 0) throw std::invalid_argument(num);
+    } catch (const std::exception&) {
+      throw SourceError("source '" + spec + "': expected v4l2:N or /dev/videoN");
+    }
+    if (spec[0] == '/' && !fs::exists(spec)) throw SourceError("cannot open V4L2 device " + spec + ": no such device");
+    return std::make_unique<Video>(spec, dev, opt);
+  }
+  const fs::path p(spec);
+  std::error_code ec;
+  if (fs::is_directory(p, ec)) return std::make_unique<ImageSequence>(p, opt.fps, opt.loop);
+  if (!fs::exists(p, ec)) throw SourceError("source '" + spec + "': no such file or folder");
+  if (has_ext(p, {".mp4", ".mkv", ".avi", ".mov", ".webm", ".m4v", ".mjpeg", ".mjpg"}))
+    return std::make_unique<Video>(spec, -1, opt);
+  throw SourceError("source '" + spec + "': not a folder, a video file (.mp4 .mkv .avi .mov .webm) or a device");
+}
+
+}  // namespace
+
+std::unique_ptr<CameraSource> still_source(cv::Mat frame, double fps, int limit, bool fail) {
+  return std::make_unique<Still>(std::move(frame), fps, limit, fail, "still");
+}
+
+std::vector<std::unique_ptr<CameraSource>> open_sources(const Rig& rig, const std::vector<std::string>& specs_in,
+                                                        const SourceOptions& opt) {
+  const size_t n = rig.cameras.size();
+  std::vector<std::unique_ptr<CameraSource>> out;
+  if (specs_in.empty()) throw SourceError("no --source given");
+  std::vector<std::string> specs = specs_in;
+  if (specs.size() == 1 && specs[0].find("{id}") != std::string::npos) {
+    const std::string pattern = specs[0];
+    specs.clear();
+    for (const auto& cam : rig.cameras) {
+      char id[16];
+      std::snprintf(id, sizeof id, "%02d", cam.id);
+      std::string s = pattern;
+      for (size_t pos; (pos = s.find("{id}")) != std::string::npos;) s.replace(pos, 4, id);
+      specs.push_back(s);
+    }
+  }
+  if (specs.size() == 1 && specs[0].rfind("frames:", 0) == 0) {
+    const fs::path dir = specs[0].substr(7);
+    std::vector<cv::Mat> frames;
+    try {
+      frames = load_frames(dir, rig);
+    } catch (const std::exception& e) {
+      throw SourceError("source '" + specs[0] + "': " + e.what());
+    }
+    for (size_t c = 0; c < n; ++c)
+      out.push_back(std::make_unique<Still>(frames[c], opt.fps, 0, false, specs[0] + " " + frame_filename(rig.cameras[c].id)));
+    return out;
+  }
+  if (specs.size() == 1 && specs[0].rfind("pano:", 0) == 0) {
+    std::string path = specs[0].substr(5);
+    auto scene = std::make_shared<PanoScene>();
+    if (const size_t at = path.rfind('@'); at != std::string::npos) {
+      try {
+        scene->deg_per_s = std::stod(path.substr(at + 1));
+      } catch (const std::exception&) {
+        throw SourceError("source '" + specs[0] + "': expected pano:IMAGE@DEG_PER_S");
+      }
+      path = path.substr(0, at);
+    }
+    try {
+      scene->pano = read_image(path, cv::IMREAD_COLOR);
+    } catch (const std::exception& e) {
+      throw SourceError("source '" + specs[0] + "': " + e.what());
+    }
+    // About the cameras' resolution (with margin), so that the views are not aliased.
+    double px_per_rad = 0;
+    for (const auto& c : rig.cameras) px_per_rad = std::max(px_per_rad, c.in.fu);
+    const int w = std::min(scene->pano.cols, std::max(64, int(2 * kPi * px_per_rad * 1.5)));
+    if (w < scene->pano.cols) cv::resize(scene->pano, scene->pano, cv::Size(w, w / 2), 0, 0, cv::INTER_AREA);
+    scene->maps = panorama_to_camera_maps(rig, scene->pano.size());
+    for (size_t c = 0; c < n; ++c) out.push_back(std::make_unique<PanoView>(scene, int(c), opt.fps, specs[0]));
+    return out;
+  }
+  if (specs.size() != n)
+    throw SourceError("got " + std::to_string(specs.size()) + " sources for a rig of " + std::to_string(n) +
+                      " cameras: give one per camera (rig order), a {id} pattern, frames:DIR or pano:IMAGE");
+  for (const auto& s : specs) out.push_back(open_one(s, opt));
+  return out;
+}
+
+}  // namespace omma::engine
