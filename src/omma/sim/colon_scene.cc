@@ -21,7 +21,8 @@ namespace omma::sim {
 namespace {
 
 constexpr double kPeriod = 240.0;  // mm, the tube repeats along z
-constexpr double kCell = 0.15;     // mm, table cell along z (and about along the circumference)
+constexpr double kGeoCell = 0.3;   // mm, radius table cell along z (and about along the circumference)
+constexpr double kTexCell = 0.15;  // mm, albedo table cell
 constexpr double kMaxDistance = 400.0;
 constexpr double kBlock = 4.0;     // mm, z blocks of the slope bounds
 constexpr int kSkipBlocks = 4;     // the free-space skip looks this many blocks either way
@@ -91,18 +92,61 @@ struct Polyp {
   double z, phi, radius, height;
 };
 
+// Bilinear interpolation cell of a periodic (z, phi) table.
+struct Cell {
+  size_t i00, i01, i10, i11;
+  float a, b;  // weights along z and phi
+};
+
+template <typename T>
+T at(const std::vector<T>& t, const Cell& c) {
+  return (t[c.i00] * (1 - c.b) + t[c.i01] * c.b) * (1 - c.a) + (t[c.i10] * (1 - c.b) + t[c.i11] * c.b) * c.a;
+}
+
+// A table over the tube surface: nz rows along z (period kPeriod), nphi columns around.
+struct TableGrid {
+  int nz = 0, nphi = 0;
+  double dz = 0, dphi = 0, inv_dz = 0, inv_dphi = 0, inv_nz = 0;
+  TableGrid() = default;
+  TableGrid(double cell_mm, double radius_mm)
+      : nz(static_cast<int>(std::lround(kPeriod / cell_mm))),
+        nphi(static_cast<int>(std::lround(kTwoPi * radius_mm / cell_mm))),
+        dz(kPeriod / nz),
+        dphi(kTwoPi / nphi),
+        inv_dz(1 / dz),
+        inv_dphi(1 / dphi),
+        inv_nz(1.0 / nz) {}
+  size_t size() const { return static_cast<size_t>(nz) * nphi; }
+  size_t idx(int iz, int ip) const {
+    iz %= nz;
+    if (iz < 0) iz += nz;
+    ip %= nphi;
+    if (ip < 0) ip += nphi;
+    return static_cast<size_t>(iz) * nphi + ip;
+  }
+  Cell cell(double z, double phi) const {
+    double u = z * inv_dz;
+    u -= nz * std::floor(u * inv_nz);
+    const double v = phi * inv_dphi;
+    const double fu = std::floor(u), fv = std::floor(v);
+    int iu = static_cast<int>(fu), iv = static_cast<int>(fv);
+    if (iu >= nz) iu -= nz;
+    if (iv >= nphi) iv -= nphi;
+    if (iv < 0) iv += nphi;
+    const int iu1 = iu + 1 == nz ? 0 : iu + 1;
+    const int iv1 = iv + 1 == nphi ? 0 : iv + 1;
+    const size_t r0 = static_cast<size_t>(iu) * nphi, r1 = static_cast<size_t>(iu1) * nphi;
+    return {r0 + iv, r0 + iv1, r1 + iv, r1 + iv1, static_cast<float>(u - fu), static_cast<float>(v - fv)};
+  }
+};
+
 class ColonScene final : public Scene {
  public:
   explicit ColonScene(const ColonParams& p) : p_(p) {
     if (!(p.radius_mm >= 10 && p.radius_mm <= 40))
       throw SceneError(fmt::format("colon scene: radius must be 10..40 mm, got {}", p.radius_mm));
-    nz_ = static_cast<int>(std::lround(kPeriod / kCell));
-    nphi_ = static_cast<int>(std::lround(kTwoPi * p.radius_mm / kCell));
-    dz_ = kPeriod / nz_;
-    dphi_ = kTwoPi / nphi_;
-    inv_dz_ = 1 / dz_;
-    inv_dphi_ = 1 / dphi_;
-    inv_nz_ = 1.0 / nz_;
+    geo_ = TableGrid(kGeoCell, p.radius_mm);
+    tex_ = TableGrid(kTexCell, p.radius_mm);
     build_tables();
   }
 
@@ -153,7 +197,7 @@ class ColonScene final : public Scene {
       // crossing, but never more than about a millimetre, so no fold or polyp can be jumped over.
       if (s > s_prev && g < g_prev) {
         const double rate = (g_prev - g) / (s - s_prev);
-        h = std::max(h, std::min(1.2 * g / rate, 1.0 + 0.01 * s));
+        h = std::max(h, std::min(1.2 * g / rate, 2.0 + 0.02 * s));
       }
       s_prev = s;
       g_prev = g;
@@ -163,9 +207,13 @@ class ColonScene final : public Scene {
     // Regula falsi (Illinois) between s_prev (g > 0, inside) and s (g <= 0, beyond the wall).
     double lo = s_prev, hi = s, glo = g_prev, ghi = g;
     int side = 0;
-    for (int i = 0; i < 8 && hi - lo > 5e-3; ++i) {
+    for (int i = 0; i < 8 && hi - lo > 0.02; ++i) {
       const double m = (lo * ghi - hi * glo) / (ghi - glo);
       const double gm = gap(o, d, m);
+      if (std::abs(gm) < 0.005) {  // within 5 um of the wall (radially)
+        hi = m;
+        break;
+      }
       if (gm > 0) {
         lo = m;
         glo = gm;
@@ -205,7 +253,7 @@ class ColonScene final : public Scene {
       const double dz = wrap_period(z - q.z), da = wrap_angle(phi - q.phi) * R0;
       const double t = (dz * dz + da * da) / (q.radius * q.radius);
       if (t < 1) {
-        const double prof = (1 - t) * (1 - t);
+        const double prof = (1 - t) * (1 + 0.8 * t);  // dome: flat top, sharp base (sessile polyp)
         r -= q.height * prof;
         pw = std::max(pw, std::sqrt(1 - t));
       }
@@ -215,19 +263,23 @@ class ColonScene final : public Scene {
   }
 
   void build_tables() {
-    polyps_ = {{18, deg2rad(40), 5.0, 4.0}, {40, deg2rad(200), 6.0, 5.5}, {62, deg2rad(110), 4.0, 3.5},
-               {95, deg2rad(300), 7.0, 6.0}};
-    radius_.assign(static_cast<size_t>(nz_) * nphi_, 0);
-    albedo_.assign(static_cast<size_t>(nz_) * nphi_, cv::Vec3f());
+    // {z mm, phi, base radius mm, height mm}: within sight of a dome at z = 0, spread around.
+    polyps_ = {{12, deg2rad(40), 6.0, 5.0}, {24, deg2rad(165), 5.0, 4.5}, {33, deg2rad(275), 7.0, 6.0},
+               {58, deg2rad(105), 5.5, 4.5}};
+    radius_.assign(geo_.size(), 0);
+    tbb::parallel_for(0, geo_.nz, [&](int iz) {
+      for (int ip = 0; ip < geo_.nphi; ++ip)
+        radius_[geo_.idx(iz, ip)] = static_cast<float>(analytic_radius(iz * geo_.dz, ip * geo_.dphi, nullptr));
+    });
+    albedo_.assign(tex_.size(), cv::Vec3f());
     const uint32_t seed = p_.seed;
     const double R0 = p_.radius_mm;
-    tbb::parallel_for(0, nz_, [&](int iz) {
-      const double z = iz * dz_;
-      for (int ip = 0; ip < nphi_; ++ip) {
-        const double phi = ip * dphi_;
+    tbb::parallel_for(0, tex_.nz, [&](int iz) {
+      const double z = iz * tex_.dz;
+      for (int ip = 0; ip < tex_.nphi; ++ip) {
+        const double phi = ip * tex_.dphi;
         double pw = 0;
-        const double r = analytic_radius(z, phi, &pw);
-        radius_[idx(iz, ip)] = static_cast<float>(r);
+        analytic_radius(z, phi, &pw);
         // Mucosa: pink-red with slow variation (linear BGR).
         const double slow = tube_noise(z, phi, 12.0, R0, 2, seed);
         cv::Vec3f c(0.16f, 0.20f, 0.62f);
@@ -243,39 +295,37 @@ class ColonScene final : public Scene {
         // Polyps: paler, with a fine pit pattern.
         if (pw > 0) {
           const double pits = tube_noise(z, phi, 0.6, R0, 1, seed + 43);
-          const cv::Vec3f polyp(0.26f, 0.33f, 0.70f);
+          const cv::Vec3f polyp(0.20f, 0.27f, 0.72f);
           const float w = static_cast<float>(smoothstep(0.0, 0.4, pw));
           c = c * (1 - w) + polyp * static_cast<float>(w * (0.85 + 0.3 * pits));
         }
-        albedo_[idx(iz, ip)] = c;
+        albedo_[tex_.idx(iz, ip)] = c;
       }
     });
-    // Bounds for the march.
+    // Normals and bounds for the march, from the geometry table.
+    const TableGrid& g = geo_;
     slope_.resize(radius_.size());
-    for (int iz = 0; iz < nz_; ++iz)
-      for (int ip = 0; ip < nphi_; ++ip)
-        slope_[idx(iz, ip)] =
-            cv::Vec2f(static_cast<float>((radius_[idx(iz + 1, ip)] - radius_[idx(iz - 1, ip)]) / (2 * dz_)),
-                      static_cast<float>((radius_[idx(iz, ip + 1)] - radius_[idx(iz, ip - 1)]) / (2 * dphi_)));
+    for (int iz = 0; iz < g.nz; ++iz)
+      for (int ip = 0; ip < g.nphi; ++ip)
+        slope_[g.idx(iz, ip)] =
+            cv::Vec2f(static_cast<float>((radius_[g.idx(iz + 1, ip)] - radius_[g.idx(iz - 1, ip)]) / (2 * g.dz)),
+                      static_cast<float>((radius_[g.idx(iz, ip + 1)] - radius_[g.idx(iz, ip - 1)]) / (2 * g.dphi)));
     r_min_ = 1e9;
     for (float r : radius_) r_min_ = std::min(r_min_, static_cast<double>(r));
     r_min_ -= 0.01;
     // Largest slopes of R per z block, then over windows of +-1 block.
     const int nb = static_cast<int>(std::lround(kPeriod / kBlock));
-    std::vector<double> lz(nb, 0), lphi(nb, 0);
-    for (int iz = 0; iz < nz_; ++iz) {
-      const int b = std::min(nb - 1, static_cast<int>(iz * dz_ / kBlock));
-      for (int ip = 0; ip < nphi_; ++ip) {
-        const double r = radius_[idx(iz, ip)];
-        const double sz = std::max(std::abs(radius_[idx(iz + 1, ip)] - r), std::abs(radius_[idx(iz - 1, ip)] - r)) / dz_;
+    std::vector<double> lz(nb, 0), lphi(nb, 0), rmin(nb, 1e9);
+    for (int iz = 0; iz < g.nz; ++iz) {
+      const int b = std::min(nb - 1, static_cast<int>(iz * g.dz / kBlock));
+      for (int ip = 0; ip < g.nphi; ++ip) {
+        const double r = radius_[g.idx(iz, ip)];
+        const double sz =
+            std::max(std::abs(radius_[g.idx(iz + 1, ip)] - r), std::abs(radius_[g.idx(iz - 1, ip)] - r)) / g.dz;
         lz[b] = std::max(lz[b], sz);
-        lphi[b] = std::max(lphi[b], std::abs(radius_[idx(iz, ip + 1)] - r) / dphi_);
+        lphi[b] = std::max(lphi[b], std::abs(radius_[g.idx(iz, ip + 1)] - r) / g.dphi);
+        rmin[b] = std::min(rmin[b], r);
       }
-    }
-    std::vector<double> rmin(nb, 1e9);
-    for (int iz = 0; iz < nz_; ++iz) {
-      const int b = std::min(nb - 1, static_cast<int>(iz * dz_ / kBlock));
-      for (int ip = 0; ip < nphi_; ++ip) rmin[b] = std::min(rmin[b], static_cast<double>(radius_[idx(iz, ip)]));
     }
     rmin_skip_.assign(nb, 1e9);
     for (int b = 0; b < nb; ++b)
@@ -291,39 +341,7 @@ class ColonScene final : public Scene {
       }
   }
 
-  size_t idx(int iz, int ip) const {
-    iz %= nz_;
-    if (iz < 0) iz += nz_;
-    ip %= nphi_;
-    if (ip < 0) ip += nphi_;
-    return static_cast<size_t>(iz) * nphi_ + ip;
-  }
-
-  // Bilinear interpolation cell of (z mm, phi rad) in the periodic tables.
-  struct Cell {
-    size_t i00, i01, i10, i11;
-    float a, b;  // weights along z and phi
-  };
-  Cell cell(double z, double phi) const {
-    double u = z * inv_dz_;
-    u -= nz_ * std::floor(u * inv_nz_);
-    const double v = phi * inv_dphi_;
-    const double fu = std::floor(u), fv = std::floor(v);
-    int iu = static_cast<int>(fu), iv = static_cast<int>(fv);
-    if (iu >= nz_) iu -= nz_;
-    if (iv >= nphi_) iv -= nphi_;
-    if (iv < 0) iv += nphi_;
-    const int iu1 = iu + 1 == nz_ ? 0 : iu + 1;
-    const int iv1 = iv + 1 == nphi_ ? 0 : iv + 1;
-    const size_t r0 = static_cast<size_t>(iu) * nphi_, r1 = static_cast<size_t>(iu1) * nphi_;
-    return {r0 + iv, r0 + iv1, r1 + iv, r1 + iv1, static_cast<float>(u - fu), static_cast<float>(v - fv)};
-  }
-  template <typename T>
-  T at(const std::vector<T>& t, const Cell& c) const {
-    return (t[c.i00] * (1 - c.b) + t[c.i01] * c.b) * (1 - c.a) + (t[c.i10] * (1 - c.b) + t[c.i11] * c.b) * c.a;
-  }
-
-  double radius_at(double z, double phi) const { return at(radius_, cell(z, phi)); }
+  double radius_at(double z, double phi) const { return at(radius_, geo_.cell(z, phi)); }
 
   double gap(const Vec3& o, const Vec3& d, double s) const {
     const double x = o.x() + s * d.x(), y = o.y() + s * d.y(), z = o.z() + s * d.z();
@@ -332,10 +350,9 @@ class ColonScene final : public Scene {
 
   cv::Vec3f shade(const Vec3& p, const Vec3& light) const {
     const double phi = fast_phi(p.y(), p.x()), rho = std::hypot(p.x(), p.y());
-    const Cell c = cell(p.z(), phi);
-    const cv::Vec2f slope = at(slope_, c);  // dR/dz, dR/dphi
+    const cv::Vec2f slope = at(slope_, geo_.cell(p.z(), phi));  // dR/dz, dR/dphi
     // F = R(z, phi) - rho grows towards the axis; its gradient is the inward normal.
-    const double cp = std::cos(phi), sp = std::sin(phi);
+    const double cp = p.x() / rho, sp = p.y() / rho;
     const Vec3 e_rho(cp, sp, 0), e_phi(-sp, cp, 0);
     const Vec3 n = (slope[0] * Vec3::UnitZ() + (slope[1] / rho) * e_phi - e_rho).normalized();
     const Vec3 to_light = light - p;
@@ -343,13 +360,13 @@ class ColonScene final : public Scene {
     const double cos_i = std::max(0.0, n.dot(to_light) / std::max(dist, 1e-9));
     const double falloff = (p_.light_distance_mm * p_.light_distance_mm) / std::max(dist * dist, 1.0);
     const double shading = p_.light_power * falloff * (0.85 * cos_i + 0.15);  // 0.15: interreflection
-    return at(albedo_, c) * static_cast<float>(shading);
+    return at(albedo_, tex_.cell(p.z(), phi)) * static_cast<float>(shading);
   }
 
   ColonParams p_;
   std::vector<Polyp> polyps_;
-  int nz_ = 0, nphi_ = 0;
-  double dz_ = 0, dphi_ = 0, inv_dz_ = 0, inv_dphi_ = 0, inv_nz_ = 0;
+  TableGrid geo_;  // radius and slopes (kGeoCell)
+  TableGrid tex_;  // albedo (kTexCell)
   std::vector<cv::Vec2f> slope_;  // dR/dz (mm/mm), dR/dphi (mm/rad), central differences
   std::vector<float> radius_;
   std::vector<cv::Vec3f> albedo_;
