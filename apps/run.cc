@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <fmt/format.h>
+#include <opencv2/core/utility.hpp>
 
 #include "apps/command.h"
 #include "omma/core/grid.h"
@@ -93,6 +94,9 @@ void add_run_command(CLI::App& root) {
           j["dropped_frames"].get<long>(), j["cameras_live"].get<long>());
       std::fprintf(stderr, tty ? "\r%s\033[K" : "%s\n", line.c_str());
     };
+    // Sources and sinks run in their own threads; OpenCV's own parallelism inside them would only
+    // compete with the renderer's threads.
+    cv::setNumThreads(1);
     std::signal(SIGINT, on_signal);
     std::signal(SIGTERM, on_signal);
     const engine::EngineStats st = engine::run_engine(rig, std::move(sources), sinks, eo);

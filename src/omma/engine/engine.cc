@@ -8,6 +8,9 @@
 #include <mutex>
 #include <thread>
 
+#include <sys/resource.h>
+#include <unistd.h>
+
 #include <spdlog/spdlog.h>
 
 namespace omma::engine {
@@ -78,6 +81,9 @@ EngineStats run_engine(const Rig& rig, std::vector<std::unique_ptr<CameraSource>
   const StoreLayout L = map->layout;  // a copy: the map is swapped when a camera drops
   for (size_t c = 0; c < n; ++c)
     threads.emplace_back([&, c] {
+      // Camera threads run at a lower priority than the render loop: on a busy machine a camera
+      // may deliver late (its frame is reused), but the panorama is never starved by decoding.
+      setpriority(PRIO_PROCESS, static_cast<id_t>(::gettid()), 5);
       CameraSource& src = *sources[c];
       Latest& slot = *latest[c];
       const double fps = src.fps();

@@ -121,9 +121,13 @@ void render(const CompiledMap& map, const FrameStore& store, cv::Mat& out, const
     rows(0, map.height);
     return;
   }
+  // Isolated: while waiting, this thread only runs render tasks (not tasks of other code sharing
+  // the oneTBB workers, e.g. OpenCV in source threads), so a render never waits behind them.
   auto body = [&] {
+    tbb::this_task_arena::isolate([&] {
     tbb::parallel_for(tbb::blocked_range<int>(0, map.height, 8),
                       [&](const tbb::blocked_range<int>& r) { rows(r.begin(), r.end()); });
+    });
   };
   if (opt.threads <= 0) {
     body();

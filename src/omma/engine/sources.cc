@@ -113,8 +113,8 @@ class Still : public CameraSource {
 // Views of a turning 360x180 photograph: camera c's remap table is computed once; turning the
 // world by yaw about the dome axis shifts the photograph's columns (cv::BORDER_WRAP).
 struct PanoScene {
-  cv::Mat pano;
-  std::vector<cv::Mat> maps;
+  cv::Mat pano, wide;
+  std::vector<cv::Mat> map_x, map_y;  // per camera, CV_32F
   double deg_per_s = 10;
   std::chrono::steady_clock::time_point t0 = std::chrono::steady_clock::now();
 };
@@ -125,13 +125,12 @@ class PanoView : public CameraSource {
       : scene_(std::move(s)), cam_(cam), fps_(fps), spec_(std::move(spec)) {}
   bool read(cv::Mat& frame) override {
     const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - scene_->t0).count();
-    const double shift = scene_->deg_per_s * t / 360.0 * scene_->pano.cols;
-    std::vector<cv::Mat> xy;
-    cv::split(scene_->maps[cam_], xy);
-    xy[0] += shift;
-    cv::Mat map;
-    cv::merge(xy, map);
-    cv::remap(scene_->pano, frame, map, cv::noArray(), cv::INTER_LINEAR, cv::BORDER_WRAP);
+    // `wide` is the photograph twice side by side: a shift in [0, W) needs no wrapping.
+    const double w = scene_->pano.cols;
+    double shift = std::fmod(scene_->deg_per_s * t / 360.0 * w, w);
+    if (shift < 0) shift += w;
+    cv::add(scene_->map_x[cam_], cv::Scalar(shift), map_x_);
+    cv::remap(scene_->wide, frame, map_x_, scene_->map_y[cam_], cv::INTER_LINEAR, cv::BORDER_REPLICATE);
     return true;
   }
   double fps() const override { return fps_; }
@@ -139,6 +138,7 @@ class PanoView : public CameraSource {
 
  private:
   std::shared_ptr<PanoScene> scene_;
+  cv::Mat map_x_;
   int cam_;
   double fps_;
   std::string spec_;
@@ -227,7 +227,13 @@ std::vector<std::unique_ptr<CameraSource>> open_sources(const Rig& rig, const st
     for (const auto& c : rig.cameras) px_per_rad = std::max(px_per_rad, c.in.fu);
     const int w = std::min(scene->pano.cols, std::max(64, int(2 * kPi * px_per_rad * 1.5)));
     if (w < scene->pano.cols) cv::resize(scene->pano, scene->pano, cv::Size(w, w / 2), 0, 0, cv::INTER_AREA);
-    scene->maps = panorama_to_camera_maps(rig, scene->pano.size());
+    cv::hconcat(scene->pano, scene->pano, scene->wide);
+    for (const cv::Mat& m : panorama_to_camera_maps(rig, scene->pano.size())) {
+      std::vector<cv::Mat> xy;
+      cv::split(m, xy);
+      scene->map_x.push_back(xy[0]);
+      scene->map_y.push_back(xy[1]);
+    }
     for (size_t c = 0; c < n; ++c) out.push_back(std::make_unique<PanoView>(scene, int(c), opt.fps, specs[0]));
     return out;
   }
