@@ -8,7 +8,7 @@
 #include "apps/command.h"
 #include "omma/core/rig.h"
 #include "omma/engine/bench.h"
-#include "omma/engine/synthetic.h"
+#include "omma/design/prototype.h"
 
 namespace omma::app {
 
@@ -25,7 +25,7 @@ void add_bench_command(CLI::App& root) {
     std::vector<std::string> only;
   };
   static Opts o;
-  cmd->add_option("--rig", o.rig, "Rig file (JSON); default: the built-in 24-camera ring rig (250x250, 64 deg)");
+  cmd->add_option("--rig", o.rig, "Rig file (JSON); default: the thesis prototype, 24 cameras 250x250, 64 deg");
   cmd->add_option("--save-rig", o.save_rig, "Also write the rig used to this file (JSON)");
   cmd->add_option("--seconds", o.seconds, "Minimum measuring time per workload, seconds (default 0.5)")
       ->check(CLI::Range(0.01, 60.0));
@@ -34,7 +34,7 @@ void add_bench_command(CLI::App& root) {
   cmd->add_flag("--json", o.json, "Print {\"results\": [{\"name\", \"fps\", ...}]} on stdout");
   cmd->callback([] {
     set_json_mode(o.json);
-    const Rig rig = o.rig.empty() ? engine::ring_rig_24() : load_rig(o.rig);
+    const Rig rig = o.rig.empty() ? design::thesis_prototype_rig() : load_rig(o.rig);
     if (!o.save_rig.empty()) save_rig(rig, o.save_rig);
     engine::BenchOptions bo;
     bo.min_seconds = o.seconds;

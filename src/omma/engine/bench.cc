@@ -8,6 +8,7 @@
 #include <opencv2/stitching/detail/blenders.hpp>
 #include <tbb/parallel_for.h>
 
+#include "omma/design/prototype.h"
 #include "omma/engine/synthetic.h"
 
 namespace omma::engine {
@@ -152,7 +153,7 @@ double measure_fps(const Workload& w, double min_seconds, int min_iterations) {
 
 std::vector<BenchEntry> run_bench_suite(const Rig& rig_in, const BenchOptions& opt,
                                         std::vector<std::string>* skipped) {
-  const Rig rig = rig_in.cameras.empty() ? ring_rig_24() : rig_in;
+  const Rig rig = rig_in.cameras.empty() ? design::thesis_prototype_rig() : rig_in;
   const auto frames = random_frames(rig, 42);
   std::vector<PanoGrid> grids = {{Projection::kVr180, 1080, 1080}, {Projection::kEquirect, 1920, 512}};
   if (opt.quick) grids = {{Projection::kVr180, 216, 216}, {Projection::kEquirect, 384, 102}};

@@ -55,7 +55,7 @@ struct BenchOptions {
   bool quick = false;             // small sizes (tests)
   std::vector<std::string> only;  // substrings of names to run; empty = all
 };
-// The whole suite of point 4 on ring_rig_24 (or `rig` if it has cameras).
+// The whole suite of point 4 on the thesis prototype rig (or `rig` if it has cameras).
 std::vector<BenchEntry> run_bench_suite(const Rig& rig, const BenchOptions& opt,
                                         std::vector<std::string>* skipped = nullptr);
 
