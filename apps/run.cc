@@ -40,7 +40,7 @@ void add_run_command(CLI::App& root) {
   cmd->add_option("--rig", o.rig, "Rig file (JSON)")->required();
   cmd->add_option("--source", o.sources, "Camera sources (see above)")->required();
   cmd->add_option("--sink", o.sinks, "Outputs (see above); none: render and measure only");
-  cmd->add_option("--method", o.method, "Blending: nn, linear, gaussian, mrf, mrf-spherical (static maps; default linear)");
+  cmd->add_option("--method", o.method, "Blending: nn, linear, gaussian, mrf, mrf-spherical, sad (per-frame weights, own kernel); default linear");
   cmd->add_option("--projection", o.projection, "Panorama projection: vr180, equirect, equirect-full (default vr180)");
   cmd->add_option("--size", o.size, "Panorama size WxH, pixels (default 1080x1080)");
   cmd->add_option("--duration", o.duration, "Stop after S seconds (default: when every source has ended)")
@@ -61,8 +61,6 @@ void add_run_command(CLI::App& root) {
     const Rig rig = load_rig(o.rig);
     engine::EngineOptions eo;
     eo.map.method = pano::parse_method(o.method);
-    if (!pano::is_static(eo.map.method))
-      throw std::invalid_argument("method " + o.method + " needs per-frame weights; omma run supports the static methods");
     const Size2 size = parse_size(o.size);
     eo.map.grid = PanoGrid{parse_projection(o.projection), size.width, size.height};
     eo.cache_dir = o.no_cache ? std::filesystem::path() : (o.cache.empty() ? engine::default_cache_dir() : std::filesystem::path(o.cache));

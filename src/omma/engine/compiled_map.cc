@@ -19,7 +19,7 @@ namespace omma::engine {
 namespace {
 
 constexpr uint32_t kMagic = 0x4d4d4f31;  // "1OMM"
-constexpr uint32_t kFormatVersion = 1;
+constexpr uint32_t kFormatVersion = 2;
 
 uint64_t fnv1a(const std::string& s) {
   uint64_t h = 1469598103934665603ull;
@@ -122,15 +122,14 @@ int CompiledMap::camera_of(uint32_t w) const {
 }
 
 CompiledMap compile_map(const Rig& rig, const MapOptions& opt) {
-  if (!pano::is_static(opt.method))
-    throw std::invalid_argument("method " + pano::to_string(opt.method) +
-                                " has per-frame weights and no static compiled map");
   if (!opt.active.empty() && opt.active.size() != rig.cameras.size())
     throw std::invalid_argument("compile_map: active set has " + std::to_string(opt.active.size()) +
                                 " entries for " + std::to_string(rig.cameras.size()) + " cameras");
   CompiledMap map;
   map.width = opt.grid.width;
   map.height = opt.grid.height;
+  map.method = opt.method;
+  map.sad_epsilon = static_cast<float>(opt.params.sad_epsilon);
   map.layout = StoreLayout::for_rig(rig);
   // The rig of the active cameras, and its camera index -> rig camera index.
   Rig sub = rig;
@@ -251,7 +250,8 @@ std::string map_key(const Rig& rig, const MapOptions& opt) {
   j["method"] = pano::to_string(opt.method);
   j["q"] = {opt.params.search.q.x(), opt.params.search.q.y(), opt.params.search.q.z()};
   j["min_r"] = opt.params.search.min_r_mm;
-  j["sigma"] = opt.params.gaussian_sigma_mm;
+  j["sigma"] = opt.params.gaussian_sigma_rel;
+  j["sad_eps"] = opt.params.sad_epsilon;
   std::string active;
   for (bool a : opt.active) active += a ? '1' : '0';
   j["active"] = active;
@@ -288,6 +288,8 @@ void save_map(const CompiledMap& map, const std::filesystem::path& path) {
     put(o, kFormatVersion);
     put<int32_t>(o, map.width);
     put<int32_t>(o, map.height);
+    put<int32_t>(o, static_cast<int32_t>(map.method));
+    put<float>(o, map.sad_epsilon);
     put<int32_t>(o, map.layout.stride_px);
     put<int32_t>(o, map.layout.rows);
     put<int32_t>(o, static_cast<int32_t>(map.layout.row0.size()));
@@ -312,10 +314,11 @@ std::optional<CompiledMap> load_map(const std::filesystem::path& path) {
   uint32_t magic = 0, version = 0;
   if (!get(i, magic) || magic != kMagic || !get(i, version) || version != kFormatVersion) return std::nullopt;
   CompiledMap m;
-  int32_t n = 0;
-  if (!get(i, m.width) || !get(i, m.height) || !get(i, m.layout.stride_px) || !get(i, m.layout.rows) ||
+  int32_t n = 0, method = 0;
+  if (!get(i, m.width) || !get(i, m.height) || !get(i, method) || !get(i, m.sad_epsilon) || !get(i, m.layout.stride_px) || !get(i, m.layout.rows) ||
       !get(i, n) || n < 0 || n > 4096 || m.width <= 0 || m.height <= 0)
     return std::nullopt;
+  m.method = static_cast<pano::Method>(method);
   for (int c = 0; c < n; ++c) {
     int32_t r0, w, h;
     if (!get(i, r0) || !get(i, w) || !get(i, h)) return std::nullopt;
