@@ -31,7 +31,7 @@ void add_run_command(CLI::App& root) {
   struct Opts {
     std::string rig, method = "linear", projection = "vr180", size = "1080x1080", cache;
     std::vector<std::string> sources, sinks;
-    double duration = 0, fps = 30, source_fps = 30;
+    double duration = 0, fps = 30, source_fps = 30, first_timeout = 10;
     long frames = 0;
     int threads = 0;
     bool loop = false, json = false, no_cache = false;
@@ -51,6 +51,9 @@ void add_run_command(CLI::App& root) {
   cmd->add_option("--source-fps", o.source_fps,
                   "Rate of image sequences, stills and pano: sources, frames/s (0: as fast as possible; default 30)")
       ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--first-frame-timeout", o.first_timeout,
+                  "A camera without a first frame after this many seconds is dropped (default 10)")
+      ->check(CLI::PositiveNumber);
   cmd->add_flag("--loop", o.loop, "Restart image sequences and video files at their end");
   cmd->add_option("--threads", o.threads, "Renderer threads (0: all; default 0)")->check(CLI::NonNegativeNumber);
   cmd->add_option("--cache", o.cache, "Map cache folder (default $OMMA_CACHE_DIR or ~/.cache/omma)");
@@ -68,6 +71,7 @@ void add_run_command(CLI::App& root) {
     eo.max_frames = o.frames;
     eo.fps = o.fps;
     eo.threads = o.threads;
+    eo.first_frame_timeout_s = o.first_timeout;
     engine::SourceOptions so;
     so.fps = o.source_fps;
     so.loop = o.loop;

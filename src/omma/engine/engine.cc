@@ -11,6 +11,7 @@
 #include <sys/resource.h>
 #include <unistd.h>
 
+#include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
 namespace omma::engine {
@@ -262,7 +263,14 @@ EngineStats run_engine(const Rig& rig, std::vector<std::unique_ptr<CameraSource>
   if (stats.frames == 0) {
     for (auto& s : sinks) s->abort();
     std::string why = "no panorama was rendered";
-    if (!stats.dropped_cameras.empty()) why += ": " + stats.dropped_cameras.front().reason;
+    if (!stats.dropped_cameras.empty()) {
+      why += ": " + stats.dropped_cameras.front().reason;
+    } else {
+      std::string waiting;
+      for (size_t c = 0; c < n; ++c)
+        if (!have[c]) waiting += (waiting.empty() ? "" : ", ") + std::to_string(rig.cameras[c].id);
+      if (!waiting.empty()) why += " in " + fmt::format("{:.1f}", stats.seconds) + " s: still waiting for the first frame of camera(s) " + waiting;
+    }
     throw std::runtime_error(why);
   }
   for (auto& s : sinks) s->finish();
