@@ -1,6 +1,7 @@
 #include "omma/engine/compiled_map.h"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
@@ -178,11 +179,44 @@ CompiledMap compile_map(const Rig& rig, const MapOptions& opt) {
     }
     double w[8];
     int q[8];
+    // Contributors (eq. 2.3) of the tile and a one-pixel border, found once and shared by the
+    // 4-neighbourhoods of mrf, mrf-spherical and sad; then the weights exactly as static_taps
+    // computes them (pano::method_weights).
+    const bool needs_nb = opt.method == pano::Method::kMrf || opt.method == pano::Method::kMrfSpherical ||
+                          opt.method == pano::Method::kSad;
+    const int bx0 = std::max(0, c0 - 1), by0 = std::max(0, r0 - 1);
+    const int bx1 = std::min(W, c1 + 1), by1 = std::min(H, r1 + 1), bw = bx1 - bx0;
+    std::vector<std::vector<pano::Contributor>> found(size_t(bw) * (by1 - by0));
+    std::vector<uint8_t> done(found.size(), 0);
+    std::array<std::vector<pano::Contributor>, 4> outside;
+    auto contributors = [&](int col, int row, int slot) -> const std::vector<pano::Contributor>& {
+      if (col >= bx0 && col < bx1 && row >= by0 && row < by1) {
+        const size_t i = size_t(row - by0) * bw + (col - bx0);
+        if (!done[i]) {
+          found[i] = pano::find_contributors(tile_rig, opt.grid.pixel_direction(col, row), opt.params.search);
+          done[i] = 1;
+        }
+        return found[i];
+      }
+      outside[slot] = pano::find_contributors(tile_rig, opt.grid.pixel_direction(col, row), opt.params.search);
+      return outside[slot];
+    };
     for (int row = r0; row < r1; ++row)
       for (int col = c0; col < c1; ++col) {
         PixelTaps& out = px[size_t(row) * W + col];
         if (tile_rig.cameras.empty()) continue;
-        std::vector<pano::Tap> taps = pano::static_taps(tile_rig, opt.grid, col, row, opt.method, opt.params);
+        const std::vector<pano::Contributor>& cs = contributors(col, row, 0);
+        if (cs.empty()) continue;
+        std::array<const std::vector<pano::Contributor>*, 4> nb{nullptr, nullptr, nullptr, nullptr};
+        if (needs_nb) {
+          const auto nbs = pano::grid_neighbours(opt.grid, col, row);
+          for (int k = 0; k < 4; ++k)
+            if (nbs[k][0] >= 0) nb[k] = &contributors(nbs[k][0], nbs[k][1], k);
+        }
+        const std::vector<double> mw = pano::method_weights(tile_rig, opt.method, cs, nb, opt.params);
+        std::vector<pano::Tap> taps;
+        for (size_t i = 0; i < cs.size(); ++i)
+          if (mw[i] > 0) taps.push_back({cs[i].camera, cs[i].px, mw[i]});
         if (taps.size() > 8) {  // keep the 8 strongest (never happens with real rigs)
           std::partial_sort(taps.begin(), taps.begin() + 8, taps.end(),
                             [](auto& a, auto& b) { return a.weight > b.weight; });
