@@ -96,6 +96,13 @@ __attribute__((target("ssse3,sse4.1"))) void render_row_simd(const CompiledMap& 
   const __m128i round = _mm_set1_epi32(1 << 17);
   const __m128i pack = _mm_setr_epi8(0, 4, 8, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1);
   const int W = map.width;
+  // (32 - fy, fy) byte pairs for pmaddubsw, one register per fy.
+  alignas(16) static const auto vy_lut = [] {
+    std::array<std::array<uint8_t, 16>, 32> t{};
+    for (int fy = 0; fy < 32; ++fy)
+      for (int i = 0; i < 16; i += 2) t[fy][i] = uint8_t(32 - fy), t[fy][i + 1] = uint8_t(fy);
+    return t;
+  }();
   for (int col = 0; col < W; ++col, out += 3) {
     __m128i acc = round;
     const int n = count[col];
@@ -107,10 +114,11 @@ __attribute__((target("ssse3,sse4.1"))) void render_row_simd(const CompiledMap& 
       const __m128i r0 = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(a));
       const __m128i r1 = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(a + stride_bytes));
       const __m128i il = _mm_unpacklo_epi8(r0, r1);
-      const __m128i vy = _mm_set1_epi16(static_cast<int16_t>((fy << 8) | (32 - fy)));
+      const __m128i vy = _mm_load_si128(reinterpret_cast<const __m128i*>(vy_lut[fy].data()));
       const __m128i v = _mm_maddubs_epi16(il, vy);
       const __m128i hp = _mm_shuffle_epi8(v, pair);
-      const __m128i wx = _mm_set1_epi32(((fx * wt) << 16) | ((32 - fx) * wt));
+      // ((32 - fx) w, fx w) as two int16 in one int32: w * (fx << 16 | (32 - fx)), no carry.
+      const __m128i wx = _mm_set1_epi32(wt * ((fx << 16) + 32 - fx));
       acc = _mm_add_epi32(acc, _mm_madd_epi16(hp, wx));
     }
     const __m128i px = _mm_shuffle_epi8(_mm_srli_epi32(acc, 18), pack);
