@@ -42,8 +42,10 @@ Workload opencv_multiband_workload(const Rig& rig, const PanoGrid& grid, const s
 // split among all threads.
 Workload memcpy_workload(const CompiledMap& map, const std::string& size_tag);
 
-// Runs w repeatedly for at least min_seconds (and at least min_iterations); returns frames/s.
-double measure_fps(const Workload& w, double min_seconds, int min_iterations = 3);
+// Runs w repeatedly for at least min_seconds (and at least min_iterations); returns frames per
+// wall-clock second; *cpu_s_per_frame (if given) gets the process CPU time per frame.
+double measure_fps(const Workload& w, double min_seconds, int min_iterations = 3,
+                   double* cpu_s_per_frame = nullptr);
 
 struct BenchEntry {
   std::string name;
