@@ -30,15 +30,15 @@
 namespace omma::isp {
 
 struct LinkConfig {
-  int width = 250;        // pixels per row (Table 5.1)
-  int height = 250;       // rows per frame
-  int bits = 10;          // ADC resolution, bits per pixel
-  int row_gap_pp = 3;     // zeros before each row, in pixel periods
-  int eof_pp = 4;         // end-of-frame marker (constant 0), PP
-  int config_pp = 505;    // configuration window (constant 0 here), PP
-  int resync_pp = 250;    // resynchronisation pattern (zeros XOR clock), PP
+  int width = 250;      // pixels per row (Table 5.1)
+  int height = 250;     // rows per frame
+  int bits = 10;        // ADC resolution, bits per pixel
+  int row_gap_pp = 3;   // zeros before each row, in pixel periods
+  int eof_pp = 4;       // end-of-frame marker (constant 0), PP
+  int config_pp = 505;  // configuration window (constant 0 here), PP
+  int resync_pp = 250;  // resynchronisation pattern (zeros XOR clock), PP
 
-  int clocks_per_pp() const { return bits + 2; }    // start + data + stop bits
+  int clocks_per_pp() const { return bits + 2; }  // start + data + stop bits
   int chips_per_pp() const { return 2 * clocks_per_pp(); }
   size_t row_chips() const { return size_t(row_gap_pp + width) * chips_per_pp(); }
   size_t frame_chips() const {
@@ -74,17 +74,19 @@ ChipStream encode_link(const std::vector<LinkFrame>& frames, const LinkConfig& c
 ChipStream impair_link(const ChipStream& in, double flip_rate, double drop_rate, uint64_t seed);
 
 struct LinkStats {
-  int frames = 0;          // frames emitted (frames with at least one intact row)
-  long rows_ok = 0;        // rows received intact, over the emitted frames
-  long rows_damaged = 0;   // rows of emitted frames that were damaged or lost
-  size_t bytes = 0;        // input size in bytes
+  int frames = 0;         // frames emitted (frames with at least one intact row)
+  long rows_ok = 0;       // rows received intact, over the emitted frames
+  long rows_damaged = 0;  // rows of emitted frames that were damaged or lost
+  size_t bytes = 0;       // input size in bytes
 };
 
 // Decodes a chip stream. Calls on_frame for every frame with at least one intact row; rows that
 // were damaged or never found have row_ok = 0 and pixels 0 (see conceal_damaged_rows).
 // Resynchronises at the next row (a run of >= 32 alternating chips then a start bit) or the next
 // frame (a constant run of >= half the end-of-frame marker, or the long resynchronisation run).
-// Runs in time linear in the input; never reads out of bounds, whatever the bytes.
+// Rows are placed by their timing after the last frame boundary. A stream whose first row start
+// is not within 1 PP of a row slot counted from the stream start (a capture begun mid-row) is
+// synchronised at its first frame boundary; rows before it are skipped and not counted. Runs in time linear in the input; never reads out of bounds, whatever the bytes.
 LinkStats decode_link(const uint8_t* data, size_t size, const LinkConfig& config,
                       const std::function<void(const LinkFrame&)>& on_frame);
 LinkStats decode_link(const std::vector<uint8_t>& bytes, const LinkConfig& config,
