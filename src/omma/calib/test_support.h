@@ -1,8 +1,8 @@
 // Test support for the calibration stage (header only, used by calib tests): a small 24-camera
-// test dome, a seeded rig perturbation, a minimal renderer of camera frames for a far-field scene
-// (an equirect photo at infinity) and for a near-field closed tube (the 35 mm calibration tube of
-// §3.6), a nearest-camera panorama render and PSNR. Kept small on purpose: the simulator (omma_sim)
-// is the full renderer.
+// test dome, a seeded rig perturbation (normal errors, unlike omma_sim's exact magnitudes), a
+// minimal noise-free renderer of camera frames for a far-field scene (an equirect photo at
+// infinity), the ideal panorama and PSNR. Kept small on purpose: the accuracy tests use the
+// simulator (omma_sim); this serves the PTO tests, which need exact, effect-free frames.
 #pragma once
 
 #include <cmath>
@@ -88,38 +88,8 @@ inline cv::Point2f equirect_source(const cv::Mat& scene, const Vec3& w) {
           static_cast<float>(s.theta / kPi * scene.rows - 0.5)};
 }
 
-// Closed tube (near field): radius R mm around the dome axis, closed at z = cap_mm. The wall is
-// textured with the photo wrapped around it (phi -> columns, z -> rows over 0..height_mm), the cap
-// with the photo's middle band mapped in x, y.
-struct Tube {
-  double radius_mm = 17.5;
-  double cap_mm = 25;
-  double bottom_mm = -5;
-};
-
-inline cv::Point2f tube_source(const cv::Mat& scene, const Tube& tube, const Vec3& o, const Vec3& d) {
-  // Cap plane first.
-  if (d.z() > 1e-9) {
-    const double s = (tube.cap_mm - o.z()) / d.z();
-    const Vec3 p = o + s * d;
-    if (p.head<2>().norm() <= tube.radius_mm)
-      return {static_cast<float>((p.x() / tube.radius_mm * 0.5 + 0.5) * scene.cols * 0.3 + 0.35 * scene.cols - 0.5),
-              static_cast<float>((p.y() / tube.radius_mm * 0.5 + 0.5) * scene.rows * 0.6 + 0.2 * scene.rows - 0.5)};
-  }
-  const double a = d.x() * d.x() + d.y() * d.y();
-  const double b = 2 * (o.x() * d.x() + o.y() * d.y());
-  const double c = o.x() * o.x() + o.y() * o.y() - tube.radius_mm * tube.radius_mm;
-  const double s = (-b + std::sqrt(std::max(0.0, b * b - 4 * a * c))) / (2 * a);
-  const Vec3 p = o + s * d;
-  double phi = std::atan2(p.y(), p.x());
-  if (phi < 0) phi += 2 * kPi;
-  const double v = (p.z() - tube.bottom_mm) / (tube.cap_mm - tube.bottom_mm);
-  return {static_cast<float>(phi / (2 * kPi) * scene.cols - 0.5),
-          static_cast<float>((0.1 + 0.8 * std::clamp(v, 0.0, 1.0)) * scene.rows - 0.5)};
-}
-
-// Renders every camera of `rig`: far field (tube == nullptr) or the tube.
-inline std::vector<cv::Mat> render_frames(const Rig& rig, const cv::Mat& scene, const Tube* tube = nullptr) {
+// Renders every camera of `rig` looking at the far-field photo (bilinear, no sensor effects).
+inline std::vector<cv::Mat> render_frames(const Rig& rig, const cv::Mat& scene) {
   std::vector<cv::Mat> frames;
   for (const auto& c : rig.cameras) {
     const CameraModel m = c.model();
@@ -127,7 +97,7 @@ inline std::vector<cv::Mat> render_frames(const Rig& rig, const cv::Mat& scene, 
     for (int r = 0; r < c.in.height; ++r)
       for (int col = 0; col < c.in.width; ++col) {
         const Vec3 w = m.unproject(Vec2(col + 0.5, r + 0.5));
-        const cv::Point2f s = tube ? tube_source(scene, *tube, c.position_mm, w) : equirect_source(scene, w);
+        const cv::Point2f s = equirect_source(scene, w);
         mx.at<float>(r, col) = s.x;
         my.at<float>(r, col) = s.y;
       }
@@ -136,36 +106,6 @@ inline std::vector<cv::Mat> render_frames(const Rig& rig, const cv::Mat& scene, 
     frames.push_back(out);
   }
   return frames;
-}
-
-// Nearest-camera panorama (far field): each grid direction from the camera whose optical axis is
-// closest, bilinear sample; pixels no camera sees stay black and are 0 in `mask`.
-inline cv::Mat render_panorama(const Rig& rig, const std::vector<cv::Mat>& frames, const PanoGrid& grid,
-                               cv::Mat* mask = nullptr) {
-  cv::Mat out(grid.height, grid.width, CV_8UC3, cv::Scalar::all(0));
-  if (mask) *mask = cv::Mat(grid.height, grid.width, CV_8U, cv::Scalar(0));
-  for (int r = 0; r < grid.height; ++r)
-    for (int col = 0; col < grid.width; ++col) {
-      const Vec3 w = grid.pixel_direction(col, r);
-      int best = -1;
-      double best_dot = -2;
-      Vec2 best_px;
-      for (size_t i = 0; i < rig.cameras.size(); ++i) {
-        const CameraModel m = rig.cameras[i].model();
-        const double d = w.dot(m.frame.t);
-        if (d <= best_dot || !m.sees(w)) continue;
-        const auto px = m.project(w);
-        if (!px || !m.inside(*px)) continue;
-        best = static_cast<int>(i), best_dot = d, best_px = *px;
-      }
-      if (best < 0) continue;
-      cv::Mat pix;
-      cv::getRectSubPix(frames[best], cv::Size(1, 1),
-                        cv::Point2f(static_cast<float>(best_px.x() - 0.5), static_cast<float>(best_px.y() - 0.5)), pix);
-      out.at<cv::Vec3b>(r, col) = pix.at<cv::Vec3b>(0, 0);
-      if (mask) mask->at<uchar>(r, col) = 255;
-    }
-  return out;
 }
 
 // The ideal far-field panorama straight from the photo.
