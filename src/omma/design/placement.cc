@@ -213,22 +213,20 @@ std::vector<Vec3> cvt_generators(int n, bool sphere, int iterations) {
   std::vector<Vec3> gen = fibonacci(n, sphere);
   const std::vector<Vec3> pts = fibonacci(std::max(2000, 40 * n) * (sphere ? 2 : 1), sphere);
   std::vector<Vec3> sum(n);
-  std::vector<int> owner(pts.size(), 0);
+  // Exact nearest-generator assignment, accelerated: if every point lies within angle D of its
+  // previous owner, its nearest generator lies within 2D of that owner (triangle inequality), so
+  // only those neighbours are searched.
+  std::vector<int> owner(pts.size());
+  for (size_t q = 0; q < pts.size(); ++q) {
+    int best = 0;
+    for (int g = 1; g < n; ++g)
+      if (pts[q].dot(gen[g]) > pts[q].dot(gen[best])) best = g;
+    owner[q] = best;
+  }
+  std::vector<std::vector<int>> near(n);
   for (int it = 0; it < iterations; ++it) {
     std::fill(sum.begin(), sum.end(), Vec3::Zero());
-    for (size_t q = 0; q < pts.size(); ++q) {
-      int best = owner[q];
-      double bd = pts[q].dot(gen[best]);
-      for (int g = 0; g < n; ++g) {
-        const double d = pts[q].dot(gen[g]);
-        if (d > bd) {
-          bd = d;
-          best = g;
-        }
-      }
-      owner[q] = best;
-      sum[best] += pts[q];
-    }
+    for (size_t q = 0; q < pts.size(); ++q) sum[owner[q]] += pts[q];
     double moved = 0;
     for (int g = 0; g < n; ++g)
       if (sum[g].norm() > 0) {
@@ -236,7 +234,29 @@ std::vector<Vec3> cvt_generators(int n, bool sphere, int iterations) {
         moved = std::max(moved, (c - gen[g]).norm());
         gen[g] = c;
       }
-    if (moved < 1e-6) break;
+    if (moved < 1e-5) break;
+    // Reassign to the moved generators.
+    double min_dot = 1.0;  // cos D
+    for (size_t q = 0; q < pts.size(); ++q) min_dot = std::min(min_dot, pts[q].dot(gen[owner[q]]));
+    const double D = std::acos(std::clamp(min_dot, -1.0, 1.0));
+    const double cos2d = 2 * D >= kPi ? -2.0 : std::cos(2 * D);
+    for (int g = 0; g < n; ++g) {
+      near[g].clear();
+      for (int h = 0; h < n; ++h)
+        if (gen[g].dot(gen[h]) >= cos2d - 1e-12) near[g].push_back(h);
+    }
+    for (size_t q = 0; q < pts.size(); ++q) {
+      int best = owner[q];
+      double bd = pts[q].dot(gen[best]);
+      for (int h : near[owner[q]]) {
+        const double d = pts[q].dot(gen[h]);
+        if (d > bd) {
+          bd = d;
+          best = h;
+        }
+      }
+      owner[q] = best;
+    }
   }
   return gen;
 }
@@ -349,7 +369,8 @@ Design design_min_cameras(const DesignParams& p) {
 Design design_cvt(const DesignParams& p) {
   check_params(p, true);
   const Checker chk(p, p.sphere);
-  // Algorithm 1, starting at N_c = the area bound.
+  // Algorithm 1, one camera more at a time, starting at N_c = the area bound (no fewer caps of
+  // radius beta can cover the field of view).
   for (int n = area_bound(chk.beta, p.sphere); n <= kMaxCameras; ++n) {
     const std::vector<Vec3> axes = cvt_generators(n, p.sphere, kCvtIterations);
     if (chk.covered(axes)) return finish(p, axes, {n}, "cvt");
