@@ -1,13 +1,62 @@
-// omma bench: placeholder until its issue lands.
-#include <stdexcept>
+// omma bench: the engine's renderer against OpenCV peers and the memory bandwidth bound
+// (issue 5 point 4, thesis §5.4).
+#include <iostream>
+#include <thread>
+
+#include <fmt/format.h>
 
 #include "apps/command.h"
+#include "omma/core/rig.h"
+#include "omma/engine/bench.h"
+#include "omma/design/prototype.h"
 
 namespace omma::app {
 
 void add_bench_command(CLI::App& root) {
-  auto* cmd = root.add_subcommand("bench", "Benchmarks against OpenCV (not implemented yet)");
-  cmd->callback([] { throw std::runtime_error("'omma bench' is not implemented yet"); });
+  auto* cmd = root.add_subcommand(
+      "bench",
+      "Measure the engine's renderer (nn, linear, mrf; 1 thread and all threads) against OpenCV "
+      "per-camera cv::remap (peer A), cv::detail::MultiBandBlender (peer B) and the memcpy bandwidth "
+      "bound, at 1080x1080 vr180 and 1920x512 equirect, random-texture frames");
+  struct Opts {
+    std::string rig, save_rig;
+    bool json = false, quick = false;
+    double seconds = 0.5;
+    std::vector<std::string> only;
+  };
+  static Opts o;
+  cmd->add_option("--rig", o.rig, "Rig file (JSON); default: the thesis prototype, 24 cameras 250x250, 64 deg");
+  cmd->add_option("--save-rig", o.save_rig, "Also write the rig used to this file (JSON)");
+  cmd->add_option("--seconds", o.seconds, "Minimum measuring time per workload, seconds (default 0.5)")
+      ->check(CLI::Range(0.01, 60.0));
+  cmd->add_option("--only", o.only, "Run only workloads whose name contains one of these strings");
+  cmd->add_flag("--quick", o.quick, "Small panoramas (216x216, 384x102) for smoke tests");
+  cmd->add_flag("--json", o.json, "Print {\"results\": [{\"name\", \"fps\", ...}]} on stdout");
+  cmd->callback([] {
+    set_json_mode(o.json);
+    const Rig rig = o.rig.empty() ? design::thesis_prototype_rig() : load_rig(o.rig);
+    if (!o.save_rig.empty()) save_rig(rig, o.save_rig);
+    engine::BenchOptions bo;
+    bo.min_seconds = o.seconds;
+    bo.quick = o.quick;
+    bo.only = o.only;
+    std::vector<std::string> skipped;
+    const auto entries = engine::run_bench_suite(rig, bo, &skipped);
+    nlohmann::json results = nlohmann::json::array();
+    for (const auto& e : entries) {
+      nlohmann::json r = {{"name", e.name}, {"fps", e.fps}};
+      for (auto it = e.info.begin(); it != e.info.end(); ++it) r[it.key()] = it.value();
+      results.push_back(r);
+    }
+    if (o.json) {
+      print_json({{"results", results}, {"skipped", skipped}, {"rig", rig.name},
+                  {"cameras", rig.cameras.size()}, {"hardware_threads", std::thread::hardware_concurrency()}});
+      return;
+    }
+    std::cout << fmt::format("{:<36} {:>12}\n", "workload", "fps");
+    for (const auto& e : entries) std::cout << fmt::format("{:<36} {:>12.1f}\n", e.name, e.fps);
+    for (const auto& s : skipped) std::cout << "skipped: " << s << "\n";
+  });
 }
 
 }  // namespace omma::app

@@ -1,0 +1,213 @@
+#include "omma/engine/bench.h"
+
+#include <chrono>
+#include <cstring>
+#include <ctime>
+#include <stdexcept>
+
+#include <opencv2/imgproc.hpp>
+#include <opencv2/stitching/detail/blenders.hpp>
+#include <tbb/parallel_for.h>
+
+#include "omma/design/prototype.h"
+#include "omma/engine/synthetic.h"
+
+namespace omma::engine {
+namespace {
+
+std::string size_tag(const PanoGrid& g) { return std::to_string(g.width) + "x" + std::to_string(g.height); }
+
+// Per camera: its footprint's bounding box on the panorama and cv::remap maps for it (pixels the
+// camera does not see map outside its image, so BORDER_TRANSPARENT leaves them untouched).
+struct CameraWarp {
+  cv::Rect roi;
+  cv::Mat map1, map2;  // fixed point (CV_16SC2 + CV_16UC1)
+  cv::Mat mask;        // CV_8U 255 where the camera sees the pixel
+};
+
+std::vector<CameraWarp> camera_warps(const Rig& rig, const PanoGrid& g) {
+  std::vector<CameraWarp> out(rig.cameras.size());
+  tbb::parallel_for(size_t(0), rig.cameras.size(), [&](size_t c) {
+    const CameraModel m = rig.cameras[c].model();
+    cv::Mat mx(g.height, g.width, CV_32F, cv::Scalar(-10)), my(g.height, g.width, CV_32F, cv::Scalar(-10));
+    int x0 = g.width, y0 = g.height, x1 = -1, y1 = -1;
+    for (int row = 0; row < g.height; ++row)
+      for (int col = 0; col < g.width; ++col) {
+        const Vec3 w = g.pixel_direction(col, row);
+        if (!m.sees(w)) continue;
+        const auto p = m.project(w);
+        if (!p || !m.inside(*p)) continue;
+        mx.at<float>(row, col) = float(p->x() - 0.5);
+        my.at<float>(row, col) = float(p->y() - 0.5);
+        x0 = std::min(x0, col), x1 = std::max(x1, col), y0 = std::min(y0, row), y1 = std::max(y1, row);
+      }
+    CameraWarp& cw = out[c];
+    if (x1 < 0) return;
+    cw.roi = cv::Rect(x0, y0, x1 - x0 + 1, y1 - y0 + 1);
+    cv::convertMaps(mx(cw.roi), my(cw.roi), cw.map1, cw.map2, CV_16SC2);
+    cw.mask = (mx(cw.roi) > -5);
+  });
+  return out;
+}
+
+}  // namespace
+
+Workload omma_workload(const Rig& rig, const PanoGrid& grid, pano::Method method, int threads,
+                       const std::vector<cv::Mat>& frames, const std::string& suffix) {
+  MapOptions opt;
+  opt.grid = grid;
+  opt.method = method;
+  const auto t0 = std::chrono::steady_clock::now();
+  auto map = std::make_shared<CompiledMap>(compile_map(rig, opt));
+  const double compile_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  auto store = std::make_shared<FrameStore>(map->layout);
+  for (size_t c = 0; c < frames.size(); ++c) store->set(int(c), frames[c]);
+  auto out = std::make_shared<cv::Mat>();
+  Workload w;
+  w.name = "omma-" + pano::to_string(method) + "-" + size_tag(grid) + suffix;
+  w.threads = threads;
+  w.run = [map, store, out, threads] { render(*map, *store, *out, {.threads = threads}); };
+  w.info = {{"bytes_per_pixel", map->bytes_per_pixel()},
+            {"taps_per_pixel", double(map->taps()) / (double(map->width) * map->height)},
+            {"compile_s", compile_s}, {"threads", threads}};
+  return w;
+}
+
+Workload opencv_remap_workload(const Rig& rig, const PanoGrid& grid, const std::vector<cv::Mat>& frames) {
+  auto warps = std::make_shared<std::vector<CameraWarp>>(camera_warps(rig, grid));
+  auto out = std::make_shared<cv::Mat>(grid.height, grid.width, CV_8UC3, cv::Scalar::all(0));
+  auto fr = std::make_shared<std::vector<cv::Mat>>(frames);
+  Workload w;
+  w.name = "opencv-remap-" + size_tag(grid);
+  w.run = [warps, out, fr] {
+    for (size_t c = 0; c < warps->size(); ++c) {
+      const CameraWarp& cw = (*warps)[c];
+      if (cw.roi.empty()) continue;
+      cv::Mat dst = (*out)(cw.roi);
+      cv::remap((*fr)[c], dst, cw.map1, cw.map2, cv::INTER_LINEAR, cv::BORDER_TRANSPARENT);
+    }
+  };
+  w.info = {{"threads", "opencv default"}};
+  return w;
+}
+
+Workload opencv_multiband_workload(const Rig& rig, const PanoGrid& grid, const std::vector<cv::Mat>& frames) {
+  const auto warps = camera_warps(rig, grid);
+  auto warped = std::make_shared<std::vector<cv::Mat>>();
+  auto masks = std::make_shared<std::vector<cv::Mat>>();
+  auto tls = std::make_shared<std::vector<cv::Point>>();
+  for (size_t c = 0; c < warps.size(); ++c) {
+    if (warps[c].roi.empty()) continue;
+    cv::Mat img;
+    cv::remap(frames[c], img, warps[c].map1, warps[c].map2, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
+    cv::Mat s16;
+    img.convertTo(s16, CV_16SC3);
+    warped->push_back(s16);
+    masks->push_back(warps[c].mask.clone());
+    tls->push_back(warps[c].roi.tl());
+  }
+  auto out = std::make_shared<cv::Mat>();
+  const cv::Rect dst_roi(0, 0, grid.width, grid.height);
+  Workload w;
+  w.name = "opencv-multiband-" + size_tag(grid);
+  w.run = [warped, masks, tls, out, dst_roi] {
+    cv::detail::MultiBandBlender blender(false, 5);
+    blender.prepare(dst_roi);
+    for (size_t i = 0; i < warped->size(); ++i) blender.feed((*warped)[i], (*masks)[i], (*tls)[i]);
+    cv::Mat result, result_mask;
+    blender.blend(result, result_mask);
+    *out = result;
+  };
+  w.info = {{"bands", 5}, {"threads", "opencv default"}};
+  return w;
+}
+
+Workload memcpy_workload(const CompiledMap& map, const std::string& tag) {
+  const size_t bytes = map.bytes() + map.layout.bytes() + size_t(map.width) * map.height * 3;
+  auto src = std::make_shared<std::vector<uint8_t>>(bytes, 1);
+  auto dst = std::make_shared<std::vector<uint8_t>>(bytes, 0);
+  Workload w;
+  w.name = "memcpy-bound-" + tag;
+  w.run = [src, dst] {
+    const size_t n = src->size(), chunk = 1 << 20;
+    tbb::parallel_for(size_t(0), (n + chunk - 1) / chunk, [&](size_t i) {
+      const size_t a = i * chunk, b = std::min(n, a + chunk);
+      std::memcpy(dst->data() + a, src->data() + a, b - a);
+    });
+  };
+  w.info = {{"bytes", bytes}};
+  return w;
+}
+
+namespace {
+double process_cpu_seconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return ts.tv_sec + ts.tv_nsec * 1e-9;
+}
+}  // namespace
+
+double measure_fps(const Workload& w, double min_seconds, int min_iterations, double* cpu_s_per_frame) {
+  w.run();  // warm-up
+  int n = 0;
+  const auto t0 = std::chrono::steady_clock::now();
+  const double c0 = process_cpu_seconds();
+  double elapsed = 0;
+  while (n < min_iterations || elapsed < min_seconds) {
+    w.run();
+    ++n;
+    elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  }
+  if (cpu_s_per_frame) *cpu_s_per_frame = (process_cpu_seconds() - c0) / n;
+  return n / elapsed;
+}
+
+std::vector<BenchEntry> run_bench_suite(const Rig& rig_in, const BenchOptions& opt,
+                                        std::vector<std::string>* skipped) {
+  const Rig rig = rig_in.cameras.empty() ? design::thesis_prototype_rig() : rig_in;
+  const auto frames = random_frames(rig, 42);
+  std::vector<PanoGrid> grids = {{Projection::kVr180, 1080, 1080}, {Projection::kEquirect, 1920, 512}};
+  if (opt.quick) grids = {{Projection::kVr180, 216, 216}, {Projection::kEquirect, 384, 102}};
+  auto wanted = [&](const std::string& name) {
+    if (opt.only.empty()) return true;
+    for (const auto& s : opt.only)
+      if (name.find(s) != std::string::npos) return true;
+    return false;
+  };
+  std::vector<BenchEntry> out;
+  auto add = [&](const Workload& w) {
+    if (!wanted(w.name)) return;
+    const bool slow = w.name.rfind("opencv-multiband", 0) == 0;
+    double cpu = 0;
+    const double fps = measure_fps(w, slow ? std::min(opt.min_seconds, 0.3) : opt.min_seconds, slow ? 1 : 3, &cpu);
+    nlohmann::json info = w.info;
+    info["cpu_ms_per_frame"] = cpu * 1e3;  // CPU time of all threads per frame (load-independent)
+    out.push_back({w.name, fps, info});
+  };
+  for (const PanoGrid& g : grids) {
+    std::shared_ptr<CompiledMap> bound_map;
+    for (pano::Method m : {pano::Method::kNearest, pano::Method::kLinear, pano::Method::kMrf}) {
+      const std::string base = "omma-" + pano::to_string(m) + "-" + size_tag(g);
+      if (!wanted(base) && !wanted("memcpy-bound-" + size_tag(g))) continue;
+      try {
+        Workload all = omma_workload(rig, g, m, 0, frames);
+        add(all);
+        add(omma_workload(rig, g, m, 1, frames, "-1thread"));
+        if (m != pano::Method::kNearest) {  // mrf if pano has it, else linear
+          MapOptions mo;
+          mo.grid = g;
+          mo.method = m;
+          bound_map = std::make_shared<CompiledMap>(compile_map(rig, mo));
+        }
+      } catch (const std::logic_error& e) {
+        if (skipped) skipped->push_back(base + ": " + e.what());
+      }
+    }
+    if (wanted("opencv-remap-" + size_tag(g))) add(opencv_remap_workload(rig, g, frames));
+    if (wanted("opencv-multiband-" + size_tag(g))) add(opencv_multiband_workload(rig, g, frames));
+    if (bound_map && wanted("memcpy-bound-" + size_tag(g))) add(memcpy_workload(*bound_map, size_tag(g)));
+  }
+  return out;
+}
+
+}  // namespace omma::engine

@@ -1,0 +1,64 @@
+// `omma bench` workloads (issue 5 point 4): our renderer against OpenCV peers and the memory
+// bandwidth bound, on one rig with random-texture frames. Shared by `omma bench` and the Google
+// Benchmark program bench/engine_bench.cc.
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+
+#include "omma/core/grid.h"
+#include "omma/core/rig.h"
+#include "omma/engine/compiled_map.h"
+#include "omma/engine/render.h"
+
+namespace omma::engine {
+
+// One measurable workload: run() renders (or copies) one panorama frame.
+struct Workload {
+  std::string name;   // e.g. "omma-mrf-1080x1080", "opencv-remap-1080x1080"
+  int threads = 0;    // 0 = all
+  std::function<void()> run;
+  nlohmann::json info;  // extra facts (bytes per pixel, compile time, ...)
+};
+
+// Our renderer for `method` on `grid` (threads: 0 = all, 1 = one). Throws std::logic_error if pano
+// does not implement the method yet. The frames are copied into a frame store once.
+Workload omma_workload(const Rig& rig, const PanoGrid& grid, pano::Method method, int threads,
+                       const std::vector<cv::Mat>& frames, const std::string& suffix = "");
+
+// Peer A: per-camera cv::remap (fixed-point maps from cv::convertMaps, INTER_LINEAR) of every
+// camera's frame into its footprint on the panorama, no blending (each camera overwrites).
+Workload opencv_remap_workload(const Rig& rig, const PanoGrid& grid, const std::vector<cv::Mat>& frames);
+
+// Peer B: cv::detail::MultiBandBlender (5 bands) fed the warped images and masks of peer A.
+Workload opencv_multiband_workload(const Rig& rig, const PanoGrid& grid, const std::vector<cv::Mat>& frames);
+
+// The bandwidth bound: memcpy of the bytes a render of `map` must touch (map + frames + output),
+// split among all threads.
+Workload memcpy_workload(const CompiledMap& map, const std::string& size_tag);
+
+// Runs w repeatedly for at least min_seconds (and at least min_iterations); returns frames per
+// wall-clock second; *cpu_s_per_frame (if given) gets the process CPU time per frame.
+double measure_fps(const Workload& w, double min_seconds, int min_iterations = 3,
+                   double* cpu_s_per_frame = nullptr);
+
+struct BenchEntry {
+  std::string name;
+  double fps = 0;
+  nlohmann::json info;
+};
+struct BenchOptions {
+  double min_seconds = 0.5;       // per workload
+  bool quick = false;             // small sizes (tests)
+  std::vector<std::string> only;  // substrings of names to run; empty = all
+};
+// The whole suite of point 4 on the thesis prototype rig (or `rig` if it has cameras).
+std::vector<BenchEntry> run_bench_suite(const Rig& rig, const BenchOptions& opt,
+                                        std::vector<std::string>* skipped = nullptr);
+
+}  // namespace omma::engine

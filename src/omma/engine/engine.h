@@ -1,0 +1,68 @@
+// The live engine (issue 5 point 3, thesis §5.3): every camera free-running in its own thread into
+// a latest-frame buffer, one render loop that takes the newest frame of every camera, renders the
+// compiled map and hands the panorama to the sinks. A camera that ends or fails is dropped: the
+// map is recompiled in the background without it (its static weights renormalised among the
+// others, eq. 2.8 ff.), and until then its last frame is used, so the panorama never stalls.
+#pragma once
+
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "omma/engine/compiled_map.h"
+#include "omma/engine/render.h"
+#include "omma/engine/sinks.h"
+#include "omma/engine/sources.h"
+
+namespace omma::engine {
+
+struct EngineOptions {
+  MapOptions map;
+  std::filesystem::path cache_dir;  // empty: no map cache
+  double duration_s = 0;            // stop after this long (0: when every source has ended)
+  long max_frames = 0;              // stop after this many panoramas (0: no limit)
+  double fps = 30;                  // panorama rate (0: render whenever a camera has a new frame)
+  double first_frame_timeout_s = 5; // a camera without a first frame by then is dropped
+  int threads = 0;                  // renderer threads (0: all)
+  // Called about twice a second from the render loop with the running statistics.
+  std::function<void(const nlohmann::json&)> on_progress;
+};
+
+struct DroppedCamera {
+  int index = 0;       // rig camera index
+  int id = 0;          // camera id
+  std::string reason;  // "ended", or the error
+  long at_frame = 0;   // panorama frame count when it was dropped
+  bool remapped = false;  // a map without it was compiled and in use by the end
+};
+
+struct EngineStats {
+  long frames = 0;               // panoramas rendered
+  double seconds = 0;            // wall time of the render loop
+  double fps = 0;
+  double render_ms_mean = 0;     // render time per panorama
+  double latency_ms_mean = 0;    // capture of the oldest frame used -> panorama done, mean
+  double latency_ms_max = 0;
+  long camera_frames = 0;        // frames delivered by the cameras
+  long dropped_frames = 0;       // camera frames overwritten before any panorama used them
+  std::vector<DroppedCamera> dropped_cameras;
+  double map_bytes_per_pixel = 0;
+  double map_seconds = 0;
+  bool map_from_cache = false;
+  nlohmann::json to_json() const;
+};
+
+// Runs the engine until the duration, the frame limit or the end of every source. Sources must
+// be one per rig camera (rig order). Throws (after stopping every thread and aborting the sinks)
+// if a frame has the wrong size, a sink fails, or no camera delivers a frame at all.
+EngineStats run_engine(const Rig& rig, std::vector<std::unique_ptr<CameraSource>> sources,
+                       std::vector<std::unique_ptr<Sink>>& sinks, const EngineOptions& opt);
+
+// Stops a running run_engine from another thread (e.g. a signal handler's watcher).
+void request_stop();
+
+}  // namespace omma::engine

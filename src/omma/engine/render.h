@@ -1,0 +1,34 @@
+// The fast CPU renderer of compiled maps (sad: its own kernel with per-frame weights) (thesis §5.4: the FPGA's per-pixel tap pipeline, here as
+// an SSSE3 kernel over rows split among oneTBB threads), and the plain reference it must match.
+#pragma once
+
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "omma/engine/compiled_map.h"
+
+namespace omma::engine {
+
+struct RenderOptions {
+  int threads = 0;       // 0 = all hardware threads (oneTBB default), 1 = the calling thread only
+  bool simd = true;      // false: the portable scalar kernel (bit-identical to the SIMD one)
+};
+
+// Renders `map` from the frames in `store` into `out` (resized to CV_8UC3 height x width).
+// The store's layout must be the map's layout.
+void render(const CompiledMap& map, const FrameStore& store, cv::Mat& out, const RenderOptions& opt = {});
+
+// True if the SIMD kernel runs on this CPU.
+bool simd_available();
+
+// Reference: for every output pixel, pano::static_taps evaluated in double precision with
+// bilinear sampling (edges replicated, centres at integer + 0.5) of the 8-bit frames; no
+// quantisation except the final rounding. `frames` are CV_8UC3, in rig order; `active` as in
+// MapOptions. This is the readable definition of what render() computes.
+cv::Mat reference_render(const Rig& rig, const MapOptions& opt, const std::vector<cv::Mat>& frames);
+
+// PSNR in dB between two 8-bit images of equal size (inf if identical).
+double psnr_u8(const cv::Mat& a, const cv::Mat& b);
+
+}  // namespace omma::engine

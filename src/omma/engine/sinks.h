@@ -1,0 +1,54 @@
+// Sinks of the live engine (issue 5 point 3). Sink specs (`omma run --sink`):
+//   FILE.mp4 | FILE.mkv | FILE.avi   video file (OpenCV VideoWriter: mp4v in mp4, MJPG in mkv/avi),
+//                                    written to a temporary file renamed into place at the end
+//   png:DIR  or  DIR/                PNG sequence DIR/frame_000000.png ... (each written atomically)
+//   cam:ID:SINK                      camera ID's own frames passed through to SINK (a video file or
+//                                    PNG folder) instead of the panorama: the ASIC's output
+//                                    multiplexer (thesis §6.3)
+//   http:PORT  or  http://127.0.0.1:PORT   live view on 127.0.0.1: `/` an HTML page showing the
+//                                    video, `/stream.mjpg` the MJPEG stream, `/frame.jpg` the latest
+//                                    frame, `/stats.json` the running statistics
+// Opening a sink checks that it can be written (folder creatable, writer opens, port free) and
+// throws SinkError otherwise; a failed or aborted run leaves no partial video file behind.
+#pragma once
+
+#include <memory>
+#include <stdexcept>
+#include <string>
+
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+
+#include "omma/core/rig.h"
+#include "omma/engine/compiled_map.h"
+
+namespace omma::engine {
+
+class SinkError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+class Sink {
+ public:
+  virtual ~Sink() = default;
+  // One rendered panorama; `store` holds the camera frames it was made from.
+  virtual void write(const cv::Mat& panorama, const FrameStore& store) = 0;
+  // The run ended normally: make the output final (rename the video into place).
+  virtual void finish() {}
+  // The run failed: remove partial output.
+  virtual void abort() {}
+  virtual void set_stats(const nlohmann::json& stats) {}
+  virtual std::string describe() const = 0;
+};
+
+struct SinkOptions {
+  double fps = 30;       // frame rate written into video files
+  int jpeg_quality = 80;  // live view
+};
+
+// Opens one sink. `pano_size` is the panorama size; the rig gives camera sizes for cam:ID sinks.
+std::unique_ptr<Sink> open_sink(const std::string& spec, const Rig& rig, cv::Size pano_size,
+                                const SinkOptions& opt = {});
+
+}  // namespace omma::engine

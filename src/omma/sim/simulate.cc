@@ -1,0 +1,130 @@
+#include "omma/sim/simulate.h"
+
+#include <chrono>
+#include <system_error>
+#include <unistd.h>
+
+#include <fmt/format.h>
+#include <tbb/parallel_for.h>
+
+#include "omma/core/frames.h"
+#include "omma/core/io.h"
+#include "omma/core/progress.h"
+
+namespace omma::sim {
+namespace fs = std::filesystem;
+
+namespace {
+double ms_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+}  // namespace
+
+SimulateResult simulate(const Rig& nominal, const Scene& scene, const SimulateOptions& o) {
+  if (nominal.cameras.empty()) throw RigError("the rig has no cameras");
+  nominal.validate();
+  if (o.truth && (o.truth_grid.width <= 0 || o.truth_grid.height <= 0))
+    throw std::invalid_argument("truth size must be positive");
+  SimulateResult res;
+  res.nominal = nominal;
+  res.true_rig = perturb_rig(nominal, o.perturb, o.effects.seed);
+  res.frames.resize(nominal.cameras.size());
+  {
+    Progress progress("simulate cameras", nominal.cameras.size(), o.progress);
+    const auto t0 = std::chrono::steady_clock::now();
+    tbb::parallel_for(size_t{0}, res.true_rig.cameras.size(), [&](size_t i) {
+      res.frames[i] = render_camera(scene, res.true_rig.cameras[i], o.pose, o.effects, o.raw);
+      progress.step();
+    });
+    progress.finish();
+    res.cameras_ms = ms_since(t0);
+  }
+  if (o.truth) {
+    const auto t0 = std::chrono::steady_clock::now();
+    res.truth = render_truth(scene, o.truth_grid, o.pose, o.truth_supersample, o.effects.exposure);
+    res.truth_ms = ms_since(t0);
+  }
+  return res;
+}
+
+nlohmann::json simulation_summary(const SimulateResult& r, const SimulateOptions& o, const Scene& scene) {
+  nlohmann::json cams = nlohmann::json::array();
+  for (size_t i = 0; i < r.frames.size(); ++i) {
+    const auto& c = r.true_rig.cameras[i];
+    const auto& g = r.frames[i].gains;
+    cams.push_back({{"id", c.id}, {"width", c.in.width}, {"height", c.in.height}, {"gains_bgr", {g[0], g[1], g[2]}}});
+  }
+  const auto& e = o.effects;
+  return {{"format", "omma-sim"},
+          {"version", 1},
+          {"scene", scene.spec()},
+          {"seed", e.seed},
+          {"encoding", "srgb"},
+          {"effects",
+           {{"supersample", e.supersample},
+            {"exposure", e.exposure},
+            {"vignetting", e.vignetting},
+            {"color_gain", e.color_gain},
+            {"full_scale_electrons", e.full_scale_electrons},
+            {"read_noise_dn", e.read_noise_dn},
+            {"bits", e.bits}}},
+          {"perturb",
+           {{"orient_deg", o.perturb.orient_deg},
+            {"focal_rel", o.perturb.focal_rel},
+            {"center_px", o.perturb.center_px},
+            {"k1", o.perturb.k1},
+            {"pos_mm", o.perturb.position_mm}}},
+          {"truth",
+           o.truth ? nlohmann::json{{"projection", to_string(o.truth_grid.projection)},
+                                    {"width", o.truth_grid.width},
+                                    {"height", o.truth_grid.height},
+                                    {"supersample", o.truth_supersample}}
+                   : nlohmann::json(nullptr)},
+          {"dome_translation_mm", {o.pose.translation_mm.x(), o.pose.translation_mm.y(), o.pose.translation_mm.z()}},
+          {"raw", o.raw},
+          {"cameras", cams},
+          {"cameras_ms", r.cameras_ms},
+          {"truth_ms", r.truth_ms}};
+}
+
+void write_frames_folder(const fs::path& dir, const SimulateResult& r, const SimulateOptions& o,
+                         const Scene& scene) {
+  if (fs::exists(dir) && !fs::is_directory(dir))
+    throw IoError(fmt::format("output '{}' exists and is not a folder", dir.string()));
+  const bool fresh = !fs::exists(dir);
+  fs::path target = dir;
+  if (fresh) {
+    const fs::path parent = dir.has_parent_path() ? dir.parent_path() : fs::path(".");
+    if (!fs::is_directory(parent))
+      throw IoError(fmt::format("cannot create '{}': folder '{}' does not exist", dir.string(), parent.string()));
+    target = parent / fmt::format(".{}.tmp-{}", dir.filename().string(), ::getpid());
+    std::error_code ec;
+    fs::remove_all(target, ec);
+    if (!fs::create_directory(target, ec) || ec)
+      throw IoError(fmt::format("cannot create folder '{}': {}", target.string(), ec.message()));
+  }
+  try {
+    for (size_t i = 0; i < r.frames.size(); ++i) {
+      const int id = r.true_rig.cameras[i].id;
+      write_image(target / frame_filename(id), r.frames[i].image);
+      if (o.raw) write_image(target / raw_frame_filename(id), r.frames[i].raw);
+    }
+    if (!r.truth.empty()) write_image(target / "truth.png", r.truth);
+    save_rig(r.nominal, target / "rig.json");
+    save_rig(r.true_rig, target / "rig_true.json");
+    write_text_atomically(target / "sim.json", simulation_summary(r, o, scene).dump(2) + "\n");
+    if (fresh) {
+      std::error_code ec;
+      fs::rename(target, dir, ec);
+      if (ec) throw IoError(fmt::format("cannot rename '{}' to '{}': {}", target.string(), dir.string(), ec.message()));
+    }
+  } catch (...) {
+    if (fresh) {
+      std::error_code ec;
+      fs::remove_all(target, ec);
+    }
+    throw;
+  }
+}
+
+}  // namespace omma::sim

@@ -1,0 +1,53 @@
+// The whole simulation: every camera of a rig plus the ground truth, and the frames folder
+// (omma/core/frames.h) it is written to:
+//   DIR/cam_XX.png        8-bit sRGB frames (render.h), XX = camera id
+//   DIR/cam_XX_raw.png    16-bit RGGB Bayer, values 0 .. 2^bits - 1 (with raw = true)
+//   DIR/truth.png         the ideal panorama from the dome centre on the truth grid (8-bit sRGB)
+//   DIR/rig.json          the nominal rig (what the stitcher is told)
+//   DIR/rig_true.json     the rig the frames were rendered with (= rig.json without perturbation)
+//   DIR/sim.json          what was simulated: scene, seed, effects, per-camera gains, perturbation
+#pragma once
+
+#include <filesystem>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "omma/sim/perturb.h"
+#include "omma/sim/render.h"
+
+namespace omma::sim {
+
+struct SimulateOptions {
+  CameraEffects effects;                                 // effects.seed is the simulation seed
+  PerturbSpec perturb;                                   // errors of the true rig (none by default)
+  PanoGrid truth_grid{Projection::kVr180, 1080, 1080};   // grid of truth.png
+  int truth_supersample = 2;                             // N x N rays per truth pixel
+  bool truth = true;                                     // render the truth at all
+  bool raw = false;                                      // also produce Bayer raw frames
+  DomePose pose;                                         // where the dome is in the scene
+  bool progress = true;                                  // progress bar on stderr
+};
+
+struct SimulateResult {
+  Rig nominal;                      // the rig given
+  Rig true_rig;                     // the rig rendered (perturbed)
+  std::vector<CameraFrame> frames;  // in rig order
+  cv::Mat truth;                    // CV_8UC3 sRGB (empty if options.truth is false)
+  double cameras_ms = 0, truth_ms = 0;
+};
+
+// Renders everything in memory. Throws std::invalid_argument / RigError on bad options or rig.
+SimulateResult simulate(const Rig& nominal, const Scene& scene, const SimulateOptions& options);
+
+// Writes the frames folder. If `dir` does not exist it is written as a temporary sibling folder
+// and renamed at the end (all or nothing); if it exists each file is replaced atomically.
+// Throws IoError if `dir` is a file or cannot be written.
+void write_frames_folder(const std::filesystem::path& dir, const SimulateResult& result,
+                         const SimulateOptions& options, const Scene& scene);
+
+// The content of DIR/sim.json.
+nlohmann::json simulation_summary(const SimulateResult& result, const SimulateOptions& options,
+                                  const Scene& scene);
+
+}  // namespace omma::sim

@@ -1,0 +1,215 @@
+// CLI tests of `omma run` and `omma bench` (issue 5 points 3, 4 and 6).
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <set>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/videoio.hpp>
+
+#include "omma/core/rig.h"
+#include "tests/cli/cli_util.h"
+
+namespace omma::test {
+namespace {
+namespace fs = std::filesystem;
+
+// The engine's 24-camera test rig (3 + 9 + 12 cameras at polar 12, 38, 70 deg), small cameras.
+fs::path write_rig(const fs::path& dir, int size = 120) {
+  Rig rig;
+  rig.name = "ring-24";
+  const struct { int n; double polar, phase; } rings[] = {{3, 12, 0}, {9, 38, 20}, {12, 70, 0}};
+  int id = 0;
+  for (const auto& r : rings)
+    for (int k = 0; k < r.n; ++k) {
+      const double phi = deg2rad(r.phase + 360.0 * k / r.n);
+      const Vec3 t = direction_from_spherical(deg2rad(r.polar), phi);
+      RigCamera cam;
+      cam.id = id++;
+      cam.frame = frame_looking_at(t, direction_from_spherical(deg2rad(r.polar + 90), phi));
+      cam.position_mm = 5.0 * t;
+      cam.in.width = cam.in.height = size;
+      cam.in.aov = deg2rad(64);
+      cam.in.fu = cam.in.fv = Intrinsics::focal_for_aov(size, cam.in.aov);
+      cam.in.cu = cam.in.cv = size / 2.0;
+      rig.cameras.push_back(cam);
+    }
+  const fs::path p = dir / "rig.json";
+  save_rig(rig, p);
+  return p;
+}
+
+cv::Vec3b camera_colour(int id) { return cv::Vec3b(uchar(20 + 9 * id), uchar(240 - 7 * id), uchar(60 + (id % 5) * 40)); }
+
+// DIR/cam_XX/000.png ... one solid-colour image sequence per camera.
+void write_sequences(const fs::path& dir, int size, int frames, int bad_camera = -1) {
+  for (int id = 0; id < 24; ++id) {
+    const fs::path d = dir / ("cam_" + std::string(id < 10 ? "0" : "") + std::to_string(id));
+    fs::create_directories(d);
+    for (int f = 0; f < frames; ++f) {
+      const fs::path file = d / (std::to_string(100 + f) + ".png");
+      if (id == bad_camera && f == 2) {
+        std::ofstream(file) << "this is not a png";  // the camera fails here
+        continue;
+      }
+      cv::imwrite(file.string(), cv::Mat(size, size, CV_8UC3, cv::Scalar(camera_colour(id))));
+    }
+  }
+}
+
+std::string lake() { return data_dir() + "/lake.jpg"; }
+
+TEST(EngineCli, RunWritesVideoPngSequencePassthroughAndJsonSummary) {
+  const auto dir = temp_dir("engine-run");
+  const auto rig = write_rig(dir);
+  const RunResult r = run_omma("run --rig " + rig.string() + " --source pano:" + lake() + "@30 --size 200x200" +
+                               " --method linear --sink " + (dir / "pano.mp4").string() + " --sink png:" +
+                               (dir / "png").string() + " --sink cam:4:" + (dir / "cam4.avi").string() +
+                               " --duration 2 --fps 15 --no-cache --json", 60);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto j = r.json();
+  const long frames = j["frames"];
+  EXPECT_GE(frames, 15);
+  EXPECT_LE(frames, 35);
+  EXPECT_EQ(j["dropped_cameras"].size(), 0u);
+  EXPECT_GT(j["map"]["bytes_per_pixel"].get<double>(), 1.0);
+  // The PNG sequence has every frame; frames are panoramas of the lake (not black) that move.
+  std::vector<fs::path> pngs;
+  for (const auto& e : fs::directory_iterator(dir / "png")) pngs.push_back(e.path());
+  std::sort(pngs.begin(), pngs.end());
+  EXPECT_EQ(long(pngs.size()), frames);
+  const cv::Mat first = cv::imread(pngs.front().string()), last = cv::imread(pngs.back().string());
+  ASSERT_EQ(first.size(), cv::Size(200, 200));
+  EXPECT_GT(cv::mean(first)[1], 30.0);
+  EXPECT_GT(cv::norm(first, last, cv::NORM_L1) / first.total(), 3.0);  // the scene turned
+  // The video has the frames, the size and the content of the PNGs.
+  cv::VideoCapture video((dir / "pano.mp4").string());
+  ASSERT_TRUE(video.isOpened());
+  EXPECT_EQ(long(video.get(cv::CAP_PROP_FRAME_COUNT)), frames);
+  cv::Mat v0;
+  ASSERT_TRUE(video.read(v0));
+  EXPECT_EQ(v0.size(), cv::Size(200, 200));
+  EXPECT_GT(cv::PSNR(v0, first), 25.0);
+  cv::VideoCapture cam4((dir / "cam4.avi").string());
+  ASSERT_TRUE(cam4.isOpened());
+  cv::Mat c0;
+  ASSERT_TRUE(cam4.read(c0));
+  EXPECT_EQ(c0.size(), cv::Size(120, 120));
+  EXPECT_FALSE(fs::exists(dir / ".pano.partial.mp4"));
+  fs::remove_all(dir);
+}
+
+TEST(EngineCli, FailingCameraIsDroppedAndItsRegionFilledFromNeighbours) {
+  const auto dir = temp_dir("engine-drop");
+  const auto rig = write_rig(dir, 64);
+  write_sequences(dir / "seq", 64, 4, /*bad_camera=*/5);
+  const RunResult r = run_omma("run --rig " + rig.string() + " --source '" + (dir / "seq").string() +
+                               "/cam_{id}' --loop --method nn --size 160x160 --duration 2 --fps 20 --no-cache" +
+                               " --sink png:" + (dir / "out").string() + " --json", 60);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto j = r.json();
+  ASSERT_EQ(j["dropped_cameras"].size(), 1u) << r.out;
+  EXPECT_EQ(j["dropped_cameras"][0]["id"], 5);
+  EXPECT_TRUE(j["dropped_cameras"][0]["remapped"].get<bool>());
+  EXPECT_NE(j["dropped_cameras"][0]["reason"].get<std::string>().find("cannot"), std::string::npos) << r.out;
+  std::vector<fs::path> pngs;
+  for (const auto& e : fs::directory_iterator(dir / "out")) pngs.push_back(e.path());
+  std::sort(pngs.begin(), pngs.end());
+  ASSERT_GE(pngs.size(), 10u);
+  // nn over solid-colour cameras: every pixel is one camera's colour. Before the drop camera 5's
+  // colour is there; in the last frame it is gone and no pixel is black (neighbours filled in).
+  auto colours = [](const cv::Mat& img) {
+    std::set<int> ids;
+    int black = 0;
+    for (int y = 0; y < img.rows; ++y)
+      for (int x = 0; x < img.cols; ++x) {
+        const cv::Vec3b p = img.at<cv::Vec3b>(y, x);
+        int found = -1;
+        for (int id = 0; id < 24; ++id)
+          if (cv::norm(cv::Vec3i(p) - cv::Vec3i(camera_colour(id)), cv::NORM_INF) <= 1) found = id;
+        if (p == cv::Vec3b(0, 0, 0)) ++black;
+        ids.insert(found);
+      }
+    return std::make_pair(ids, black);
+  };
+  const auto [before, black0] = colours(cv::imread(pngs.front().string()));
+  const auto [after, black1] = colours(cv::imread(pngs.back().string()));
+  EXPECT_TRUE(before.count(5));
+  EXPECT_FALSE(after.count(5));
+  EXPECT_FALSE(after.count(-1));  // nothing but camera colours
+  EXPECT_GE(after.size(), 20u);
+  EXPECT_EQ(black1, 0);
+  fs::remove_all(dir);
+}
+
+TEST(EngineCli, BadInputGivesClearErrorsAndLeavesNoOutput) {
+  const auto dir = temp_dir("engine-bad");
+  const auto rig = write_rig(dir, 64);
+  const std::string base = "run --rig " + rig.string() + " --size 96x96 --no-cache --duration 3 ";
+  // A source that cannot be opened.
+  RunResult r = run_omma(base + "--source '" + (dir / "none").string() + "/cam_{id}.mp4' --sink " +
+                         (dir / "a.mp4").string(), 30);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("no such file"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "a.mp4"));
+  // Frames of the wrong size (100x100 for a 64x64 rig): clear error, no video left behind.
+  write_sequences(dir / "seq", 100, 2);
+  r = run_omma(base + "--source '" + (dir / "seq").string() + "/cam_{id}' --sink " + (dir / "b.mkv").string(), 30);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("100x100"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "b.mkv"));
+  for (const auto& e : fs::directory_iterator(dir)) EXPECT_EQ(e.path().string().find("partial"), std::string::npos);
+  // A port in use.
+  const int sock = ::socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  addr.sin_port = 0;
+  ASSERT_EQ(::bind(sock, reinterpret_cast<sockaddr*>(&addr), sizeof addr), 0);
+  ASSERT_EQ(::listen(sock, 1), 0);
+  socklen_t len = sizeof addr;
+  ::getsockname(sock, reinterpret_cast<sockaddr*>(&addr), &len);
+  const int port = ntohs(addr.sin_port);
+  r = run_omma(base + "--source pano:" + lake() + " --sink http:" + std::to_string(port), 30);
+  ::close(sock);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("port"), std::string::npos) << r.err;
+  // A sink that cannot be written.
+  r = run_omma(base + "--source pano:" + lake() + " --sink /proc/omma-no/out.mp4", 30);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("cannot write video"), std::string::npos) << r.err;
+  r = run_omma(base + "--source pano:" + lake() + " --sink png:/proc/omma-no", 30);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("PNG folder"), std::string::npos) << r.err;
+  // Wrong number of sources, unknown method.
+  r = run_omma(base + "--source a b", 30);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("24 cameras"), std::string::npos) << r.err;
+  fs::remove_all(dir);
+}
+
+TEST(EngineCli, BenchJsonListsOursAndThePeers) {
+  const RunResult r = run_omma("bench --quick --seconds 0.05 --json", 120);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto j = r.json();
+  std::map<std::string, double> fps;
+  for (const auto& e : j["results"]) fps[e["name"]] = e["fps"];
+  for (const char* name : {"omma-nn-216x216", "omma-linear-216x216", "omma-linear-216x216-1thread",
+                           "opencv-remap-216x216", "opencv-multiband-216x216", "memcpy-bound-216x216",
+                           "omma-linear-384x102", "opencv-remap-384x102"}) {
+    ASSERT_TRUE(fps.count(name)) << name;
+    EXPECT_GT(fps[name], 1.0) << name;
+  }
+  // Blending with OpenCV's multi-band blender is far slower than our blended render.
+  EXPECT_GT(fps["omma-linear-216x216"], 3 * fps["opencv-multiband-216x216"]);
+}
+
+}  // namespace
+}  // namespace omma::test
