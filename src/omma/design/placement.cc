@@ -103,7 +103,10 @@ std::vector<double> search_layer_offsets(const std::vector<int>& counts,
       for (int s = 0; s < steps; ++s) {
         std::vector<double> trial = off;
         trial[i] = deg2rad(s * (360.0 / counts[i]) / steps);
-        const double r = covering_radius(axes_for(trial), coarse);
+        const std::vector<Vec3> axes = axes_for(trial);
+        // Cheap rejection first: most trials have a gap wider than the best so far.
+        if (!covers(axes, coarse, best - 1e-9)) continue;
+        const double r = covering_radius(axes, coarse);
         if (r < best - 1e-9) {
           best = r;
           off = trial;
