@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -138,7 +139,7 @@ Design design_max_volume(const DesignParams& p) {
   }
   const Intrinsics in = ideal_intrinsics(p.aov_rad, p.width, p.height);
   d.rig = radial_rig(axes, p.r_phys_mm, in, p.sphere, "max-volume", "max-volume");
-  d.r_virtual_mm = virtual_radius(d.rig, p.check_step_rad);
+  if (p.compute_r_virtual) d.r_virtual_mm = virtual_radius(d.rig, p.check_step_rad);
   return d;
 }
 
@@ -176,7 +177,7 @@ Design finish(const DesignParams& p, std::vector<Vec3> axes, std::vector<int> la
   d.layers = std::move(layers);
   const Intrinsics in = ideal_intrinsics(p.aov_rad, p.width, p.height);
   d.rig = radial_rig(axes, p.r_phys_mm, in, p.sphere, method, method);
-  d.r_virtual_mm = virtual_radius(d.rig, p.check_step_rad);
+  if (p.compute_r_virtual) d.r_virtual_mm = virtual_radius(d.rig, p.check_step_rad);
   return d;
 }
 
@@ -290,8 +291,9 @@ namespace {
 
 // §3.4.1 with a given number of layers nl: layer i nominally at (2i+1) beta_fine, beta_fine =
 // (pi/2) / (2 nl) (eq. 3.5). Returns false if no design was found.
-bool min_cameras_with_layers(const Checker& chk, int nl, bool trim, std::vector<Vec3>& axes,
-                             std::vector<int>& layers) {
+// Gives up (returns false) as soon as the design would reach `limit` cameras.
+bool min_cameras_with_layers(const Checker& chk, int nl, bool trim, size_t limit,
+                             std::vector<Vec3>& axes, std::vector<int>& layers) {
   const double beta = chk.reach;
   const double beta_fine = (kPi / 2) / (2 * nl);  // eq. 3.5
   const double trim_step = deg2rad(0.5);
@@ -314,8 +316,10 @@ bool min_cameras_with_layers(const Checker& chk, int nl, bool trim, std::vector<
     std::vector<Vec3> placed;
     const int max_n = static_cast<int>(std::ceil(2 * kPi / std::max(chk.s.step_rad, 0.02))) + 8;
     for (n = 1; n <= max_n; ++n) {
+      if (axes.size() + n >= limit) return false;  // cannot beat the best design so far
       // Refinement 1: rotational search of the layer over one camera spacing (<= 60 steps).
-      const int steps = std::clamp(static_cast<int>(std::lround(360.0 / n)), 1, 60);
+      // The first layer has nothing to align with: all its rotations are equivalent.
+      const int steps = i == 0 ? 1 : std::clamp(static_cast<int>(std::lround(360.0 / n)), 1, 60);
       bool found = false;
       for (int s = 0; s < steps && !found; ++s) {
         offset = 2 * kPi / n * s / steps;
@@ -330,8 +334,9 @@ bool min_cameras_with_layers(const Checker& chk, int nl, bool trim, std::vector<
       if (found) break;
     }
     if (n > max_n) return false;
-    // Refinement 2: trim the layer's latitude towards the equator while the condition holds.
-    while (trim && polar + trim_step <= kPi / 2 + 1e-12) {
+    // Refinement 2: trim the layer's latitude towards the equator while the condition holds
+    // (not the last layer: there it cannot save a camera).
+    while (trim && !last && polar + trim_step <= kPi / 2 + 1e-12) {
       std::vector<Vec3> trial = axes;
       add_layer(trial, n, polar + trim_step, offset);
       if (!ok(trial)) break;
@@ -359,7 +364,8 @@ Design design_min_cameras(const DesignParams& p) {
   std::vector<int> best_layers, layers;
   for (int nl = nv; nl <= nv + 3; ++nl)
     for (bool trim : {true, false}) {
-      if (!min_cameras_with_layers(chk, nl, trim, axes, layers)) continue;
+      const size_t limit = best_axes.empty() ? std::numeric_limits<size_t>::max() : best_axes.size();
+      if (!min_cameras_with_layers(chk, nl, trim, limit, axes, layers)) continue;
       if (best_axes.empty() || axes.size() < best_axes.size()) {
         best_axes = axes;
         best_layers = layers;
@@ -392,7 +398,9 @@ Design design_rig(Method m, const DesignParams& p) {
 }
 
 int cameras_needed(Method m, const DesignParams& p) {
-  return static_cast<int>(design_rig(m, p).rig.cameras.size());
+  DesignParams q = p;
+  q.compute_r_virtual = false;
+  return static_cast<int>(design_rig(m, q).rig.cameras.size());
 }
 
 }  // namespace omma::design
