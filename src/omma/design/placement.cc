@@ -163,7 +163,8 @@ struct Checker {
 
 std::vector<Vec3> mirrored(const std::vector<Vec3>& north) {
   std::vector<Vec3> all = north;
-  for (const Vec3& a : north) all.push_back(Vec3(a.x(), a.y(), -a.z()));
+  for (const Vec3& a : north)
+    if (a.z() > 1e-9) all.push_back(Vec3(a.x(), a.y(), -a.z()));  // equator cameras once
   return all;
 }
 
@@ -171,8 +172,12 @@ Design finish(const DesignParams& p, std::vector<Vec3> axes, std::vector<int> la
               const std::string& method) {
   Design d;
   if (p.sphere && method != "cvt") {  // hemisphere designs mirror onto the southern half
+    const size_t north = axes.size();
     axes = mirrored(axes);
-    for (int i = static_cast<int>(layers.size()) - 1; i >= 0; --i) layers.push_back(layers[i]);
+    // Southern layers in mirror order; a layer on the equator is not repeated.
+    const int on_equator = static_cast<int>(2 * north - axes.size());
+    const int nl = static_cast<int>(layers.size());
+    for (int i = nl - 1 - (on_equator > 0 ? 1 : 0); i >= 0; --i) layers.push_back(layers[i]);
   }
   d.layers = std::move(layers);
   const Intrinsics in = ideal_intrinsics(p.aov_rad, p.width, p.height);
