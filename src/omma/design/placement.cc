@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -103,7 +104,10 @@ std::vector<double> search_layer_offsets(const std::vector<int>& counts,
       for (int s = 0; s < steps; ++s) {
         std::vector<double> trial = off;
         trial[i] = deg2rad(s * (360.0 / counts[i]) / steps);
-        const double r = covering_radius(axes_for(trial), coarse);
+        const std::vector<Vec3> axes = axes_for(trial);
+        // Cheap rejection first: most trials have a gap wider than the best so far.
+        if (!covers(axes, coarse, best - 1e-9)) continue;
+        const double r = covering_radius(axes, coarse);
         if (r < best - 1e-9) {
           best = r;
           off = trial;
@@ -135,7 +139,7 @@ Design design_max_volume(const DesignParams& p) {
   }
   const Intrinsics in = ideal_intrinsics(p.aov_rad, p.width, p.height);
   d.rig = radial_rig(axes, p.r_phys_mm, in, p.sphere, "max-volume", "max-volume");
-  d.r_virtual_mm = virtual_radius(d.rig, p.check_step_rad);
+  if (p.compute_r_virtual) d.r_virtual_mm = virtual_radius(d.rig, p.check_step_rad);
   return d;
 }
 
@@ -159,7 +163,8 @@ struct Checker {
 
 std::vector<Vec3> mirrored(const std::vector<Vec3>& north) {
   std::vector<Vec3> all = north;
-  for (const Vec3& a : north) all.push_back(Vec3(a.x(), a.y(), -a.z()));
+  for (const Vec3& a : north)
+    if (a.z() > 1e-9) all.push_back(Vec3(a.x(), a.y(), -a.z()));  // equator cameras once
   return all;
 }
 
@@ -167,13 +172,17 @@ Design finish(const DesignParams& p, std::vector<Vec3> axes, std::vector<int> la
               const std::string& method) {
   Design d;
   if (p.sphere && method != "cvt") {  // hemisphere designs mirror onto the southern half
+    const size_t north = axes.size();
     axes = mirrored(axes);
-    for (int i = static_cast<int>(layers.size()) - 1; i >= 0; --i) layers.push_back(layers[i]);
+    // Southern layers in mirror order; a layer on the equator is not repeated.
+    const int on_equator = static_cast<int>(2 * north - axes.size());
+    const int nl = static_cast<int>(layers.size());
+    for (int i = nl - 1 - (on_equator > 0 ? 1 : 0); i >= 0; --i) layers.push_back(layers[i]);
   }
   d.layers = std::move(layers);
   const Intrinsics in = ideal_intrinsics(p.aov_rad, p.width, p.height);
   d.rig = radial_rig(axes, p.r_phys_mm, in, p.sphere, method, method);
-  d.r_virtual_mm = virtual_radius(d.rig, p.check_step_rad);
+  if (p.compute_r_virtual) d.r_virtual_mm = virtual_radius(d.rig, p.check_step_rad);
   return d;
 }
 
@@ -213,22 +222,20 @@ std::vector<Vec3> cvt_generators(int n, bool sphere, int iterations) {
   std::vector<Vec3> gen = fibonacci(n, sphere);
   const std::vector<Vec3> pts = fibonacci(std::max(2000, 40 * n) * (sphere ? 2 : 1), sphere);
   std::vector<Vec3> sum(n);
-  std::vector<int> owner(pts.size(), 0);
+  // Exact nearest-generator assignment, accelerated: if every point lies within angle D of its
+  // previous owner, its nearest generator lies within 2D of that owner (triangle inequality), so
+  // only those neighbours are searched.
+  std::vector<int> owner(pts.size());
+  for (size_t q = 0; q < pts.size(); ++q) {
+    int best = 0;
+    for (int g = 1; g < n; ++g)
+      if (pts[q].dot(gen[g]) > pts[q].dot(gen[best])) best = g;
+    owner[q] = best;
+  }
+  std::vector<std::vector<int>> near(n);
   for (int it = 0; it < iterations; ++it) {
     std::fill(sum.begin(), sum.end(), Vec3::Zero());
-    for (size_t q = 0; q < pts.size(); ++q) {
-      int best = owner[q];
-      double bd = pts[q].dot(gen[best]);
-      for (int g = 0; g < n; ++g) {
-        const double d = pts[q].dot(gen[g]);
-        if (d > bd) {
-          bd = d;
-          best = g;
-        }
-      }
-      owner[q] = best;
-      sum[best] += pts[q];
-    }
+    for (size_t q = 0; q < pts.size(); ++q) sum[owner[q]] += pts[q];
     double moved = 0;
     for (int g = 0; g < n; ++g)
       if (sum[g].norm() > 0) {
@@ -236,7 +243,29 @@ std::vector<Vec3> cvt_generators(int n, bool sphere, int iterations) {
         moved = std::max(moved, (c - gen[g]).norm());
         gen[g] = c;
       }
-    if (moved < 1e-6) break;
+    if (moved < 1e-5) break;
+    // Reassign to the moved generators.
+    double min_dot = 1.0;  // cos D
+    for (size_t q = 0; q < pts.size(); ++q) min_dot = std::min(min_dot, pts[q].dot(gen[owner[q]]));
+    const double D = std::acos(std::clamp(min_dot, -1.0, 1.0));
+    const double cos2d = 2 * D >= kPi ? -2.0 : std::cos(2 * D);
+    for (int g = 0; g < n; ++g) {
+      near[g].clear();
+      for (int h = 0; h < n; ++h)
+        if (gen[g].dot(gen[h]) >= cos2d - 1e-12) near[g].push_back(h);
+    }
+    for (size_t q = 0; q < pts.size(); ++q) {
+      int best = owner[q];
+      double bd = pts[q].dot(gen[best]);
+      for (int h : near[owner[q]]) {
+        const double d = pts[q].dot(gen[h]);
+        if (d > bd) {
+          bd = d;
+          best = h;
+        }
+      }
+      owner[q] = best;
+    }
   }
   return gen;
 }
@@ -267,8 +296,9 @@ namespace {
 
 // §3.4.1 with a given number of layers nl: layer i nominally at (2i+1) beta_fine, beta_fine =
 // (pi/2) / (2 nl) (eq. 3.5). Returns false if no design was found.
-bool min_cameras_with_layers(const Checker& chk, int nl, bool trim, std::vector<Vec3>& axes,
-                             std::vector<int>& layers) {
+// Gives up (returns false) as soon as the design would reach `limit` cameras.
+bool min_cameras_with_layers(const Checker& chk, int nl, bool trim, size_t limit,
+                             std::vector<Vec3>& axes, std::vector<int>& layers) {
   const double beta = chk.reach;
   const double beta_fine = (kPi / 2) / (2 * nl);  // eq. 3.5
   const double trim_step = deg2rad(0.5);
@@ -291,8 +321,10 @@ bool min_cameras_with_layers(const Checker& chk, int nl, bool trim, std::vector<
     std::vector<Vec3> placed;
     const int max_n = static_cast<int>(std::ceil(2 * kPi / std::max(chk.s.step_rad, 0.02))) + 8;
     for (n = 1; n <= max_n; ++n) {
+      if (axes.size() + n >= limit) return false;  // cannot beat the best design so far
       // Refinement 1: rotational search of the layer over one camera spacing (<= 60 steps).
-      const int steps = std::clamp(static_cast<int>(std::lround(360.0 / n)), 1, 60);
+      // The first layer has nothing to align with: all its rotations are equivalent.
+      const int steps = i == 0 ? 1 : std::clamp(static_cast<int>(std::lround(360.0 / n)), 1, 60);
       bool found = false;
       for (int s = 0; s < steps && !found; ++s) {
         offset = 2 * kPi / n * s / steps;
@@ -307,8 +339,9 @@ bool min_cameras_with_layers(const Checker& chk, int nl, bool trim, std::vector<
       if (found) break;
     }
     if (n > max_n) return false;
-    // Refinement 2: trim the layer's latitude towards the equator while the condition holds.
-    while (trim && polar + trim_step <= kPi / 2 + 1e-12) {
+    // Refinement 2: trim the layer's latitude towards the equator while the condition holds
+    // (not the last layer: there it cannot save a camera).
+    while (trim && !last && polar + trim_step <= kPi / 2 + 1e-12) {
       std::vector<Vec3> trial = axes;
       add_layer(trial, n, polar + trim_step, offset);
       if (!ok(trial)) break;
@@ -336,7 +369,8 @@ Design design_min_cameras(const DesignParams& p) {
   std::vector<int> best_layers, layers;
   for (int nl = nv; nl <= nv + 3; ++nl)
     for (bool trim : {true, false}) {
-      if (!min_cameras_with_layers(chk, nl, trim, axes, layers)) continue;
+      const size_t limit = best_axes.empty() ? std::numeric_limits<size_t>::max() : best_axes.size();
+      if (!min_cameras_with_layers(chk, nl, trim, limit, axes, layers)) continue;
       if (best_axes.empty() || axes.size() < best_axes.size()) {
         best_axes = axes;
         best_layers = layers;
@@ -349,7 +383,8 @@ Design design_min_cameras(const DesignParams& p) {
 Design design_cvt(const DesignParams& p) {
   check_params(p, true);
   const Checker chk(p, p.sphere);
-  // Algorithm 1, starting at N_c = the area bound.
+  // Algorithm 1, one camera more at a time, starting at N_c = the area bound (no fewer caps of
+  // radius beta can cover the field of view).
   for (int n = area_bound(chk.beta, p.sphere); n <= kMaxCameras; ++n) {
     const std::vector<Vec3> axes = cvt_generators(n, p.sphere, kCvtIterations);
     if (chk.covered(axes)) return finish(p, axes, {n}, "cvt");
@@ -368,7 +403,9 @@ Design design_rig(Method m, const DesignParams& p) {
 }
 
 int cameras_needed(Method m, const DesignParams& p) {
-  return static_cast<int>(design_rig(m, p).rig.cameras.size());
+  DesignParams q = p;
+  q.compute_r_virtual = false;
+  return static_cast<int>(design_rig(m, q).rig.cameras.size());
 }
 
 }  // namespace omma::design

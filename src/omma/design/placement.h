@@ -42,12 +42,15 @@ struct DesignParams {
   // checks are conservative: a design passes only if the largest sampled gap plus the sampling
   // radius is within reach, so the rig also passes a finer coverage analysis.
   double check_step_rad = deg2rad(0.5);
+  // Run the coverage analysis of the result (Design::r_virtual_mm); sweeps that only need the
+  // count switch it off.
+  bool compute_r_virtual = true;
 };
 
 struct Design {
   Rig rig;
   std::vector<int> layers;  // cameras per layer from the pole (one entry for cvt: all cameras)
-  double r_virtual_mm = 0;  // overlap distance of the produced rig (coverage analysis)
+  double r_virtual_mm = 0;  // overlap distance of the produced rig (coverage analysis; 0 if off)
 };
 
 // max-volume layer counts, eq. 3.7-3.11: d_cam = sqrt(w^2 + h^2), N_v = floor(pi/2 r_in / d_cam),
