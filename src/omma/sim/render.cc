@@ -181,6 +181,15 @@ CameraFrame render_camera(const Scene& scene, const RigCamera& camera, const Dom
   return apply_sensor(render_radiance(scene, camera, pose, effects.supersample), camera, effects, want_raw);
 }
 
+std::vector<CameraFrame> render_rig(const Scene& scene, const Rig& rig, const DomePose& pose,
+                                    const CameraEffects& effects, bool want_raw) {
+  check_effects(effects);
+  std::vector<CameraFrame> frames(rig.cameras.size());
+  tbb::parallel_for(size_t{0}, rig.cameras.size(),
+                    [&](size_t i) { frames[i] = render_camera(scene, rig.cameras[i], pose, effects, want_raw); });
+  return frames;
+}
+
 cv::Mat render_truth_linear(const Scene& scene, const PanoGrid& grid, const DomePose& pose, int n,
                             double exposure) {
   if (n < 1 || n > 16) throw std::invalid_argument(fmt::format("truth supersample must be 1..16, got {}", n));

@@ -14,6 +14,7 @@
 #pragma once
 
 #include <cstdint>
+#include <vector>
 
 #include <opencv2/core.hpp>
 
@@ -62,6 +63,12 @@ struct CameraFrame {
 // with a new pose per frame (and a new effects.seed for fresh noise).
 CameraFrame render_camera(const Scene& scene, const RigCamera& camera, const DomePose& pose,
                           const CameraEffects& effects, bool want_raw = false);
+
+// Every camera of `rig` (in rig order, cameras in parallel) for one dome pose: one frame of an
+// animated sequence. Each camera's noise comes from (effects.seed, camera id): vary effects.seed per
+// frame for fresh noise.
+std::vector<CameraFrame> render_rig(const Scene& scene, const Rig& rig, const DomePose& pose,
+                                    const CameraEffects& effects, bool want_raw = false);
 
 // Sensor effects alone, applied to a linear radiance image (as render_radiance gives).
 CameraFrame apply_sensor(const cv::Mat& radiance, const RigCamera& camera, const CameraEffects& effects,

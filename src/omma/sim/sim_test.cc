@@ -348,6 +348,23 @@ TEST(SimUsaf, TruthResolutionFollowsThePanoramaPixelSize) {
   EXPECT_LE(fine, 2.5 * px900);
 }
 
+TEST(SimRender, RenderRigEqualsCameraByCamera) {
+  const Rig rig = test_rig();
+  const auto scene = make_checker_scene(40);
+  DomePose pose;
+  pose.translation_mm = Vec3(1, 2, 3);
+  CameraEffects e;
+  e.supersample = 2;
+  e.seed = 9;
+  const auto frames = render_rig(*scene, rig, pose, e, true);
+  ASSERT_EQ(frames.size(), rig.cameras.size());
+  for (size_t i = 0; i < frames.size(); ++i) {
+    const CameraFrame one = render_camera(*scene, rig.cameras[i], pose, e, true);
+    EXPECT_EQ(cv::norm(frames[i].image, one.image, cv::NORM_INF), 0.0) << i;
+    EXPECT_EQ(cv::norm(frames[i].raw, one.raw, cv::NORM_INF), 0.0) << i;
+  }
+}
+
 TEST(SimRender, MovingTheDomeRotatesWhatTheCamerasSee) {
   // Rotating the dome by R equals rendering a camera whose frame is turned by R (far-field scene).
   const auto scene = make_photo_scene(photo());
