@@ -8,7 +8,7 @@
 #include "apps/command.h"
 #include "omma/core/rig.h"
 #include "omma/engine/bench.h"
-#include "omma/engine/synthetic.h"
+#include "omma/design/prototype.h"
 
 namespace omma::app {
 
@@ -19,13 +19,14 @@ void add_bench_command(CLI::App& root) {
       "per-camera cv::remap (peer A), cv::detail::MultiBandBlender (peer B) and the memcpy bandwidth "
       "bound, at 1080x1080 vr180 and 1920x512 equirect, random-texture frames");
   struct Opts {
-    std::string rig;
+    std::string rig, save_rig;
     bool json = false, quick = false;
     double seconds = 0.5;
     std::vector<std::string> only;
   };
   static Opts o;
-  cmd->add_option("--rig", o.rig, "Rig file (JSON); default: the built-in 24-camera ring rig (250x250, 64 deg)");
+  cmd->add_option("--rig", o.rig, "Rig file (JSON); default: the thesis prototype, 24 cameras 250x250, 64 deg");
+  cmd->add_option("--save-rig", o.save_rig, "Also write the rig used to this file (JSON)");
   cmd->add_option("--seconds", o.seconds, "Minimum measuring time per workload, seconds (default 0.5)")
       ->check(CLI::Range(0.01, 60.0));
   cmd->add_option("--only", o.only, "Run only workloads whose name contains one of these strings");
@@ -33,7 +34,8 @@ void add_bench_command(CLI::App& root) {
   cmd->add_flag("--json", o.json, "Print {\"results\": [{\"name\", \"fps\", ...}]} on stdout");
   cmd->callback([] {
     set_json_mode(o.json);
-    const Rig rig = o.rig.empty() ? engine::ring_rig_24() : load_rig(o.rig);
+    const Rig rig = o.rig.empty() ? design::thesis_prototype_rig() : load_rig(o.rig);
+    if (!o.save_rig.empty()) save_rig(rig, o.save_rig);
     engine::BenchOptions bo;
     bo.min_seconds = o.seconds;
     bo.quick = o.quick;

@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <fmt/format.h>
+#include <opencv2/core/utility.hpp>
 
 #include "apps/command.h"
 #include "omma/core/grid.h"
@@ -30,7 +31,7 @@ void add_run_command(CLI::App& root) {
   struct Opts {
     std::string rig, method = "linear", projection = "vr180", size = "1080x1080", cache;
     std::vector<std::string> sources, sinks;
-    double duration = 0, fps = 30, source_fps = 30;
+    double duration = 0, fps = 30, source_fps = 30, first_timeout = 10;
     long frames = 0;
     int threads = 0;
     bool loop = false, json = false, no_cache = false;
@@ -39,7 +40,7 @@ void add_run_command(CLI::App& root) {
   cmd->add_option("--rig", o.rig, "Rig file (JSON)")->required();
   cmd->add_option("--source", o.sources, "Camera sources (see above)")->required();
   cmd->add_option("--sink", o.sinks, "Outputs (see above); none: render and measure only");
-  cmd->add_option("--method", o.method, "Blending: nn, linear, gaussian, mrf, mrf-spherical (static maps; default linear)");
+  cmd->add_option("--method", o.method, "Blending: nn, linear, gaussian, mrf, mrf-spherical, sad (per-frame weights, own kernel); default linear");
   cmd->add_option("--projection", o.projection, "Panorama projection: vr180, equirect, equirect-full (default vr180)");
   cmd->add_option("--size", o.size, "Panorama size WxH, pixels (default 1080x1080)");
   cmd->add_option("--duration", o.duration, "Stop after S seconds (default: when every source has ended)")
@@ -50,6 +51,9 @@ void add_run_command(CLI::App& root) {
   cmd->add_option("--source-fps", o.source_fps,
                   "Rate of image sequences, stills and pano: sources, frames/s (0: as fast as possible; default 30)")
       ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--first-frame-timeout", o.first_timeout,
+                  "A camera without a first frame after this many seconds is dropped (default 10)")
+      ->check(CLI::PositiveNumber);
   cmd->add_flag("--loop", o.loop, "Restart image sequences and video files at their end");
   cmd->add_option("--threads", o.threads, "Renderer threads (0: all; default 0)")->check(CLI::NonNegativeNumber);
   cmd->add_option("--cache", o.cache, "Map cache folder (default $OMMA_CACHE_DIR or ~/.cache/omma)");
@@ -60,8 +64,6 @@ void add_run_command(CLI::App& root) {
     const Rig rig = load_rig(o.rig);
     engine::EngineOptions eo;
     eo.map.method = pano::parse_method(o.method);
-    if (!pano::is_static(eo.map.method))
-      throw std::invalid_argument("method " + o.method + " needs per-frame weights; omma run supports the static methods");
     const Size2 size = parse_size(o.size);
     eo.map.grid = PanoGrid{parse_projection(o.projection), size.width, size.height};
     eo.cache_dir = o.no_cache ? std::filesystem::path() : (o.cache.empty() ? engine::default_cache_dir() : std::filesystem::path(o.cache));
@@ -69,6 +71,7 @@ void add_run_command(CLI::App& root) {
     eo.max_frames = o.frames;
     eo.fps = o.fps;
     eo.threads = o.threads;
+    eo.first_frame_timeout_s = o.first_timeout;
     engine::SourceOptions so;
     so.fps = o.source_fps;
     so.loop = o.loop;
@@ -93,6 +96,9 @@ void add_run_command(CLI::App& root) {
           j["dropped_frames"].get<long>(), j["cameras_live"].get<long>());
       std::fprintf(stderr, tty ? "\r%s\033[K" : "%s\n", line.c_str());
     };
+    // Sources and sinks run in their own threads; OpenCV's own parallelism inside them would only
+    // compete with the renderer's threads.
+    cv::setNumThreads(1);
     std::signal(SIGINT, on_signal);
     std::signal(SIGTERM, on_signal);
     const engine::EngineStats st = engine::run_engine(rig, std::move(sources), sinks, eo);

@@ -2,12 +2,14 @@
 
 #include <chrono>
 #include <cstring>
+#include <ctime>
 #include <stdexcept>
 
 #include <opencv2/imgproc.hpp>
 #include <opencv2/stitching/detail/blenders.hpp>
 #include <tbb/parallel_for.h>
 
+#include "omma/design/prototype.h"
 #include "omma/engine/synthetic.h"
 
 namespace omma::engine {
@@ -137,22 +139,32 @@ Workload memcpy_workload(const CompiledMap& map, const std::string& tag) {
   return w;
 }
 
-double measure_fps(const Workload& w, double min_seconds, int min_iterations) {
+namespace {
+double process_cpu_seconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return ts.tv_sec + ts.tv_nsec * 1e-9;
+}
+}  // namespace
+
+double measure_fps(const Workload& w, double min_seconds, int min_iterations, double* cpu_s_per_frame) {
   w.run();  // warm-up
   int n = 0;
   const auto t0 = std::chrono::steady_clock::now();
+  const double c0 = process_cpu_seconds();
   double elapsed = 0;
   while (n < min_iterations || elapsed < min_seconds) {
     w.run();
     ++n;
     elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }
+  if (cpu_s_per_frame) *cpu_s_per_frame = (process_cpu_seconds() - c0) / n;
   return n / elapsed;
 }
 
 std::vector<BenchEntry> run_bench_suite(const Rig& rig_in, const BenchOptions& opt,
                                         std::vector<std::string>* skipped) {
-  const Rig rig = rig_in.cameras.empty() ? ring_rig_24() : rig_in;
+  const Rig rig = rig_in.cameras.empty() ? design::thesis_prototype_rig() : rig_in;
   const auto frames = random_frames(rig, 42);
   std::vector<PanoGrid> grids = {{Projection::kVr180, 1080, 1080}, {Projection::kEquirect, 1920, 512}};
   if (opt.quick) grids = {{Projection::kVr180, 216, 216}, {Projection::kEquirect, 384, 102}};
@@ -166,8 +178,11 @@ std::vector<BenchEntry> run_bench_suite(const Rig& rig_in, const BenchOptions& o
   auto add = [&](const Workload& w) {
     if (!wanted(w.name)) return;
     const bool slow = w.name.rfind("opencv-multiband", 0) == 0;
-    out.push_back({w.name, measure_fps(w, slow ? std::min(opt.min_seconds, 0.3) : opt.min_seconds, slow ? 1 : 3),
-                   w.info});
+    double cpu = 0;
+    const double fps = measure_fps(w, slow ? std::min(opt.min_seconds, 0.3) : opt.min_seconds, slow ? 1 : 3, &cpu);
+    nlohmann::json info = w.info;
+    info["cpu_ms_per_frame"] = cpu * 1e3;  // CPU time of all threads per frame (load-independent)
+    out.push_back({w.name, fps, info});
   };
   for (const PanoGrid& g : grids) {
     std::shared_ptr<CompiledMap> bound_map;

@@ -42,8 +42,10 @@ Workload opencv_multiband_workload(const Rig& rig, const PanoGrid& grid, const s
 // split among all threads.
 Workload memcpy_workload(const CompiledMap& map, const std::string& size_tag);
 
-// Runs w repeatedly for at least min_seconds (and at least min_iterations); returns frames/s.
-double measure_fps(const Workload& w, double min_seconds, int min_iterations = 3);
+// Runs w repeatedly for at least min_seconds (and at least min_iterations); returns frames per
+// wall-clock second; *cpu_s_per_frame (if given) gets the process CPU time per frame.
+double measure_fps(const Workload& w, double min_seconds, int min_iterations = 3,
+                   double* cpu_s_per_frame = nullptr);
 
 struct BenchEntry {
   std::string name;
@@ -55,7 +57,7 @@ struct BenchOptions {
   bool quick = false;             // small sizes (tests)
   std::vector<std::string> only;  // substrings of names to run; empty = all
 };
-// The whole suite of point 4 on ring_rig_24 (or `rig` if it has cameras).
+// The whole suite of point 4 on the thesis prototype rig (or `rig` if it has cameras).
 std::vector<BenchEntry> run_bench_suite(const Rig& rig, const BenchOptions& opt,
                                         std::vector<std::string>* skipped = nullptr);
 

@@ -1,6 +1,7 @@
 #include "omma/engine/compiled_map.h"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
@@ -19,7 +20,7 @@ namespace omma::engine {
 namespace {
 
 constexpr uint32_t kMagic = 0x4d4d4f31;  // "1OMM"
-constexpr uint32_t kFormatVersion = 1;
+constexpr uint32_t kFormatVersion = 2;
 
 uint64_t fnv1a(const std::string& s) {
   uint64_t h = 1469598103934665603ull;
@@ -122,15 +123,14 @@ int CompiledMap::camera_of(uint32_t w) const {
 }
 
 CompiledMap compile_map(const Rig& rig, const MapOptions& opt) {
-  if (!pano::is_static(opt.method))
-    throw std::invalid_argument("method " + pano::to_string(opt.method) +
-                                " has per-frame weights and no static compiled map");
   if (!opt.active.empty() && opt.active.size() != rig.cameras.size())
     throw std::invalid_argument("compile_map: active set has " + std::to_string(opt.active.size()) +
                                 " entries for " + std::to_string(rig.cameras.size()) + " cameras");
   CompiledMap map;
   map.width = opt.grid.width;
   map.height = opt.grid.height;
+  map.method = opt.method;
+  map.sad_epsilon = static_cast<float>(opt.params.sad_epsilon);
   map.layout = StoreLayout::for_rig(rig);
   // The rig of the active cameras, and its camera index -> rig camera index.
   Rig sub = rig;
@@ -179,11 +179,44 @@ CompiledMap compile_map(const Rig& rig, const MapOptions& opt) {
     }
     double w[8];
     int q[8];
+    // Contributors (eq. 2.3) of the tile and a one-pixel border, found once and shared by the
+    // 4-neighbourhoods of mrf, mrf-spherical and sad; then the weights exactly as static_taps
+    // computes them (pano::method_weights).
+    const bool needs_nb = opt.method == pano::Method::kMrf || opt.method == pano::Method::kMrfSpherical ||
+                          opt.method == pano::Method::kSad;
+    const int bx0 = std::max(0, c0 - 1), by0 = std::max(0, r0 - 1);
+    const int bx1 = std::min(W, c1 + 1), by1 = std::min(H, r1 + 1), bw = bx1 - bx0;
+    std::vector<std::vector<pano::Contributor>> found(size_t(bw) * (by1 - by0));
+    std::vector<uint8_t> done(found.size(), 0);
+    std::array<std::vector<pano::Contributor>, 4> outside;
+    auto contributors = [&](int col, int row, int slot) -> const std::vector<pano::Contributor>& {
+      if (col >= bx0 && col < bx1 && row >= by0 && row < by1) {
+        const size_t i = size_t(row - by0) * bw + (col - bx0);
+        if (!done[i]) {
+          found[i] = pano::find_contributors(tile_rig, opt.grid.pixel_direction(col, row), opt.params.search);
+          done[i] = 1;
+        }
+        return found[i];
+      }
+      outside[slot] = pano::find_contributors(tile_rig, opt.grid.pixel_direction(col, row), opt.params.search);
+      return outside[slot];
+    };
     for (int row = r0; row < r1; ++row)
       for (int col = c0; col < c1; ++col) {
         PixelTaps& out = px[size_t(row) * W + col];
         if (tile_rig.cameras.empty()) continue;
-        std::vector<pano::Tap> taps = pano::static_taps(tile_rig, opt.grid, col, row, opt.method, opt.params);
+        const std::vector<pano::Contributor>& cs = contributors(col, row, 0);
+        if (cs.empty()) continue;
+        std::array<const std::vector<pano::Contributor>*, 4> nb{nullptr, nullptr, nullptr, nullptr};
+        if (needs_nb) {
+          const auto nbs = pano::grid_neighbours(opt.grid, col, row);
+          for (int k = 0; k < 4; ++k)
+            if (nbs[k][0] >= 0) nb[k] = &contributors(nbs[k][0], nbs[k][1], k);
+        }
+        const std::vector<double> mw = pano::method_weights(tile_rig, opt.method, cs, nb, opt.params);
+        std::vector<pano::Tap> taps;
+        for (size_t i = 0; i < cs.size(); ++i)
+          if (mw[i] > 0) taps.push_back({cs[i].camera, cs[i].px, mw[i]});
         if (taps.size() > 8) {  // keep the 8 strongest (never happens with real rigs)
           std::partial_sort(taps.begin(), taps.begin() + 8, taps.end(),
                             [](auto& a, auto& b) { return a.weight > b.weight; });
@@ -251,7 +284,8 @@ std::string map_key(const Rig& rig, const MapOptions& opt) {
   j["method"] = pano::to_string(opt.method);
   j["q"] = {opt.params.search.q.x(), opt.params.search.q.y(), opt.params.search.q.z()};
   j["min_r"] = opt.params.search.min_r_mm;
-  j["sigma"] = opt.params.gaussian_sigma_mm;
+  j["sigma"] = opt.params.gaussian_sigma_rel;
+  j["sad_eps"] = opt.params.sad_epsilon;
   std::string active;
   for (bool a : opt.active) active += a ? '1' : '0';
   j["active"] = active;
@@ -288,6 +322,8 @@ void save_map(const CompiledMap& map, const std::filesystem::path& path) {
     put(o, kFormatVersion);
     put<int32_t>(o, map.width);
     put<int32_t>(o, map.height);
+    put<int32_t>(o, static_cast<int32_t>(map.method));
+    put<float>(o, map.sad_epsilon);
     put<int32_t>(o, map.layout.stride_px);
     put<int32_t>(o, map.layout.rows);
     put<int32_t>(o, static_cast<int32_t>(map.layout.row0.size()));
@@ -312,10 +348,11 @@ std::optional<CompiledMap> load_map(const std::filesystem::path& path) {
   uint32_t magic = 0, version = 0;
   if (!get(i, magic) || magic != kMagic || !get(i, version) || version != kFormatVersion) return std::nullopt;
   CompiledMap m;
-  int32_t n = 0;
-  if (!get(i, m.width) || !get(i, m.height) || !get(i, m.layout.stride_px) || !get(i, m.layout.rows) ||
+  int32_t n = 0, method = 0;
+  if (!get(i, m.width) || !get(i, m.height) || !get(i, method) || !get(i, m.sad_epsilon) || !get(i, m.layout.stride_px) || !get(i, m.layout.rows) ||
       !get(i, n) || n < 0 || n > 4096 || m.width <= 0 || m.height <= 0)
     return std::nullopt;
+  m.method = static_cast<pano::Method>(method);
   for (int c = 0; c < n; ++c) {
     int32_t r0, w, h;
     if (!get(i, r0) || !get(i, w) || !get(i, h)) return std::nullopt;

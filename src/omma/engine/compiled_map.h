@@ -79,6 +79,10 @@ struct MapOptions {
 
 struct CompiledMap {
   int width = 0, height = 0;
+  // kSad: the taps hold the geometric prior of eq. 4.18 (the mrf weights) and render() computes
+  // the per-frame SAD weights (eq. 4.17-4.18) with its own kernel; any other method: final weights.
+  pano::Method method = pano::Method::kLinear;
+  float sad_epsilon = 1.0f / 255;
   StoreLayout layout;
   std::vector<uint8_t> count;
   std::vector<uint32_t> row_start;
@@ -96,8 +100,8 @@ struct CompiledMap {
 inline constexpr int kFracBits = 5;
 inline constexpr int kIndexBits = 22;
 
-// Compiles the map with pano::static_taps for every output pixel (oneTBB parallel). Throws for sad
-// (per-frame weights) and for methods pano does not implement.
+// Compiles the map with pano::static_taps for every output pixel (oneTBB parallel). For sad the
+// map holds the mrf prior; the per-frame weights are computed by render().
 CompiledMap compile_map(const Rig& rig, const MapOptions& opt);
 
 // Hash (hex) of everything the map depends on: rig (as JSON), grid, method, params, active set

@@ -8,6 +8,10 @@
 #include <mutex>
 #include <thread>
 
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
 namespace omma::engine {
@@ -78,6 +82,9 @@ EngineStats run_engine(const Rig& rig, std::vector<std::unique_ptr<CameraSource>
   const StoreLayout L = map->layout;  // a copy: the map is swapped when a camera drops
   for (size_t c = 0; c < n; ++c)
     threads.emplace_back([&, c] {
+      // Camera threads run at a lower priority than the render loop: on a busy machine a camera
+      // may deliver late (its frame is reused), but the panorama is never starved by decoding.
+      setpriority(PRIO_PROCESS, static_cast<id_t>(::gettid()), 5);
       CameraSource& src = *sources[c];
       Latest& slot = *latest[c];
       const double fps = src.fps();
@@ -256,7 +263,14 @@ EngineStats run_engine(const Rig& rig, std::vector<std::unique_ptr<CameraSource>
   if (stats.frames == 0) {
     for (auto& s : sinks) s->abort();
     std::string why = "no panorama was rendered";
-    if (!stats.dropped_cameras.empty()) why += ": " + stats.dropped_cameras.front().reason;
+    if (!stats.dropped_cameras.empty()) {
+      why += ": " + stats.dropped_cameras.front().reason;
+    } else {
+      std::string waiting;
+      for (size_t c = 0; c < n; ++c)
+        if (!have[c]) waiting += (waiting.empty() ? "" : ", ") + std::to_string(rig.cameras[c].id);
+      if (!waiting.empty()) why += " in " + fmt::format("{:.1f}", stats.seconds) + " s: still waiting for the first frame of camera(s) " + waiting;
+    }
     throw std::runtime_error(why);
   }
   for (auto& s : sinks) s->finish();

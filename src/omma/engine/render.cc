@@ -1,6 +1,9 @@
 #include "omma/engine/render.h"
 
+#include <array>
 #include <cmath>
+
+#include "omma/pano/stitch.h"
 #include <cstring>
 #include <limits>
 #include <memory>
@@ -42,6 +45,41 @@ void render_row_scalar(const CompiledMap& map, const uint8_t* store, size_t stri
   }
 }
 
+// sad (eq. 4.17-4.18): per pixel, sample every tap (same fixed-point bilinear as above), gray
+// level Y of each sample, SAD_i = sum_j |Y_i - Y_j|, weights prior_i / (SAD_i + eps) normalised.
+void render_row_sad(const CompiledMap& map, const uint8_t* store, size_t stride_bytes, int row, uint8_t* out) {
+  const uint8_t* count = map.count.data() + size_t(row) * map.width;
+  size_t k = map.row_start[row];
+  const float eps = map.sad_epsilon;
+  for (int col = 0; col < map.width; ++col, out += 3) {
+    const int n = count[col];
+    float s[8][3], y[8], w[8];
+    for (int t = 0; t < n; ++t, ++k) {
+      const uint32_t wd = map.word[k];
+      const int32_t fx = (wd >> 22) & 31, fy = wd >> 27;
+      const uint8_t* a = store + size_t(wd & kIndexMask) * 3;
+      const uint8_t* c = a + stride_bytes;
+      for (int ch = 0; ch < 3; ++ch) {
+        const int32_t top = a[ch] * (32 - fy) + c[ch] * fy;
+        const int32_t bot = a[ch + 3] * (32 - fy) + c[ch + 3] * fy;
+        s[t][ch] = float(top * (32 - fx) + bot * fx);  // value * 1024
+      }
+      y[t] = (0.114f * s[t][0] + 0.587f * s[t][1] + 0.299f * s[t][2]) * (1.0f / (1024.0f * 255.0f));
+      w[t] = float(map.weight[k] + 1);
+    }
+    float acc[3] = {0, 0, 0}, sum = 0;
+    for (int i = 0; i < n; ++i) {
+      float sad = 0;
+      for (int j = 0; j < n; ++j) sad += std::fabs(y[i] - y[j]);
+      const float wi = n > 1 ? w[i] / (sad + eps) : w[i];
+      sum += wi;
+      for (int ch = 0; ch < 3; ++ch) acc[ch] += wi * s[i][ch];
+    }
+    for (int ch = 0; ch < 3; ++ch)
+      out[ch] = n ? static_cast<uint8_t>(std::min(255.0f, acc[ch] / (sum * 1024.0f) + 0.5f)) : 0;
+  }
+}
+
 #ifdef OMMA_X86
 // SSSE3 kernel. Per tap: two 8-byte loads (pixels a,b of row y and c,d of row y+1), interleave
 // rows, pmaddubsw with (32-fy, fy) -> vertical sums per channel of a/c and b/d, shuffle the a and b
@@ -58,6 +96,13 @@ __attribute__((target("ssse3,sse4.1"))) void render_row_simd(const CompiledMap& 
   const __m128i round = _mm_set1_epi32(1 << 17);
   const __m128i pack = _mm_setr_epi8(0, 4, 8, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1);
   const int W = map.width;
+  // (32 - fy, fy) byte pairs for pmaddubsw, one register per fy.
+  alignas(16) static const auto vy_lut = [] {
+    std::array<std::array<uint8_t, 16>, 32> t{};
+    for (int fy = 0; fy < 32; ++fy)
+      for (int i = 0; i < 16; i += 2) t[fy][i] = uint8_t(32 - fy), t[fy][i + 1] = uint8_t(fy);
+    return t;
+  }();
   for (int col = 0; col < W; ++col, out += 3) {
     __m128i acc = round;
     const int n = count[col];
@@ -69,10 +114,11 @@ __attribute__((target("ssse3,sse4.1"))) void render_row_simd(const CompiledMap& 
       const __m128i r0 = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(a));
       const __m128i r1 = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(a + stride_bytes));
       const __m128i il = _mm_unpacklo_epi8(r0, r1);
-      const __m128i vy = _mm_set1_epi16(static_cast<int16_t>((fy << 8) | (32 - fy)));
+      const __m128i vy = _mm_load_si128(reinterpret_cast<const __m128i*>(vy_lut[fy].data()));
       const __m128i v = _mm_maddubs_epi16(il, vy);
       const __m128i hp = _mm_shuffle_epi8(v, pair);
-      const __m128i wx = _mm_set1_epi32(((fx * wt) << 16) | ((32 - fx) * wt));
+      // ((32 - fx) w, fx w) as two int16 in one int32: w * (fx << 16 | (32 - fx)), no carry.
+      const __m128i wx = _mm_set1_epi32(wt * ((fx << 16) + 32 - fx));
       acc = _mm_add_epi32(acc, _mm_madd_epi16(hp, wx));
     }
     const __m128i px = _mm_shuffle_epi8(_mm_srli_epi32(acc, 18), pack);
@@ -105,9 +151,14 @@ void render(const CompiledMap& map, const FrameStore& store, cv::Mat& out, const
   const size_t stride_bytes = size_t(map.layout.stride_px) * 3;
   const uint8_t* data = store.data();
   const bool simd = opt.simd && simd_available();
+  const bool sad = map.method == pano::Method::kSad;
   auto rows = [&](int r0, int r1) {
     for (int r = r0; r < r1; ++r) {
       uint8_t* o = out.ptr<uint8_t>(r);
+      if (sad) {
+        render_row_sad(map, data, stride_bytes, r, o);
+        continue;
+      }
 #ifdef OMMA_X86
       if (simd) {
         render_row_simd(map, data, stride_bytes, r, o);
@@ -121,9 +172,13 @@ void render(const CompiledMap& map, const FrameStore& store, cv::Mat& out, const
     rows(0, map.height);
     return;
   }
+  // Isolated: while waiting, this thread only runs render tasks (not tasks of other code sharing
+  // the oneTBB workers, e.g. OpenCV in source threads), so a render never waits behind them.
   auto body = [&] {
+    tbb::this_task_arena::isolate([&] {
     tbb::parallel_for(tbb::blocked_range<int>(0, map.height, 8),
                       [&](const tbb::blocked_range<int>& r) { rows(r.begin(), r.end()); });
+    });
   };
   if (opt.threads <= 0) {
     body();
@@ -163,12 +218,21 @@ cv::Mat reference_render(const Rig& rig, const MapOptions& opt, const std::vecto
   tbb::parallel_for(0, g.height, [&](int row) {
     for (int col = 0; col < g.width; ++col) {
       if (sub.cameras.empty()) continue;
-      const auto taps = pano::static_taps(sub, g, col, row, opt.method, opt.params);
-      double v[3] = {0, 0, 0};
-      for (const auto& t : taps) {
-        const cv::Mat& img = frames[to_full[t.camera]];
-        for (int ch = 0; ch < 3; ++ch) v[ch] += t.weight * sample(img, t.px.x(), t.px.y(), ch);
+      auto taps = pano::static_taps(sub, g, col, row, opt.method, opt.params);
+      std::vector<std::array<double, 3>> s(taps.size());
+      std::vector<double> gray(taps.size());
+      for (size_t i = 0; i < taps.size(); ++i) {
+        const cv::Mat& img = frames[to_full[taps[i].camera]];
+        for (int ch = 0; ch < 3; ++ch) s[i][ch] = sample(img, taps[i].px.x(), taps[i].px.y(), ch);
+        gray[i] = pano::luma(cv::Vec3f(s[i][0], s[i][1], s[i][2])) / 255.0;
       }
+      if (opt.method == pano::Method::kSad && !taps.empty()) {  // eq. 4.17-4.18
+        const auto w = pano::sad_weights(taps, gray, opt.params.sad_epsilon);
+        for (size_t i = 0; i < taps.size(); ++i) taps[i].weight = w[i];
+      }
+      double v[3] = {0, 0, 0};
+      for (size_t i = 0; i < taps.size(); ++i)
+        for (int ch = 0; ch < 3; ++ch) v[ch] += taps[i].weight * s[i][ch];
       auto& o = out.at<cv::Vec3b>(row, col);
       for (int ch = 0; ch < 3; ++ch) o[ch] = cv::saturate_cast<uint8_t>(v[ch]);
     }

@@ -1,4 +1,4 @@
-// The fast CPU renderer of compiled maps (thesis §5.4: the FPGA's per-pixel tap pipeline, here as
+// The fast CPU renderer of compiled maps (sad: its own kernel with per-frame weights) (thesis §5.4: the FPGA's per-pixel tap pipeline, here as
 // an SSSE3 kernel over rows split among oneTBB threads), and the plain reference it must match.
 #pragma once
 

@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <condition_variable>
 #include <filesystem>
+#include <fstream>
 #include <mutex>
 #include <thread>
 
@@ -13,6 +15,10 @@
 #include "omma/core/frames.h"
 #include "omma/core/io.h"
 #include "omma/engine/synthetic.h"
+#include "omma/isp/isp.h"
+#include "omma/isp/link.h"
+#include "omma/sim/render.h"
+#include "omma/sim/scene.h"
 
 namespace omma::engine {
 namespace fs = std::filesystem;
@@ -113,8 +119,8 @@ class Still : public CameraSource {
 // Views of a turning 360x180 photograph: camera c's remap table is computed once; turning the
 // world by yaw about the dome axis shifts the photograph's columns (cv::BORDER_WRAP).
 struct PanoScene {
-  cv::Mat pano;
-  std::vector<cv::Mat> maps;
+  cv::Mat pano, wide;
+  std::vector<cv::Mat> map_x, map_y;  // per camera, CV_32F
   double deg_per_s = 10;
   std::chrono::steady_clock::time_point t0 = std::chrono::steady_clock::now();
 };
@@ -125,13 +131,12 @@ class PanoView : public CameraSource {
       : scene_(std::move(s)), cam_(cam), fps_(fps), spec_(std::move(spec)) {}
   bool read(cv::Mat& frame) override {
     const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - scene_->t0).count();
-    const double shift = scene_->deg_per_s * t / 360.0 * scene_->pano.cols;
-    std::vector<cv::Mat> xy;
-    cv::split(scene_->maps[cam_], xy);
-    xy[0] += shift;
-    cv::Mat map;
-    cv::merge(xy, map);
-    cv::remap(scene_->pano, frame, map, cv::noArray(), cv::INTER_LINEAR, cv::BORDER_WRAP);
+    // `wide` is the photograph twice side by side: a shift in [0, W) needs no wrapping.
+    const double w = scene_->pano.cols;
+    double shift = std::fmod(scene_->deg_per_s * t / 360.0 * w, w);
+    if (shift < 0) shift += w;
+    cv::add(scene_->map_x[cam_], cv::Scalar(shift), map_x_);
+    cv::remap(scene_->wide, frame, map_x_, scene_->map_y[cam_], cv::INTER_LINEAR, cv::BORDER_REPLICATE);
     return true;
   }
   double fps() const override { return fps_; }
@@ -139,16 +144,137 @@ class PanoView : public CameraSource {
 
  private:
   std::shared_ptr<PanoScene> scene_;
+  cv::Mat map_x_;
   int cam_;
   double fps_;
   std::string spec_;
 };
 
-std::unique_ptr<CameraSource> open_one(const std::string& spec, const SourceOptions& opt) {
-  if (spec.rfind("sim:", 0) == 0)
-    throw SourceError("source '" + spec + "': the simulator source is not in this build yet (use pano:IMAGE)");
-  if (spec.rfind("link:", 0) == 0)
-    throw SourceError("source '" + spec + "': the raw sensor-link source is not in this build yet");
+// The simulator (sim/): the dome moving through a scene; each camera renders its own view at the
+// pose of the moment it is read (colon: along the tube axis at `speed` mm/s; other scenes: turning
+// about the dome axis at `speed` deg/s).
+struct SimScene {
+  std::unique_ptr<sim::Scene> scene;
+  bool translate = false;
+  double speed = 5;
+  sim::CameraEffects effects = sim::CameraEffects::ideal(1);
+  std::chrono::steady_clock::time_point t0 = std::chrono::steady_clock::now();
+};
+
+class SimView : public CameraSource {
+ public:
+  SimView(std::shared_ptr<SimScene> s, RigCamera cam, double fps, std::string spec)
+      : scene_(std::move(s)), cam_(std::move(cam)), fps_(fps), spec_(std::move(spec)) {}
+  bool read(cv::Mat& frame) override {
+    const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - scene_->t0).count();
+    sim::DomePose pose;
+    if (scene_->translate) {
+      pose.translation_mm = Vec3(0, 0, scene_->speed * t);
+    } else {
+      const double a = deg2rad(scene_->speed * t);
+      pose.rotation = Eigen::AngleAxisd(a, Vec3::UnitZ()).toRotationMatrix();
+    }
+    sim::CameraEffects fx = scene_->effects;
+    fx.seed = ++n_;
+    frame = sim::render_camera(*scene_->scene, cam_, pose, fx, false).image;
+    return true;
+  }
+  double fps() const override { return fps_; }
+  std::string describe() const override { return spec_ + " camera " + std::to_string(cam_.id); }
+
+ private:
+  std::shared_ptr<SimScene> scene_;
+  RigCamera cam_;
+  double fps_;
+  std::string spec_;
+  uint64_t n_ = 0;
+};
+
+// A raw sensor-link file (isp/link.h, chips packed 8 per byte) of one camera: the link decoder
+// runs in a background thread into a small queue; each frame's damaged rows are concealed and the
+// ISP (isp/isp.h) develops it to 8-bit BGR.
+class LinkFile : public CameraSource {
+ public:
+  LinkFile(const fs::path& path, const RigCamera& cam, double fps, bool loop) : path_(path), fps_(fps), loop_(loop) {
+    config_.width = cam.in.width;
+    config_.height = cam.in.height;
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw SourceError("cannot open sensor-link file " + path.string());
+    bytes_.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+    if (bytes_.empty()) throw SourceError("sensor-link file " + path.string() + " is empty");
+    thread_ = std::thread([this] { decode(); });
+  }
+  ~LinkFile() override {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      stop_ = true;
+    }
+    cv_.notify_all();
+    if (thread_.joinable()) thread_.join();
+  }
+  bool read(cv::Mat& frame) override {
+    isp::LinkFrame lf;
+    {
+      std::unique_lock<std::mutex> lock(mutex_);
+      cv_.wait(lock, [&] { return !queue_.empty() || done_; });
+      if (queue_.empty()) {
+        if (!error_.empty()) throw SourceError(error_);
+        if (decoded_ == 0) throw SourceError("sensor-link file " + path_.string() + " holds no decodable frame");
+        return false;
+      }
+      lf = std::move(queue_.front());
+      queue_.erase(queue_.begin());
+    }
+    cv_.notify_all();
+    isp::conceal_damaged_rows(lf);
+    frame = isp::develop(isp::to_mat(lf), isp::IspOptions{});
+    return true;
+  }
+  double fps() const override { return fps_; }
+  std::string describe() const override { return "link:" + path_.string(); }
+
+ private:
+  struct Stop {};
+  void decode() {
+    try {
+      do {
+        isp::decode_link(bytes_, config_, [this](const isp::LinkFrame& f) {
+          std::unique_lock<std::mutex> lock(mutex_);
+          cv_.wait(lock, [&] { return queue_.size() < 3 || stop_; });
+          if (stop_) throw Stop{};
+          queue_.push_back(f);
+          ++decoded_;
+          cv_.notify_all();
+        });
+      } while (loop_ && decoded_ > 0 && !stop_);
+    } catch (const Stop&) {
+    } catch (const std::exception& e) {
+      std::lock_guard<std::mutex> lock(mutex_);
+      error_ = "sensor-link file " + path_.string() + ": " + e.what();
+    }
+    std::lock_guard<std::mutex> lock(mutex_);
+    done_ = true;
+    cv_.notify_all();
+  }
+  fs::path path_;
+  isp::LinkConfig config_;
+  std::vector<uint8_t> bytes_;
+  double fps_;
+  bool loop_;
+  std::thread thread_;
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  std::vector<isp::LinkFrame> queue_;
+  long decoded_ = 0;
+  bool stop_ = false, done_ = false;
+  std::string error_;
+};
+
+std::unique_ptr<CameraSource> open_one(const std::string& spec, const RigCamera& cam, const SourceOptions& opt) {
+  if (spec.rfind("link:", 0) == 0 || has_ext(fs::path(spec), {".bin"})) {
+    const fs::path p = spec.rfind("link:", 0) == 0 ? spec.substr(5) : spec;
+    return std::make_unique<LinkFile>(p, cam, opt.fps, opt.loop);
+  }
   if (spec.rfind("v4l2:", 0) == 0 || spec.rfind("/dev/video", 0) == 0) {
     const std::string num = spec.substr(spec.rfind("v4l2:", 0) == 0 ? 5 : 10);
     int dev = -1;
@@ -206,6 +332,28 @@ std::vector<std::unique_ptr<CameraSource>> open_sources(const Rig& rig, const st
       out.push_back(std::make_unique<Still>(frames[c], opt.fps, 0, false, specs[0] + " " + frame_filename(rig.cameras[c].id)));
     return out;
   }
+  if (specs.size() == 1 && specs[0].rfind("sim:", 0) == 0) {
+    std::string spec = specs[0].substr(4);
+    auto scene = std::make_shared<SimScene>();
+    const bool colon = spec.rfind("colon", 0) == 0;
+    scene->translate = colon;
+    scene->speed = colon ? 5.0 : 10.0;
+    if (const size_t at = spec.rfind('@'); at != std::string::npos) {
+      try {
+        scene->speed = std::stod(spec.substr(at + 1));
+      } catch (const std::exception&) {
+        throw SourceError("source '" + specs[0] + "': expected sim:SCENE@SPEED");
+      }
+      spec = spec.substr(0, at);
+    }
+    try {
+      scene->scene = sim::make_scene(spec);
+    } catch (const std::exception& e) {
+      throw SourceError("source '" + specs[0] + "': " + e.what());
+    }
+    for (size_t c = 0; c < n; ++c) out.push_back(std::make_unique<SimView>(scene, rig.cameras[c], opt.fps, specs[0]));
+    return out;
+  }
   if (specs.size() == 1 && specs[0].rfind("pano:", 0) == 0) {
     std::string path = specs[0].substr(5);
     auto scene = std::make_shared<PanoScene>();
@@ -227,14 +375,20 @@ std::vector<std::unique_ptr<CameraSource>> open_sources(const Rig& rig, const st
     for (const auto& c : rig.cameras) px_per_rad = std::max(px_per_rad, c.in.fu);
     const int w = std::min(scene->pano.cols, std::max(64, int(2 * kPi * px_per_rad * 1.5)));
     if (w < scene->pano.cols) cv::resize(scene->pano, scene->pano, cv::Size(w, w / 2), 0, 0, cv::INTER_AREA);
-    scene->maps = panorama_to_camera_maps(rig, scene->pano.size());
+    cv::hconcat(scene->pano, scene->pano, scene->wide);
+    for (const cv::Mat& m : panorama_to_camera_maps(rig, scene->pano.size())) {
+      std::vector<cv::Mat> xy;
+      cv::split(m, xy);
+      scene->map_x.push_back(xy[0]);
+      scene->map_y.push_back(xy[1]);
+    }
     for (size_t c = 0; c < n; ++c) out.push_back(std::make_unique<PanoView>(scene, int(c), opt.fps, specs[0]));
     return out;
   }
   if (specs.size() != n)
     throw SourceError("got " + std::to_string(specs.size()) + " sources for a rig of " + std::to_string(n) +
                       " cameras: give one per camera (rig order), a {id} pattern, frames:DIR or pano:IMAGE");
-  for (const auto& s : specs) out.push_back(open_one(s, opt));
+  for (size_t c = 0; c < n; ++c) out.push_back(open_one(specs[c], rig.cameras[c], opt));
   return out;
 }
 

@@ -9,9 +9,12 @@
 //   frames:DIR          (all cameras) a frames folder DIR/cam_XX.png (frames.h), repeated as stills
 //   pano:IMAGE[@DEG_S]  (all cameras) views of an equirect-full 360x180 photograph turning about the
 //                       dome axis at DEG_S degrees per second (default 10): an animated test scene
+//   link:FILE or FILE.bin  raw sensor-link file of one camera (isp/link.h chips): decoded in a
+//                       background thread, damaged rows concealed, developed by the ISP (isp.h)
+//   sim:SCENE[@SPEED]   (all cameras) the simulator (sim/): SCENE = colon (the dome moving along
+//                       the colon at SPEED mm/s, default 5), photo:PATH, usaf, checker (turning at
+//                       SPEED deg/s, default 10); ideal cameras (no noise), one ray per pixel
 //   PATTERN with {id}   expanded once per camera with its two-digit id, e.g. "cams/cam_{id}.mp4"
-//   sim:SCENE, link:FILE  the simulator and the raw sensor-link (ISP) sources: not in this build
-//                       yet (clear error)
 #pragma once
 
 #include <chrono>
