@@ -20,7 +20,7 @@ struct SimulateArgs {
   std::string rig, scene, out, truth_size = "1080x1080", projection = "vr180", perturb;
   bool raw = false, json = false, ideal = false, no_truth = false;
   uint64_t seed = 1;
-  int supersample = 3, truth_supersample = 2, bits = 10;
+  int supersample = 3, truth_supersample = 0, bits = 10;
   double vignetting = 0.5, color_gain = 0.10, electrons = 4000, read_noise = 2.0, exposure = 1.0;
   double dome_z = 0;
 };
@@ -36,8 +36,8 @@ void run_simulate(const SimulateArgs& a) {
   const Size2 ts = parse_size(a.truth_size);
   o.truth_grid = PanoGrid{parse_projection(a.projection), ts.width, ts.height};
   o.truth_supersample = a.truth_supersample;
-  if (a.truth_supersample < 1 || a.truth_supersample > 16)
-    throw std::invalid_argument(fmt::format("--truth-supersample must be 1..16, got {}", a.truth_supersample));
+  if (a.truth_supersample < 0 || a.truth_supersample > 16)
+    throw std::invalid_argument(fmt::format("--truth-supersample must be 0 (auto) or 1..16, got {}", a.truth_supersample));
   o.perturb = sim::parse_perturb(a.perturb);
   o.effects = a.ideal ? sim::CameraEffects::ideal(a.supersample) : sim::CameraEffects{};
   o.effects.supersample = a.supersample;
@@ -115,7 +115,8 @@ void add_simulate_command(CLI::App& root) {
                   "relative, pixels, unitless, mm; exact magnitudes, random directions)");
   cmd->add_option("--supersample", a.supersample, "N: N x N rays per camera pixel (optical blur), 1..16")
       ->capture_default_str();
-  cmd->add_option("--truth-supersample", a.truth_supersample, "N x N rays per truth pixel, 1..16")
+  cmd->add_option("--truth-supersample", a.truth_supersample,
+                  "N x N rays per truth pixel, 1..16; 0 = auto: rays at most 0.09 deg apart (2 for vr180 1080x1080)")
       ->capture_default_str();
   cmd->add_option("--vignetting", a.vignetting, "Vignetting strength s in [0,1]: V = 1 - s (1 - cos^4 angle)")
       ->capture_default_str();

@@ -190,6 +190,16 @@ std::vector<CameraFrame> render_rig(const Scene& scene, const Rig& rig, const Do
   return frames;
 }
 
+int auto_truth_supersample(const PanoGrid& grid) {
+  double deg_per_px = 0;
+  switch (grid.projection) {
+    case Projection::kEquirect: deg_per_px = std::max(360.0 / grid.width, 90.0 / grid.height); break;
+    case Projection::kVr180: deg_per_px = std::max(180.0 / grid.width, 180.0 / grid.height); break;
+    case Projection::kEquirectFull: deg_per_px = std::max(360.0 / grid.width, 180.0 / grid.height); break;
+  }
+  return std::clamp(static_cast<int>(std::ceil(deg_per_px / 0.09 - 1e-9)), 1, 4);
+}
+
 cv::Mat render_truth_linear(const Scene& scene, const PanoGrid& grid, const DomePose& pose, int n,
                             double exposure) {
   if (n < 1 || n > 16) throw std::invalid_argument(fmt::format("truth supersample must be 1..16, got {}", n));

@@ -84,6 +84,11 @@ cv::Mat render_truth(const Scene& scene, const PanoGrid& grid, const DomePose& p
 cv::Mat render_truth_linear(const Scene& scene, const PanoGrid& grid, const DomePose& pose = {},
                             int supersample = 2, double exposure = 1.0);
 
+// Truth supersampling that keeps the ray spacing at or below 0.09 deg (the pixel pitch of a
+// 4096-wide 360-degree photo): ceil(grid pixel pitch / 0.09 deg), clamped to 1..4. 2 for vr180
+// 1080x1080, 4 for vr180 540x540.
+int auto_truth_supersample(const PanoGrid& grid);
+
 // Linear CV_32FC3 -> sRGB-encoded CV_8UC3 (clipped to [0, 1]).
 cv::Mat encode_srgb8(const cv::Mat& linear);
 

@@ -348,6 +348,14 @@ TEST(SimUsaf, TruthResolutionFollowsThePanoramaPixelSize) {
   EXPECT_LE(fine, 2.5 * px900);
 }
 
+TEST(SimRender, AutoTruthSupersampling) {
+  EXPECT_EQ(auto_truth_supersample({Projection::kVr180, 1080, 1080}), 2);
+  EXPECT_EQ(auto_truth_supersample({Projection::kVr180, 540, 540}), 4);
+  EXPECT_EQ(auto_truth_supersample({Projection::kVr180, 4000, 4000}), 1);
+  EXPECT_EQ(auto_truth_supersample({Projection::kEquirect, 1920, 480}), 3);
+  EXPECT_EQ(auto_truth_supersample({Projection::kEquirect, 64, 16}), 4);
+}
+
 TEST(SimRender, RenderRigEqualsCameraByCamera) {
   const Rig rig = test_rig();
   const auto scene = make_checker_scene(40);
