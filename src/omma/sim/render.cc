@@ -201,7 +201,7 @@ int auto_truth_supersample(const PanoGrid& grid) {
 }
 
 cv::Mat render_truth_linear(const Scene& scene, const PanoGrid& grid, const DomePose& pose, int n,
-                            double exposure) {
+                            double exposure, Progress* progress) {
   if (n < 1 || n > 16) throw std::invalid_argument(fmt::format("truth supersample must be 1..16, got {}", n));
   if (grid.width <= 0 || grid.height <= 0) throw std::invalid_argument("truth grid size must be positive");
   cv::Mat out(grid.height, grid.width, CV_32FC3);
@@ -219,13 +219,15 @@ cv::Mat render_truth_linear(const Scene& scene, const PanoGrid& grid, const Dome
           }
         dst[c] = sum * scale;
       }
+      if (progress) progress->step();
     }
   });
   return out;
 }
 
-cv::Mat render_truth(const Scene& scene, const PanoGrid& grid, const DomePose& pose, int n, double exposure) {
-  return encode_srgb8(render_truth_linear(scene, grid, pose, n, exposure));
+cv::Mat render_truth(const Scene& scene, const PanoGrid& grid, const DomePose& pose, int n, double exposure,
+                     Progress* progress) {
+  return encode_srgb8(render_truth_linear(scene, grid, pose, n, exposure, progress));
 }
 
 }  // namespace omma::sim

@@ -19,6 +19,7 @@
 #include <opencv2/core.hpp>
 
 #include "omma/core/grid.h"
+#include "omma/core/progress.h"
 #include "omma/core/rig.h"
 #include "omma/sim/scene.h"
 
@@ -79,10 +80,11 @@ cv::Mat bayer_rggb(const cv::Mat& bgr);
 
 // The ground truth: the ideal panorama seen from the dome centre on `grid`, noise-free, no sensor
 // effects, N x N supersampled, sRGB-encoded CV_8UC3 (linear CV_32FC3 from render_truth_linear).
+// `progress` (optional) is stepped once per finished row.
 cv::Mat render_truth(const Scene& scene, const PanoGrid& grid, const DomePose& pose = {}, int supersample = 2,
-                     double exposure = 1.0);
+                     double exposure = 1.0, Progress* progress = nullptr);
 cv::Mat render_truth_linear(const Scene& scene, const PanoGrid& grid, const DomePose& pose = {},
-                            int supersample = 2, double exposure = 1.0);
+                            int supersample = 2, double exposure = 1.0, Progress* progress = nullptr);
 
 // Truth supersampling that keeps the ray spacing at or below 0.09 deg (the pixel pitch of a
 // 4096-wide 360-degree photo): ceil(grid pixel pitch / 0.09 deg), clamped to 1..4. 2 for vr180

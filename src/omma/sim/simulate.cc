@@ -42,7 +42,9 @@ SimulateResult simulate(const Rig& nominal, const Scene& scene, const SimulateOp
   if (o.truth) {
     const auto t0 = std::chrono::steady_clock::now();
     const int n = o.truth_supersample > 0 ? o.truth_supersample : auto_truth_supersample(o.truth_grid);
-    res.truth = render_truth(scene, o.truth_grid, o.pose, n, o.effects.exposure);
+    Progress progress("simulate truth", o.truth_grid.height, o.progress);
+    res.truth = render_truth(scene, o.truth_grid, o.pose, n, o.effects.exposure, &progress);
+    progress.finish();
     res.truth_ms = ms_since(t0);
   }
   return res;
