@@ -17,6 +17,7 @@
 #include "omma/core/io.h"
 #include "omma/core/log.h"
 #include "omma/core/rig.h"
+#include "omma/isp/isp.h"
 #include "omma/pano/maps.h"
 
 namespace omma::app {
@@ -27,6 +28,10 @@ struct StitchArgs {
   std::string boundary, boundary_overlay, single_camera, coverage;
   double threshold = 0.2;
   bool json = false;
+  // --raw: develop DIR/cam_XX_raw.png with the ISP (thesis §5.1.2, appendix A) before stitching.
+  bool raw = false;
+  std::string demosaic = "hybrid", awb = "grayworld", flat;
+  bool linear_output = false;
 };
 
 std::filesystem::path overlay_path_for(const std::filesystem::path& boundary) {
@@ -54,7 +59,17 @@ void run_stitch(const StitchArgs& a) {
   if (a.threshold < 0 || a.threshold > 1) throw std::invalid_argument("--threshold must be in [0, 1]");
   const Rig rig = load_rig(a.rig);
   if (rig.cameras.empty()) throw std::invalid_argument("rig " + a.rig + " has no cameras");
-  const std::vector<cv::Mat> frames = load_frames(a.frames, rig);
+  std::vector<cv::Mat> frames;
+  if (a.raw) {
+    isp::IspOptions iso;
+    iso.demosaic = isp::parse_demosaic(a.demosaic);
+    iso.awb = isp::parse_awb(a.awb);
+    iso.srgb = !a.linear_output;
+    if (!a.flat.empty()) iso.flat_gain = isp::load_flat_field(a.flat);
+    frames = isp::develop_all(load_raw_frames(a.frames, rig), iso);
+  } else {
+    frames = load_frames(a.frames, rig);
+  }
 
   pano::StitchOptions opt;
   opt.method = method;
@@ -135,6 +150,16 @@ void add_stitch_command(CLI::App& root) {
       "(the seam band, usable as `omma eval --mask`), dark gray = seen by none");
   cmd->add_option("--coverage", a.coverage,
                   "Write the coverage map: number of cameras per direction (8-bit gray)");
+  cmd->add_flag("--raw", a.raw,
+                "Read the raw Bayer frames DIR/cam_XX_raw.png (16-bit RGGB, 10-bit values) and develop each\n"
+                "with the ISP (demosaic, white balance, optional flat field) before stitching");
+  cmd->add_option("--demosaic", a.demosaic, "With --raw: bilinear, hybrid, ah or cc (appendix A)")
+      ->capture_default_str();
+  cmd->add_option("--awb", a.awb, "With --raw: none, grayworld or whitepatch (eq. A.23-A.38)")
+      ->capture_default_str();
+  cmd->add_option("--flat", a.flat, "With --raw: flat-field raw frame for vignetting correction");
+  cmd->add_flag("--linear-output", a.linear_output,
+                "With --raw: keep the 8 most significant linear bits (the thesis hardware) instead of sRGB");
   cmd->add_flag("--json", a.json,
                 "Print one JSON object {method, width, height, ms, inter_camera_psnr_db} on stdout");
   cmd->callback([] { run_stitch(a); });

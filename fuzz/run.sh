@@ -39,6 +39,6 @@ set +e
 rc=$?
 set -e
 grep -E "^#[0-9]+ +(DONE|pulse)|Done [0-9]+ runs|^stat::|ERROR|SUMMARY|crash-|timeout-" fuzz.log | tail -12
-crashes=$(ls crash-* leak-* timeout-* oom-* 2>/dev/null | wc -l)
+crashes=$( (ls crash-* leak-* timeout-* oom-* 2>/dev/null || true) | wc -l)
 echo "fuzz: exit status $rc, executions requested $runs, crash/leak/timeout/oom files: $crashes (log: $out/fuzz.log)"
 exit $rc

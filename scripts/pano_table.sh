@@ -4,7 +4,8 @@
 #   scripts/pano_table.sh RIG [OUT_DIR]        (RIG: e.g. the 24-camera prototype rig file)
 # Writes OUT_DIR/table.md (Markdown) and prints it. Uses build/omma (override with OMMA=...).
 # Sizes: equirect 1920x512 and vr180 1080x1080 (the thesis's panoramas); override with
-# EQ_SIZE=WxH VR_SIZE=WxH for a quicker run.
+# EQ_SIZE=WxH VR_SIZE=WxH for a quicker run. SIM_FLAGS adds simulator flags (e.g. --ideal: no
+# vignetting, gains, noise or quantisation); SCENES limits the scenes (e.g. SCENES=colon).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 RIG=${1:?usage: scripts/pano_table.sh RIG [OUT_DIR]}
@@ -20,12 +21,14 @@ table="$OUT/table.md"
   echo "|---|---|---|---|---|---|---|---|"
 } > "$table"
 json() { python3 -c "import json,sys; d=json.load(open(sys.argv[1])); v=d[sys.argv[2]]; print('n/a' if v is None else (f'{v:.4f}' if sys.argv[2]=='ssim' else f'{v:.2f}'))" "$@"; }
-for scene in "photo:$DATA/louvre.jpg" "photo:$DATA/lake.jpg" colon; do
+SCENES=${SCENES:-"photo:$DATA/louvre.jpg photo:$DATA/lake.jpg colon"}
+SIM_FLAGS=${SIM_FLAGS:-}
+for scene in $SCENES; do
   name=$(basename "${scene#photo:}" .jpg)
   for proj in equirect vr180; do
     size=$EQ_SIZE; [ "$proj" = vr180 ] && size=$VR_SIZE
     dir="$OUT/$name-$proj"
-    "$OMMA" simulate --rig "$RIG" --scene "$scene" --out "$dir" --projection "$proj" --truth-size "$size" >&2
+    "$OMMA" simulate --rig "$RIG" --scene "$scene" --out "$dir" --projection "$proj" --truth-size "$size" $SIM_FLAGS >&2
     for m in nn linear gaussian mrf mrf-spherical sad; do
       "$OMMA" stitch --rig "$RIG" --frames "$dir" --method "$m" --projection "$proj" --size "$size" \
         --out "$dir/pano_$m.png" --single-camera "$dir/single.png" --json > "$dir/stitch_$m.json"

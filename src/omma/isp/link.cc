@@ -112,6 +112,7 @@ class Decoder {
           in_const = false;
           anchor_pos_ = double(i) + double(size_t(cfg_.resync_pp + cfg_.row_gap_pp) * cpp_);
           anchor_idx_ = 0;
+          synced_ = true;
         }
         ++alt;
         cst = 1;
@@ -189,10 +190,20 @@ class Decoder {
       finish_frame();
       anchor_pos_ = double(q);
       anchor_idx_ = 0;
+      synced_ = true;
     }
+    // Row indices come from timing relative to a known row. Until the stream is synchronised
+    // (its first row sits in a row slot counted from the stream start, or a frame boundary /
+    // resynchronisation run has been seen),
+    // rows are skipped: a capture that starts mid-frame must not misplace them.
+    if (!synced_ && !any_row_) {  // the first row: in a row slot from the stream start (+-1 PP)?
+      const double slots = (double(q) - anchor_pos_) / double(row_chips_);
+      if (std::fabs(slots - std::floor(slots + 0.5)) * double(row_chips_) <= double(cpp_)) synced_ = true;
+    }
+    any_row_ = true;
     const double rel = (double(q) - anchor_pos_) / double(row_chips_);
     const double idx_d = double(anchor_idx_) + std::floor(rel + 0.5);
-    const bool in_frame = idx_d >= 0 && idx_d < double(cfg_.height);
+    const bool in_frame = synced_ && idx_d >= 0 && idx_d < double(cfg_.height);
     const int idx = in_frame ? int(idx_d) : -1;
 
     const size_t clocks = size_t(cfg_.clocks_per_pp());
@@ -253,6 +264,8 @@ class Decoder {
   std::vector<uint16_t> row_;     // the row being decoded
   std::vector<int> stored_rows_;  // rows of frame_ written since the last reset
   long rows_seen_ = 0;
+  bool synced_ = false;   // row indices known (see take_row)
+  bool any_row_ = false;  // a row start has been seen
   LinkStats stats_;
 };
 

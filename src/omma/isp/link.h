@@ -84,7 +84,9 @@ struct LinkStats {
 // were damaged or never found have row_ok = 0 and pixels 0 (see conceal_damaged_rows).
 // Resynchronises at the next row (a run of >= 32 alternating chips then a start bit) or the next
 // frame (a constant run of >= half the end-of-frame marker, or the long resynchronisation run).
-// Runs in time linear in the input; never reads out of bounds, whatever the bytes.
+// Rows are placed by their timing after the last frame boundary. A stream whose first row start
+// is not within 1 PP of a row slot counted from the stream start (a capture begun mid-row) is
+// synchronised at its first frame boundary; rows before it are skipped and not counted. Runs in time linear in the input; never reads out of bounds, whatever the bytes.
 LinkStats decode_link(const uint8_t* data, size_t size, const LinkConfig& config,
                       const std::function<void(const LinkFrame&)>& on_frame);
 LinkStats decode_link(const std::vector<uint8_t>& bytes, const LinkConfig& config,
