@@ -10,6 +10,7 @@
 #include "omma/core/grid.h"
 #include "omma/core/io.h"
 #include "omma/core/rig.h"
+#include "omma/design/prototype.h"
 #include "omma/sim/simulate.h"
 
 namespace omma::app {
@@ -19,7 +20,7 @@ struct SimulateArgs {
   std::string rig, scene, out, truth_size = "1080x1080", projection = "vr180", perturb;
   bool raw = false, json = false, ideal = false, no_truth = false;
   uint64_t seed = 1;
-  int supersample = 3, truth_supersample = 2, bits = 10;
+  int supersample = 3, truth_supersample = 0, bits = 10;
   double vignetting = 0.5, color_gain = 0.10, electrons = 4000, read_noise = 2.0, exposure = 1.0;
   double dome_z = 0;
 };
@@ -35,8 +36,8 @@ void run_simulate(const SimulateArgs& a) {
   const Size2 ts = parse_size(a.truth_size);
   o.truth_grid = PanoGrid{parse_projection(a.projection), ts.width, ts.height};
   o.truth_supersample = a.truth_supersample;
-  if (a.truth_supersample < 1 || a.truth_supersample > 16)
-    throw std::invalid_argument(fmt::format("--truth-supersample must be 1..16, got {}", a.truth_supersample));
+  if (a.truth_supersample < 0 || a.truth_supersample > 16)
+    throw std::invalid_argument(fmt::format("--truth-supersample must be 0 (auto) or 1..16, got {}", a.truth_supersample));
   o.perturb = sim::parse_perturb(a.perturb);
   o.effects = a.ideal ? sim::CameraEffects::ideal(a.supersample) : sim::CameraEffects{};
   o.effects.supersample = a.supersample;
@@ -55,7 +56,7 @@ void run_simulate(const SimulateArgs& a) {
   o.progress = !a.json;
   if (fs::exists(a.out) && !fs::is_directory(a.out))
     throw IoError(fmt::format("--out '{}' exists and is not a folder", a.out));
-  const Rig rig = load_rig(a.rig);
+  const Rig rig = a.rig.empty() ? design::thesis_prototype_rig() : load_rig(a.rig);
   if (rig.cameras.empty()) throw RigError(fmt::format("rig '{}' has no cameras", a.rig));
   const std::unique_ptr<sim::Scene> scene = sim::make_scene(a.scene);
   const sim::SimulateResult res = sim::simulate(rig, *scene, o);
@@ -96,7 +97,7 @@ void add_simulate_command(CLI::App& root) {
       "from the dome centre (ground truth). Writes the frames folder OUT: cam_XX.png (8-bit sRGB),\n"
       "cam_XX_raw.png (--raw: 16-bit RGGB Bayer, 10-bit values), truth.png, rig.json (nominal),\n"
       "rig_true.json (rendered, with --perturb errors), sim.json (what was simulated).");
-  cmd->add_option("--rig", a.rig, "Rig file (JSON, omma-rig)")->required();
+  cmd->add_option("--rig", a.rig, "Rig file (JSON, omma-rig); default: the thesis 24-camera prototype");
   cmd->add_option("--scene", a.scene,
                   "Scene: photo:PATH (far-field 360x180 equirect photo), colon (procedural tube), "
                   "usaf[:DIST_MM] (USAF 1951 chart, default 25 mm ahead), checker[:RADIUS_MM] (textured sphere, "
@@ -114,7 +115,8 @@ void add_simulate_command(CLI::App& root) {
                   "relative, pixels, unitless, mm; exact magnitudes, random directions)");
   cmd->add_option("--supersample", a.supersample, "N: N x N rays per camera pixel (optical blur), 1..16")
       ->capture_default_str();
-  cmd->add_option("--truth-supersample", a.truth_supersample, "N x N rays per truth pixel, 1..16")
+  cmd->add_option("--truth-supersample", a.truth_supersample,
+                  "N x N rays per truth pixel, 1..16; 0 = auto: rays at most 0.09 deg apart (2 for vr180 1080x1080)")
       ->capture_default_str();
   cmd->add_option("--vignetting", a.vignetting, "Vignetting strength s in [0,1]: V = 1 - s (1 - cos^4 angle)")
       ->capture_default_str();

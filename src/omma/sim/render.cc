@@ -181,8 +181,27 @@ CameraFrame render_camera(const Scene& scene, const RigCamera& camera, const Dom
   return apply_sensor(render_radiance(scene, camera, pose, effects.supersample), camera, effects, want_raw);
 }
 
+std::vector<CameraFrame> render_rig(const Scene& scene, const Rig& rig, const DomePose& pose,
+                                    const CameraEffects& effects, bool want_raw) {
+  check_effects(effects);
+  std::vector<CameraFrame> frames(rig.cameras.size());
+  tbb::parallel_for(size_t{0}, rig.cameras.size(),
+                    [&](size_t i) { frames[i] = render_camera(scene, rig.cameras[i], pose, effects, want_raw); });
+  return frames;
+}
+
+int auto_truth_supersample(const PanoGrid& grid) {
+  double deg_per_px = 0;
+  switch (grid.projection) {
+    case Projection::kEquirect: deg_per_px = std::max(360.0 / grid.width, 90.0 / grid.height); break;
+    case Projection::kVr180: deg_per_px = std::max(180.0 / grid.width, 180.0 / grid.height); break;
+    case Projection::kEquirectFull: deg_per_px = std::max(360.0 / grid.width, 180.0 / grid.height); break;
+  }
+  return std::clamp(static_cast<int>(std::ceil(deg_per_px / 0.09 - 1e-9)), 1, 4);
+}
+
 cv::Mat render_truth_linear(const Scene& scene, const PanoGrid& grid, const DomePose& pose, int n,
-                            double exposure) {
+                            double exposure, Progress* progress) {
   if (n < 1 || n > 16) throw std::invalid_argument(fmt::format("truth supersample must be 1..16, got {}", n));
   if (grid.width <= 0 || grid.height <= 0) throw std::invalid_argument("truth grid size must be positive");
   cv::Mat out(grid.height, grid.width, CV_32FC3);
@@ -200,13 +219,15 @@ cv::Mat render_truth_linear(const Scene& scene, const PanoGrid& grid, const Dome
           }
         dst[c] = sum * scale;
       }
+      if (progress) progress->step();
     }
   });
   return out;
 }
 
-cv::Mat render_truth(const Scene& scene, const PanoGrid& grid, const DomePose& pose, int n, double exposure) {
-  return encode_srgb8(render_truth_linear(scene, grid, pose, n, exposure));
+cv::Mat render_truth(const Scene& scene, const PanoGrid& grid, const DomePose& pose, int n, double exposure,
+                     Progress* progress) {
+  return encode_srgb8(render_truth_linear(scene, grid, pose, n, exposure, progress));
 }
 
 }  // namespace omma::sim

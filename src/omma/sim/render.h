@@ -14,10 +14,12 @@
 #pragma once
 
 #include <cstdint>
+#include <vector>
 
 #include <opencv2/core.hpp>
 
 #include "omma/core/grid.h"
+#include "omma/core/progress.h"
 #include "omma/core/rig.h"
 #include "omma/sim/scene.h"
 
@@ -63,6 +65,12 @@ struct CameraFrame {
 CameraFrame render_camera(const Scene& scene, const RigCamera& camera, const DomePose& pose,
                           const CameraEffects& effects, bool want_raw = false);
 
+// Every camera of `rig` (in rig order, cameras in parallel) for one dome pose: one frame of an
+// animated sequence. Each camera's noise comes from (effects.seed, camera id): vary effects.seed per
+// frame for fresh noise.
+std::vector<CameraFrame> render_rig(const Scene& scene, const Rig& rig, const DomePose& pose,
+                                    const CameraEffects& effects, bool want_raw = false);
+
 // Sensor effects alone, applied to a linear radiance image (as render_radiance gives).
 CameraFrame apply_sensor(const cv::Mat& radiance, const RigCamera& camera, const CameraEffects& effects,
                          bool want_raw = false);
@@ -72,10 +80,16 @@ cv::Mat bayer_rggb(const cv::Mat& bgr);
 
 // The ground truth: the ideal panorama seen from the dome centre on `grid`, noise-free, no sensor
 // effects, N x N supersampled, sRGB-encoded CV_8UC3 (linear CV_32FC3 from render_truth_linear).
+// `progress` (optional) is stepped once per finished row.
 cv::Mat render_truth(const Scene& scene, const PanoGrid& grid, const DomePose& pose = {}, int supersample = 2,
-                     double exposure = 1.0);
+                     double exposure = 1.0, Progress* progress = nullptr);
 cv::Mat render_truth_linear(const Scene& scene, const PanoGrid& grid, const DomePose& pose = {},
-                            int supersample = 2, double exposure = 1.0);
+                            int supersample = 2, double exposure = 1.0, Progress* progress = nullptr);
+
+// Truth supersampling that keeps the ray spacing at or below 0.09 deg (the pixel pitch of a
+// 4096-wide 360-degree photo): ceil(grid pixel pitch / 0.09 deg), clamped to 1..4. 2 for vr180
+// 1080x1080, 4 for vr180 540x540.
+int auto_truth_supersample(const PanoGrid& grid);
 
 // Linear CV_32FC3 -> sRGB-encoded CV_8UC3 (clipped to [0, 1]).
 cv::Mat encode_srgb8(const cv::Mat& linear);

@@ -1,5 +1,6 @@
 // Tests of the dome simulator: scenes, camera rendering, truth, sensor effects, perturbation.
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 
@@ -78,6 +79,7 @@ TEST(SimPhoto, IdealCameraMatchesPhotoResampled) {
   // With 3x3 supersampling (optical blur) the image is close but not identical.
   const CameraFrame blurred = render_camera(*scene, cam, {}, CameraEffects::ideal(3));
   const double psnr_blur = cv::PSNR(blurred.image, ref);
+  std::printf("  ideal camera vs remapped photo: %.2f dB (1 ray), %.2f dB (3x3 rays)\n", psnr, psnr_blur);
   EXPECT_GT(psnr_blur, 25.0);
   EXPECT_LT(psnr_blur, psnr);
 }
@@ -91,6 +93,7 @@ TEST(SimPhoto, TruthEqualsPhotoResampledOnTheGrid) {
     ASSERT_EQ(truth.cols, grid.width);
     const cv::Mat ref = remap_photo(photo(), grid.width, grid.height,
                                     [&](int c, int r) { return grid.pixel_direction(c, r); });
+    std::printf("  truth %s vs remapped photo: %.2f dB\n", to_string(p).c_str(), cv::PSNR(truth, ref));
     EXPECT_GT(cv::PSNR(truth, ref), 38.0) << to_string(p);
   }
 }
@@ -129,6 +132,9 @@ TEST(SimColon, BrightnessFallsWithDistance) {
   const double d0 = 3.0 / (std::sqrt(lum[0] / lum[1]) - 1);
   EXPECT_GT(d0, 12);  // the wall is 12-30 mm from the axis
   EXPECT_LT(d0, 30);
+  std::printf("  colon bands:");
+  for (double b : band) std::printf(" %.4f", b);
+  std::printf("; wall distance from the falloff d0 = %.1f mm\n", d0);
   for (int k = 2; k <= 4; ++k) EXPECT_NEAR(std::sqrt(lum[0] / lum[k]), 1 + 3.0 * k / d0, 0.01) << k;
 }
 
@@ -207,6 +213,7 @@ TEST(SimSensor, NoiseStatisticsAsConfigured) {
   cv::meanStdDev(f.signal.reshape(1), mean, sd);
   const double expected = std::sqrt(level / 4000 + std::pow(2.0 / 1023, 2) + 1.0 / (12 * 1023.0 * 1023.0));
   EXPECT_NEAR(mean[0], level, 0.001);
+  std::printf("  noise sd %.5f expected %.5f, mean %.5f\n", sd[0], expected, mean[0]);
   EXPECT_NEAR(sd[0], expected, 0.05 * expected);
   // Deterministic per seed; another seed gives other noise.
   EXPECT_EQ(cv::norm(f.signal, apply_sensor(radiance, cam, e).signal, cv::NORM_INF), 0.0);
@@ -331,12 +338,39 @@ TEST(SimUsaf, TruthResolutionFollowsThePanoramaPixelSize) {
   };
   const double px360 = 180.0 / 360, px900 = 180.0 / 900;
   const double coarse = limit_bar_deg(360), fine = limit_bar_deg(900);
+  std::printf("  truth USAF limit: %.3f deg/bar at 360 px (%.3f deg/px), %.3f at 900 px (%.3f deg/px)\n", coarse,
+              px360, fine, px900);
   EXPECT_LT(fine, coarse);
   // A bar needs at least about one pixel, and about two pixels suffice (box-filtered truth).
   EXPECT_GE(coarse, 0.9 * px360);
   EXPECT_LE(coarse, 2.5 * px360);
   EXPECT_GE(fine, 0.9 * px900);
   EXPECT_LE(fine, 2.5 * px900);
+}
+
+TEST(SimRender, AutoTruthSupersampling) {
+  EXPECT_EQ(auto_truth_supersample({Projection::kVr180, 1080, 1080}), 2);
+  EXPECT_EQ(auto_truth_supersample({Projection::kVr180, 540, 540}), 4);
+  EXPECT_EQ(auto_truth_supersample({Projection::kVr180, 4000, 4000}), 1);
+  EXPECT_EQ(auto_truth_supersample({Projection::kEquirect, 1920, 480}), 3);
+  EXPECT_EQ(auto_truth_supersample({Projection::kEquirect, 64, 16}), 4);
+}
+
+TEST(SimRender, RenderRigEqualsCameraByCamera) {
+  const Rig rig = test_rig();
+  const auto scene = make_checker_scene(40);
+  DomePose pose;
+  pose.translation_mm = Vec3(1, 2, 3);
+  CameraEffects e;
+  e.supersample = 2;
+  e.seed = 9;
+  const auto frames = render_rig(*scene, rig, pose, e, true);
+  ASSERT_EQ(frames.size(), rig.cameras.size());
+  for (size_t i = 0; i < frames.size(); ++i) {
+    const CameraFrame one = render_camera(*scene, rig.cameras[i], pose, e, true);
+    EXPECT_EQ(cv::norm(frames[i].image, one.image, cv::NORM_INF), 0.0) << i;
+    EXPECT_EQ(cv::norm(frames[i].raw, one.raw, cv::NORM_INF), 0.0) << i;
+  }
 }
 
 TEST(SimRender, MovingTheDomeRotatesWhatTheCamerasSee) {
@@ -352,6 +386,30 @@ TEST(SimRender, MovingTheDomeRotatesWhatTheCamerasSee) {
   turned.frame.v = pose.rotation * cam.frame.v;
   const cv::Mat a = render_radiance(*scene, cam, pose, 1), b = render_radiance(*scene, turned, {}, 1);
   EXPECT_LT(cv::norm(a, b, cv::NORM_INF), 1e-5);
+}
+
+}  // namespace
+}  // namespace omma::sim
+
+#include "omma/design/prototype.h"
+
+namespace omma::sim {
+namespace {
+
+TEST(SimPrototype, EveryCameraOfTheThesisDomeSeesThePhotoWhereItShould) {
+  const Rig rig = design::thesis_prototype_rig();
+  ASSERT_EQ(rig.cameras.size(), 24u);
+  const auto scene = make_photo_scene(photo());
+  double worst = 1e9;
+  for (const auto& cam : rig.cameras) {
+    const CameraFrame f = render_camera(*scene, cam, {}, CameraEffects::ideal(1));
+    const CameraModel m = cam.model();
+    const cv::Mat ref = remap_photo(photo(), cam.in.width, cam.in.height,
+                                    [&](int c, int r) { return m.unproject(Vec2(c + 0.5, r + 0.5)); });
+    worst = std::min(worst, cv::PSNR(f.image, ref));
+  }
+  std::printf("  prototype: worst camera vs remapped photo %.2f dB\n", worst);
+  EXPECT_GT(worst, 35.0);
 }
 
 }  // namespace

@@ -41,7 +41,10 @@ SimulateResult simulate(const Rig& nominal, const Scene& scene, const SimulateOp
   }
   if (o.truth) {
     const auto t0 = std::chrono::steady_clock::now();
-    res.truth = render_truth(scene, o.truth_grid, o.pose, o.truth_supersample, o.effects.exposure);
+    const int n = o.truth_supersample > 0 ? o.truth_supersample : auto_truth_supersample(o.truth_grid);
+    Progress progress("simulate truth", o.truth_grid.height, o.progress);
+    res.truth = render_truth(scene, o.truth_grid, o.pose, n, o.effects.exposure, &progress);
+    progress.finish();
     res.truth_ms = ms_since(t0);
   }
   return res;
@@ -78,7 +81,8 @@ nlohmann::json simulation_summary(const SimulateResult& r, const SimulateOptions
            o.truth ? nlohmann::json{{"projection", to_string(o.truth_grid.projection)},
                                     {"width", o.truth_grid.width},
                                     {"height", o.truth_grid.height},
-                                    {"supersample", o.truth_supersample}}
+                                    {"supersample", o.truth_supersample > 0 ? o.truth_supersample
+                                                                            : auto_truth_supersample(o.truth_grid)}}
                    : nlohmann::json(nullptr)},
           {"dome_translation_mm", {o.pose.translation_mm.x(), o.pose.translation_mm.y(), o.pose.translation_mm.z()}},
           {"raw", o.raw},

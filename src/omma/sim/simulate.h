@@ -22,7 +22,7 @@ struct SimulateOptions {
   CameraEffects effects;                                 // effects.seed is the simulation seed
   PerturbSpec perturb;                                   // errors of the true rig (none by default)
   PanoGrid truth_grid{Projection::kVr180, 1080, 1080};   // grid of truth.png
-  int truth_supersample = 2;                             // N x N rays per truth pixel
+  int truth_supersample = 0;                             // N x N rays per truth pixel; 0: auto_truth_supersample
   bool truth = true;                                     // render the truth at all
   bool raw = false;                                      // also produce Bayer raw frames
   DomePose pose;                                         // where the dome is in the scene
