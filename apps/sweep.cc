@@ -26,7 +26,7 @@ void add_sweep_command(CLI::App& root) {
       "12, 25, 30, 40 mm (Fig. 3.3 / 3.9: layered, cvt, min-cameras) and vs R_vir / R_phy at a\n"
       "fixed AOV (Fig. 3.7: layered vs min-cameras). Writes OUT/sweep.csv, OUT/cameras_vs_aov.svg\n"
       "and OUT/cameras_vs_ratio.svg.");
-  cmd->add_option("--out-dir", o->out_dir, "Output folder (created if missing)")->capture_default_str();
+  cmd->add_option("--out,--out-dir", o->out_dir, "Output folder (created if missing)")->capture_default_str();
   cmd->add_option("--r-phys", o->p.r_phys_mm, "Dome radius, mm")->capture_default_str();
   cmd->add_option("--r-virtual", o->p.r_virtual_mm, "R_vir values of the AOV sweep, mm")
       ->capture_default_str();
