@@ -73,6 +73,13 @@ EngineStats run_engine(const Rig& rig, std::vector<std::unique_ptr<CameraSource>
                pano::to_string(mopt.method), map->bytes_per_pixel(), first.from_cache ? "loaded" : "compiled",
                first.seconds);
 
+  // Warm-up render (black frames) from this thread, so that the renderer's worker threads are
+  // created here at normal priority (threads inherit the nice value of their creator).
+  {
+    FrameStore warm(map->layout);
+    cv::Mat out;
+    render(*map, warm, out, {.threads = opt.threads});
+  }
   std::vector<std::unique_ptr<Latest>> latest;
   for (size_t c = 0; c < n; ++c) latest.push_back(std::make_unique<Latest>());
   std::atomic<bool> stop{false};
@@ -84,7 +91,7 @@ EngineStats run_engine(const Rig& rig, std::vector<std::unique_ptr<CameraSource>
     threads.emplace_back([&, c] {
       // Camera threads run at a lower priority than the render loop: on a busy machine a camera
       // may deliver late (its frame is reused), but the panorama is never starved by decoding.
-      setpriority(PRIO_PROCESS, static_cast<id_t>(::gettid()), 5);
+      setpriority(PRIO_PROCESS, static_cast<id_t>(::gettid()), 15);
       CameraSource& src = *sources[c];
       Latest& slot = *latest[c];
       const double fps = src.fps();
