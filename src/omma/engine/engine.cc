@@ -247,6 +247,8 @@ EngineStats run_engine(const Rig& rig, std::vector<std::unique_ptr<CameraSource>
         stats.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
         stats.fps = stats.frames / stats.seconds;
         stats.latency_ms_mean = latency_sum / stats.frames;
+        stats.camera_frames = 0;
+        for (size_t c = 0; c < n; ++c) stats.camera_frames += used_seq[c];
         nlohmann::json j = stats.to_json();
         j["latency_ms"] = stats.latency_ms_mean;
         j["cameras_live"] = std::count(live.begin(), live.end(), true);
@@ -281,6 +283,7 @@ EngineStats run_engine(const Rig& rig, std::vector<std::unique_ptr<CameraSource>
     throw std::runtime_error(why);
   }
   for (auto& s : sinks) s->finish();
+  stats.camera_frames = 0;
   for (size_t c = 0; c < n; ++c) stats.camera_frames += latest[c]->seq;
   stats.fps = stats.frames / stats.seconds;
   stats.render_ms_mean = render_ms_sum / stats.frames;
