@@ -1,13 +1,102 @@
-// omma calibrate: placeholder until its issue lands.
-#include <stdexcept>
+// omma calibrate: calibrate a rig from one set of camera frames (thesis §3.6): SIFT features,
+// matching between cameras whose nominal views overlap, RANSAC, Ceres bundle adjustment.
+#include <iostream>
+#include <fmt/format.h>
 
 #include "apps/command.h"
+#include "omma/calib/calibrate.h"
+#include "omma/core/frames.h"
+#include "omma/core/log.h"
+#include "omma/core/rig.h"
 
 namespace omma::app {
 
+namespace {
+struct CalibrateArgs {
+  std::string rig, frames, out, scene = "auto", focal = "per-camera", center = "per-camera",
+                                distortion = "per-camera", loss = "huber";
+  int radial_terms = 1, max_iterations = 50, min_matches = 30, upsample = 2;
+  double loss_scale = 1.0, ransac_px = 5, prior_deg = 5;
+  bool json = false;
+};
+
+// "per-camera" | "shared" | "fixed" -> (estimate, share)
+void parse_mode(const std::string& what, const std::string& mode, bool* estimate, bool* share) {
+  if (mode == "per-camera") *estimate = true, *share = false;
+  else if (mode == "shared") *estimate = true, *share = true;
+  else if (mode == "fixed") *estimate = false, *share = false;
+  else throw std::invalid_argument(fmt::format("--{} must be per-camera, shared or fixed (got '{}')", what, mode));
+}
+}  // namespace
+
 void add_calibrate_command(CLI::App& root) {
-  auto* cmd = root.add_subcommand("calibrate", "Calibrate a rig from camera frames (not implemented yet)");
-  cmd->callback([] { throw std::runtime_error("'omma calibrate' is not implemented yet"); });
+  static CalibrateArgs a;
+  auto* cmd = root.add_subcommand(
+      "calibrate",
+      "Calibrate a rig from camera frames (thesis §3.6): SIFT features in every camera, matching between\n"
+      "cameras whose nominal cones of view intersect, RANSAC (rotation-only model for a far scene, essential\n"
+      "matrix with parallax), then a Ceres bundle adjustment of each camera's rotation, fu, fv, cu, cv and\n"
+      "radial distortion with a robust loss. Cameras with too few matches keep their nominal values (warning).");
+  cmd->add_option("--rig", a.rig, "Nominal rig (JSON)")->required();
+  cmd->add_option("--frames", a.frames, "Frames folder: DIR/cam_XX.png per camera (omma/core/frames.h)")->required();
+  cmd->add_option("--out", a.out, "Calibrated rig to write (JSON, atomic)")->required();
+  cmd->add_option("--scene", a.scene, "Scene model: far (rotation only), near (parallax: scene points, camera "
+                                      "positions fixed at nominal) or auto (default: from the RANSAC consensus)");
+  cmd->add_option("--focal", a.focal, "fu, fv: per-camera (default), shared or fixed");
+  cmd->add_option("--center", a.center, "cu, cv: per-camera (default), shared or fixed");
+  cmd->add_option("--distortion", a.distortion, "radial k: per-camera (default), shared or fixed");
+  cmd->add_option("--radial-terms", a.radial_terms, "How many radial coefficients to estimate: 1 = k1 (default), "
+                                                    "2 = k1, k2, 3 = k1, k2, k5");
+  cmd->add_option("--loss", a.loss, "Robust loss: huber (default), cauchy or none");
+  cmd->add_option("--loss-scale", a.loss_scale, "Robust loss scale, pixels (default 1)");
+  cmd->add_option("--ransac-px", a.ransac_px, "RANSAC inlier threshold, pixels (default 5)");
+  cmd->add_option("--prior-deg", a.prior_deg, "Gauge prior on the rotation corrections, degrees (default 5)");
+  cmd->add_option("--max-iterations", a.max_iterations, "Ceres iterations per solve (default 50)");
+  cmd->add_option("--min-matches", a.min_matches, "Matched observations a camera needs to be calibrated "
+                                                  "(default 30)");
+  cmd->add_option("--upsample", a.upsample, "Run SIFT on frames upsampled this much (default 2; 1 = off)");
+  cmd->add_flag("--json", a.json, "Print one JSON object on stdout");
+  cmd->callback([] {
+    set_json_mode(a.json);
+    const Rig nominal = load_rig(a.rig);
+    const auto frames = load_frames(a.frames, nominal);
+    calib::CalibrationOptions opt;
+    opt.scene = calib::parse_scene_model(a.scene);
+    bool share = false;
+    parse_mode("focal", a.focal, &opt.estimate_focal, &opt.share_focal);
+    parse_mode("center", a.center, &opt.estimate_center, &opt.share_center);
+    bool est_k = true;
+    parse_mode("distortion", a.distortion, &est_k, &share);
+    opt.share_distortion = share;
+    if (a.radial_terms < 0 || a.radial_terms > 3) throw std::invalid_argument("--radial-terms must be 0..3");
+    opt.radial_terms = est_k ? a.radial_terms : 0;
+    if (a.loss != "huber" && a.loss != "cauchy" && a.loss != "none")
+      throw std::invalid_argument("--loss must be huber, cauchy or none");
+    opt.loss = a.loss;
+    opt.loss_scale_px = a.loss_scale;
+    opt.match.ransac_threshold_px = a.ransac_px;
+    opt.prior_rotation_deg = a.prior_deg;
+    opt.max_iterations = a.max_iterations;
+    opt.min_observations = a.min_matches;
+    opt.features.upsample = a.upsample;
+    const calib::CalibrationResult r = calib::calibrate_rig(nominal, frames, opt);
+    save_rig(r.rig, a.out);
+    if (a.json) {
+      nlohmann::json per = nlohmann::json::array();
+      for (const auto& c : r.per_camera)
+        per.push_back({{"id", c.id}, {"rms_px", c.rms_px}, {"matches", c.matches}, {"calibrated", c.calibrated}});
+      print_json({{"cameras", r.rig.cameras.size()}, {"matches", r.matches}, {"inliers", r.inliers},
+                  {"rms_px", r.rms_px}, {"initial_rms_px", r.initial_rms_px}, {"scene", calib::to_string(r.scene)},
+                  {"pairs", r.pairs}, {"tracks", r.tracks}, {"observations", r.observations},
+                  {"rejected", r.rejected}, {"uncalibrated", r.uncalibrated_ids}, {"warnings", r.warnings},
+                  {"per_camera", per}, {"out", a.out}});
+    } else {
+      std::cout << fmt::format("{}: {} cameras ({} uncalibrated), {} matches, {} inliers, {} scene, reprojection RMS "
+                               "{:.3f} px (nominal rig {:.3f} px)\n",
+                               a.out, r.rig.cameras.size(), r.uncalibrated_ids.size(), r.matches, r.inliers,
+                               calib::to_string(r.scene), r.rms_px, r.initial_rms_px);
+    }
+  });
 }
 
 }  // namespace omma::app

@@ -65,10 +65,9 @@ void add_coverage_command(CLI::App& root) {
       grid.width = o->map_width;
       grid.height = rig.dome.sphere ? o->map_width / 2 : o->map_width / 4;
       const cv::Mat counts = design::coverage_count_map(rig, grid, distance);
-      const std::string title = fmt::format(
-          "{}: cameras seeing each direction at {:.2f} mm (R_vir {:.2f} mm); phi 0..360 deg left to "
-          "right, theta 0 (pole) at the top",
-          rig.name.empty() ? o->rig : rig.name, distance, st.r_virtual_mm);
+      const std::string title =
+          fmt::format("{}: cameras per direction at {:.2f} mm (R_vir {:.2f} mm)",
+                      rig.name.empty() ? o->rig : rig.name, distance, st.r_virtual_mm);
       write_image(o->map, design::render_coverage_map(counts, title));
       spdlog::info("wrote {}", o->map);
     }

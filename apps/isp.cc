@@ -1,5 +1,7 @@
 // omma isp: develop a raw RGGB Bayer frame (vignetting, demosaicing, white balance), or evaluate the
 // demosaicing methods on a photograph (thesis §5.1.2, appendix A, Table A.1).
+#include "omma/isp/isp.h"
+
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -9,7 +11,6 @@
 #include "apps/command.h"
 #include "omma/core/io.h"
 #include "omma/core/log.h"
-#include "omma/isp/isp.h"
 
 namespace omma::app {
 
@@ -21,6 +22,7 @@ struct IspArgs {
   int bits = 10;
   int border = 8;
   bool rgb565 = false;
+  bool srgb = false;
   bool json = false;
 };
 
@@ -50,24 +52,35 @@ void run_isp(const IspArgs& a) {
     }
     return;
   }
-  if (a.in.empty() || a.out.empty()) throw std::invalid_argument("give --in RAW and --out RGB, or --eval PHOTO");
+  if (a.in.empty() || a.out.empty())
+    throw std::invalid_argument("give --in RAW and --out RGB, or --eval PHOTO");
   isp::IspOptions o;
   o.demosaic = isp::parse_demosaic(a.demosaic);
   o.awb = isp::parse_awb(a.awb);
   o.bits = a.bits;
+  o.srgb = a.srgb;
   const cv::Mat raw = read_image(a.in);
   if (raw.channels() != 1 || raw.depth() != CV_16U)
-    throw std::invalid_argument("'" + a.in + "' is not a raw Bayer frame: expected a 16-bit single-channel "
-                                "PNG with " + std::to_string(a.bits) + "-bit RGGB values, got " +
+    throw std::invalid_argument("'" + a.in +
+                                "' is not a raw Bayer frame: expected a 16-bit single-channel "
+                                "PNG with " +
+                                std::to_string(a.bits) + "-bit RGGB values, got " +
                                 std::to_string(raw.channels()) + " channel(s) of " +
-                                (raw.depth() == CV_8U ? "8" : raw.depth() == CV_16U ? "16" : "other") +
+                                (raw.depth() == CV_8U    ? "8"
+                                 : raw.depth() == CV_16U ? "16"
+                                                         : "other") +
                                 " bits");
   if (!a.flat.empty()) o.flat_gain = isp::load_flat_field(a.flat);
   const cv::Mat rgb = isp::develop(raw, o);
   write_image(a.out, a.rgb565 ? isp::pack_rgb565(rgb) : rgb);
   if (a.json)
-    print_json({{"in", a.in}, {"out", a.out}, {"demosaic", a.demosaic}, {"awb", a.awb},
-                {"width", raw.cols}, {"height", raw.rows}, {"rgb565", a.rgb565}});
+    print_json({{"in", a.in},
+                {"out", a.out},
+                {"demosaic", a.demosaic},
+                {"awb", a.awb},
+                {"width", raw.cols},
+                {"height", raw.rows},
+                {"rgb565", a.rgb565}});
   else
     spdlog::info("isp: {} -> {} ({}x{}, {}, {})", a.in, a.out, raw.cols, raw.rows, a.demosaic, a.awb);
 }
@@ -85,15 +98,24 @@ void add_isp_command(CLI::App& root) {
   cmd->add_option("--in", a->in, "Raw Bayer frame (16-bit single-channel PNG, RGGB)");
   cmd->add_option("--out", a->out, "Output image (8-bit BGR; written atomically)");
   cmd->add_option("--demosaic", a->demosaic, "bilinear | hybrid | ah | cc")
-      ->check(CLI::IsMember({"bilinear", "hybrid", "ah", "cc"}))->capture_default_str();
+      ->check(CLI::IsMember({"bilinear", "hybrid", "ah", "cc"}))
+      ->capture_default_str();
   cmd->add_option("--awb", a->awb, "White balance: none | grayworld | whitepatch")
-      ->check(CLI::IsMember({"none", "grayworld", "whitepatch"}))->capture_default_str();
-  cmd->add_option("--flat", a->flat, "Flat-field raw frame (white target, same size) for vignetting correction");
-  cmd->add_option("--bits", a->bits, "Bit depth of the raw values")->check(CLI::Range(8, 16))->capture_default_str();
+      ->check(CLI::IsMember({"none", "grayworld", "whitepatch"}))
+      ->capture_default_str();
+  cmd->add_option("--flat", a->flat,
+                  "Flat-field raw frame (white target, same size) for vignetting correction");
+  cmd->add_option("--bits", a->bits, "Bit depth of the raw values")
+      ->check(CLI::Range(8, 16))
+      ->capture_default_str();
+  cmd->add_flag(
+      "--srgb", a->srgb,
+      "sRGB-encode the output (for linear raw such as the simulator's) instead of the 8 linear MSBs");
   cmd->add_flag("--rgb565", a->rgb565, "Write the RGB565-packed frame (16-bit single channel, §5.2) instead");
   cmd->add_option("--eval", a->eval, "Photograph to evaluate the demosaicing methods on (instead of --in)");
   cmd->add_option("--border", a->border, "Pixels left out on each side for --eval PSNR")
-      ->check(CLI::Range(0, 1000))->capture_default_str();
+      ->check(CLI::Range(0, 1000))
+      ->capture_default_str();
   cmd->add_flag("--json", a->json, "Print one JSON object on stdout");
   cmd->callback([a] { run_isp(*a); });
 }

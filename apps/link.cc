@@ -32,7 +32,8 @@ void add_config_options(CLI::App* cmd, isp::LinkConfig& c) {
   cmd->add_option("--width", c.width, "Pixels per row")->capture_default_str();
   cmd->add_option("--height", c.height, "Rows per frame")->capture_default_str();
   cmd->add_option("--bits", c.bits, "Bits per pixel (ADC resolution)")->capture_default_str();
-  cmd->add_option("--row-gap-pp", c.row_gap_pp, "Zeros before each row, pixel periods (PP)")->capture_default_str();
+  cmd->add_option("--row-gap-pp", c.row_gap_pp, "Zeros before each row, pixel periods (PP)")
+      ->capture_default_str();
   cmd->add_option("--eof-pp", c.eof_pp, "End-of-frame marker, PP")->capture_default_str();
   cmd->add_option("--config-pp", c.config_pp, "Configuration window, PP")->capture_default_str();
   cmd->add_option("--resync-pp", c.resync_pp, "Resynchronisation pattern, PP")->capture_default_str();
@@ -46,8 +47,10 @@ void run_encode(const LinkArgs& a) {
     throw std::invalid_argument("--flip-rate and --drop-rate must be in [0, 1]");
   const cv::Mat raw = read_image(a.in);
   if (raw.channels() != 1 || raw.depth() != CV_16U)
-    throw std::invalid_argument("'" + a.in + "' is not a raw frame: expected a 16-bit single-channel PNG "
-                                "with " + std::to_string(a.cfg.bits) + "-bit values");
+    throw std::invalid_argument("'" + a.in +
+                                "' is not a raw frame: expected a 16-bit single-channel PNG "
+                                "with " +
+                                std::to_string(a.cfg.bits) + "-bit values");
   if (raw.cols != a.cfg.width || raw.rows != a.cfg.height)
     throw std::invalid_argument("'" + a.in + "' is " + std::to_string(raw.cols) + "x" +
                                 std::to_string(raw.rows) + " but the link carries " +
@@ -94,7 +97,9 @@ void run_decode(const LinkArgs& a) {
                              " bytes): not a " + std::to_string(a.cfg.width) + "x" +
                              std::to_string(a.cfg.height) + " link stream, or damaged beyond recovery");
   if (a.json)
-    print_json({{"frames", st.frames}, {"rows_ok", st.rows_ok}, {"rows_damaged", st.rows_damaged},
+    print_json({{"frames", st.frames},
+                {"rows_ok", st.rows_ok},
+                {"rows_damaged", st.rows_damaged},
                 {"bytes", st.bytes}});
   else
     std::printf("frames %d, rows ok %ld, rows damaged %ld, bytes %zu\n", st.frames, st.rows_ok,
@@ -120,7 +125,8 @@ void add_link_command(CLI::App& root) {
   e->add_option("--frames", enc->repeat, "Send the frame this many times")->capture_default_str();
   e->add_option("--flip-rate", enc->flip_rate, "Probability of flipping each line sample (channel errors)")
       ->capture_default_str();
-  e->add_option("--drop-rate", enc->drop_rate, "Probability of losing each line sample")->capture_default_str();
+  e->add_option("--drop-rate", enc->drop_rate, "Probability of losing each line sample")
+      ->capture_default_str();
   e->add_option("--seed", enc->seed, "Seed for the impairments")->capture_default_str();
   e->add_flag("--json", enc->json, "Print one JSON object on stdout");
   e->callback([enc] { run_encode(*enc); });
@@ -128,7 +134,8 @@ void add_link_command(CLI::App& root) {
   auto dec = std::make_shared<LinkArgs>();
   auto* d = cmd->add_subcommand("decode", "Link bit stream file -> frames OUT_PREFIX_000.png, ... (16-bit)");
   d->add_option("IN", dec->in, "Bit stream file")->required();
-  d->add_option("OUT_PREFIX", dec->out, "Output prefix; frames are written as OUT_PREFIX_NNN.png")->required();
+  d->add_option("OUT_PREFIX", dec->out, "Output prefix; frames are written as OUT_PREFIX_NNN.png")
+      ->required();
   add_config_options(d, dec->cfg);
   d->add_flag("--no-conceal", dec->no_conceal,
               "Leave damaged rows black instead of copying the nearest intact row of the same colour");

@@ -3,13 +3,13 @@
 // OpenCV's cvtColor bilinear Bayer conversion (16-bit in, no white balance) on the same frames,
 // also over the frames with oneTBB, in the same run. The target is >= 100 sets/s on 2 cores.
 // Also: the plain reference path, and the sensor-link decoder (one 250x250 frame).
-#include <filesystem>
-#include <vector>
-
 #include <benchmark/benchmark.h>
+#include <tbb/parallel_for.h>
+
+#include <filesystem>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
-#include <tbb/parallel_for.h>
+#include <vector>
 
 #include "omma/isp/isp.h"
 
@@ -72,12 +72,34 @@ void BM_OpenCvBilinearSet(benchmark::State& state) {
   const auto& in = frames();
   std::vector<cv::Mat> out(in.size());
   for (auto _ : state) {
-    tbb::parallel_for(size_t(0), in.size(), [&](size_t i) { cv::cvtColor(in[i], out[i], cv::COLOR_BayerBG2BGR); });
+    tbb::parallel_for(size_t(0), in.size(),
+                      [&](size_t i) { cv::cvtColor(in[i], out[i], cv::COLOR_BayerBG2BGR); });
     benchmark::DoNotOptimize(out.data());
   }
   set_counters(state);
 }
 BENCHMARK(BM_OpenCvBilinearSet)->UseRealTime()->Unit(benchmark::kMillisecond);
+
+// One frame on one thread (CPU cost per frame, for the fast path's tuning).
+void BM_IspFrame(benchmark::State& state) {
+  omma::isp::IspOptions o;
+  o.demosaic = Demosaic(state.range(0));
+  o.awb = Awb::kGrayWorld;
+  const cv::Mat& f = frames()[3];
+  for (auto _ : state) benchmark::DoNotOptimize(omma::isp::develop(f, o).data);
+  state.SetLabel(omma::isp::demosaic_name(o.demosaic) + "+grayworld");
+}
+BENCHMARK(BM_IspFrame)->ArgName("method")->DenseRange(0, 3)->Unit(benchmark::kMicrosecond);
+
+void BM_OpenCvBilinearFrame(benchmark::State& state) {
+  const cv::Mat& f = frames()[3];
+  cv::Mat out;
+  for (auto _ : state) {
+    cv::cvtColor(f, out, cv::COLOR_BayerBG2BGR);
+    benchmark::DoNotOptimize(out.data);
+  }
+}
+BENCHMARK(BM_OpenCvBilinearFrame)->Unit(benchmark::kMicrosecond);
 
 // The plain per-pixel reference (one thread), for scale.
 void BM_IspReferenceSet(benchmark::State& state) {
@@ -97,7 +119,8 @@ void BM_LinkDecodeFrame(benchmark::State& state) {
     const auto st = omma::isp::decode_link(stream.bytes, c, [](const omma::isp::LinkFrame&) {});
     benchmark::DoNotOptimize(st.rows_ok);
   }
-  state.counters["frames_per_s"] = benchmark::Counter(double(state.iterations()), benchmark::Counter::kIsRate);
+  state.counters["frames_per_s"] =
+      benchmark::Counter(double(state.iterations()), benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_LinkDecodeFrame)->UseRealTime()->Unit(benchmark::kMillisecond);
 

@@ -34,4 +34,11 @@ SRC
   touch "$out/corpus/seed_valid"
 fi
 cd "$out"
-./link_fuzz -runs="$runs" -max_len=4096 -timeout=10 -print_final_stats=1 corpus 2>&1 | tail -25
+set +e
+./link_fuzz -runs="$runs" -max_len=4096 -timeout=10 -print_final_stats=1 corpus > fuzz.log 2>&1
+rc=$?
+set -e
+grep -E "^#[0-9]+ +(DONE|pulse)|Done [0-9]+ runs|^stat::|ERROR|SUMMARY|crash-|timeout-" fuzz.log | tail -12
+crashes=$(ls crash-* leak-* timeout-* oom-* 2>/dev/null | wc -l)
+echo "fuzz: exit status $rc, executions requested $runs, crash/leak/timeout/oom files: $crashes (log: $out/fuzz.log)"
+exit $rc

@@ -1,11 +1,11 @@
 // CLI tests for `omma isp` and `omma link` (thesis §5.1, appendix A).
+#include <gtest/gtest.h>
+
 #include <filesystem>
 #include <fstream>
-#include <random>
-
-#include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <random>
 
 #include "tests/cli/cli_util.h"
 
@@ -54,6 +54,83 @@ TEST(IspCli, DevelopsRawFrameAndMatchesMethodsOptions) {
   fs::remove_all(dir);
 }
 
+// The simulator's raw frames (linear 10-bit RGGB) developed with --srgb match its own sRGB frames
+// (cam_XX.png, rendered from the same signal without a mosaic) up to the demosaicing error.
+TEST(IspCli, DevelopsSimulatorRawFrames) {
+  const fs::path dir = temp_dir("ispsim");
+  RunResult r = run_omma("design --method max-volume --cam-size 1x1x2 --out " + (dir / "rig.json").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = run_omma("simulate --rig " + (dir / "rig.json").string() + " --scene photo:" + data_dir() +
+               "/louvre.jpg --out " + (dir / "sim").string() + " --raw --no-truth --supersample 2 --seed 3");
+  if (r.exit_code != 0 && !fs::exists(data_dir() + "/louvre.jpg")) GTEST_SKIP();
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  double worst_cc = 99, worst_bl = 99, sum_cc = 0, sum_bl = 0;
+  const int cams[] = {0, 5, 14, 20};
+  for (int cam : cams) {
+    char name[32];
+    std::snprintf(name, sizeof name, "cam_%02d", cam);
+    const fs::path raw = dir / "sim" / (std::string(name) + "_raw.png");
+    const cv::Mat ref = cv::imread((dir / "sim" / (std::string(name) + ".png")).string(), cv::IMREAD_COLOR);
+    ASSERT_FALSE(ref.empty());
+    for (const char* m : {"bilinear", "cc"}) {
+      const fs::path out = dir / (std::string(name) + "_" + m + ".png");
+      r = run_omma("isp --in " + raw.string() + " --demosaic " + m + " --awb none --srgb --out " +
+                   out.string());
+      ASSERT_EQ(r.exit_code, 0) << r.err;
+      const cv::Mat got = cv::imread(out.string(), cv::IMREAD_COLOR);
+      const cv::Rect roi(8, 8, ref.cols - 16, ref.rows - 16);
+      const double p = cv::PSNR(got(roi), ref(roi));
+      if (std::string(m) == "cc") {
+        worst_cc = std::min(worst_cc, p);
+        sum_cc += p;
+      } else {
+        worst_bl = std::min(worst_bl, p);
+        sum_bl += p;
+      }
+    }
+  }
+  std::printf(
+      "simulator raw -> sRGB vs cam_XX.png: bilinear mean %.2f dB (worst %.2f), cc mean %.2f dB (worst "
+      "%.2f)\n",
+      sum_bl / 4, worst_bl, sum_cc / 4, worst_cc);
+  EXPECT_GT(worst_cc, 29.5);
+  EXPECT_GT(sum_cc, sum_bl);
+  fs::remove_all(dir);
+}
+
+TEST(IspCli, FlatFieldRemovesVignetting) {
+  const fs::path dir = temp_dir("ispflat");
+  const int W = 250, H = 250;
+  cv::Mat flat(H, W, CV_16UC1), scene(H, W, CV_16UC1);
+  for (int y = 0; y < H; ++y)
+    for (int x = 0; x < W; ++x) {
+      const double r2 = (std::pow(x + 0.5 - W / 2.0, 2) + std::pow(y + 0.5 - H / 2.0, 2)) / (W * W / 4.0);
+      const double fall = 1.0 / std::pow(1.0 + 0.4 * r2, 2);
+      flat.at<uint16_t>(y, x) = uint16_t(950 * fall);
+      scene.at<uint16_t>(y, x) = uint16_t(500 * fall);
+    }
+  cv::imwrite((dir / "flat.png").string(), flat);
+  cv::imwrite((dir / "scene.png").string(), scene);
+  auto ratio = [&](const std::string& extra) {
+    const fs::path out = dir / "out.png";
+    const RunResult r = run_omma("isp --in " + (dir / "scene.png").string() + " --awb none --out " +
+                                 out.string() + " " + extra);
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    const cv::Mat im = cv::imread(out.string(), cv::IMREAD_COLOR);
+    fs::remove(out);
+    return cv::mean(im(cv::Rect(4, 4, 30, 30)))[1] / cv::mean(im(cv::Rect(105, 105, 40, 40)))[1];
+  };
+  EXPECT_LT(ratio(""), 0.7);
+  EXPECT_NEAR(ratio("--flat " + (dir / "flat.png").string()), 1.0, 0.03);
+  cv::imwrite((dir / "small.png").string(), cv::Mat(100, 100, CV_16UC1, cv::Scalar(900)));
+  const RunResult bad = run_omma("isp --in " + (dir / "scene.png").string() + " --flat " +
+                                 (dir / "small.png").string() + " --out " + (dir / "o.png").string());
+  EXPECT_EQ(bad.exit_code, 1);
+  EXPECT_NE(bad.err.find("flat"), std::string::npos) << bad.err;
+  EXPECT_FALSE(fs::exists(dir / "o.png"));
+  fs::remove_all(dir);
+}
+
 TEST(IspCli, EvalPrintsTableA1Json) {
   const fs::path dir = temp_dir("ispeval");
   cv::Mat photo = cv::imread(data_dir() + "/lake.jpg", cv::IMREAD_COLOR);
@@ -71,7 +148,8 @@ TEST(IspCli, EvalPrintsTableA1Json) {
       EXPECT_LT(j["methods"][k][c].get<double>(), 80.0);
     }
   // our bilinear is OpenCV's bilinear; the gradient methods beat it
-  EXPECT_NEAR(j["methods"]["bilinear"]["r"].get<double>(), j["methods"]["opencv_bilinear"]["r"].get<double>(), 0.011);
+  EXPECT_NEAR(j["methods"]["bilinear"]["r"].get<double>(), j["methods"]["opencv_bilinear"]["r"].get<double>(),
+              0.011);
   EXPECT_GT(j["methods"]["cc"]["r"].get<double>(), j["methods"]["bilinear"]["r"].get<double>() + 2.0);
   fs::remove_all(dir);
 }
@@ -86,15 +164,16 @@ TEST(IspCli, BadInputsFailClearlyWithoutOutput) {
   struct Case {
     std::string in, expect;
   };
-  for (const Case& c : {Case{"odd.png", "even"}, Case{"rgb8.png", "16-bit single-channel"},
-                        Case{"deep.png", "bits"}, Case{"junk.png", "cannot read"},
-                        Case{"missing.png", "does not exist"}}) {
+  for (const Case& c :
+       {Case{"odd.png", "even"}, Case{"rgb8.png", "16-bit single-channel"}, Case{"deep.png", "bits"},
+        Case{"junk.png", "cannot read"}, Case{"missing.png", "does not exist"}}) {
     const RunResult r = run_omma("isp --in " + (dir / c.in).string() + " --out " + out.string());
     EXPECT_EQ(r.exit_code, 1) << c.in;
     EXPECT_NE(r.err.find(c.expect), std::string::npos) << c.in << ": " << r.err;
     EXPECT_FALSE(fs::exists(out)) << c.in;
   }
-  const RunResult m = run_omma("isp --in " + (dir / "odd.png").string() + " --demosaic nearest --out " + out.string());
+  const RunResult m =
+      run_omma("isp --in " + (dir / "odd.png").string() + " --demosaic nearest --out " + out.string());
   EXPECT_NE(m.exit_code, 0);
   EXPECT_FALSE(fs::exists(out));
   fs::remove_all(dir);
@@ -105,8 +184,8 @@ TEST(LinkCli, EncodeDecodeRoundTripAndDamage) {
   const cv::Mat raw = make_raw(250, 250);
   cv::imwrite((dir / "raw.png").string(), raw);
   // clean, 2 frames
-  RunResult e = run_omma("link encode " + (dir / "raw.png").string() + " " + (dir / "s.bin").string() +
-                         " --frames 2");
+  RunResult e =
+      run_omma("link encode " + (dir / "raw.png").string() + " " + (dir / "s.bin").string() + " --frames 2");
   ASSERT_EQ(e.exit_code, 0) << e.err;
   RunResult d = run_omma("link decode " + (dir / "s.bin").string() + " " + (dir / "f").string() + " --json");
   ASSERT_EQ(d.exit_code, 0) << d.err;
@@ -147,7 +226,8 @@ TEST(LinkCli, GarbageAndTruncatedFiles) {
     for (int i = 0; i < 300000; ++i) g.put(char(rng()));
   }
   std::ofstream(dir / "empty.bin").close();
-  RunResult r = run_omma("link decode " + (dir / "garbage.bin").string() + " " + (dir / "x").string() + " --json", 60);
+  RunResult r =
+      run_omma("link decode " + (dir / "garbage.bin").string() + " " + (dir / "x").string() + " --json", 60);
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("no frame found"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir / "x_000.png"));
@@ -159,7 +239,8 @@ TEST(LinkCli, GarbageAndTruncatedFiles) {
   EXPECT_NE(r.err.find("does not exist"), std::string::npos) << r.err;
   // truncated stream: the rows that arrived are kept, the rest counted as damaged
   cv::imwrite((dir / "raw.png").string(), make_raw(250, 250));
-  ASSERT_EQ(run_omma("link encode " + (dir / "raw.png").string() + " " + (dir / "s.bin").string()).exit_code, 0);
+  ASSERT_EQ(run_omma("link encode " + (dir / "raw.png").string() + " " + (dir / "s.bin").string()).exit_code,
+            0);
   fs::resize_file(dir / "s.bin", 100000);
   r = run_omma("link decode " + (dir / "s.bin").string() + " " + (dir / "t").string() + " --json");
   ASSERT_EQ(r.exit_code, 0) << r.err;

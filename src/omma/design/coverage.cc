@@ -43,7 +43,8 @@ std::vector<Cone> make_cones(const Rig& rig) {
 inline bool sees(const Cone& k, const Vec3& X) {
   const Vec3 d = X - k.p;
   const double dt = d.dot(k.t);
-  return dt >= 0 && dt * dt >= k.c2 * d.squaredNorm();
+  // Inclusive cone (relative tolerance 1e-9): a point exactly on the rim, e.g. at R_vir, is seen.
+  return dt >= 0 && dt * dt >= k.c2 * d.squaredNorm() * (1 - 1e-9);
 }
 
 struct Interval {
@@ -236,7 +237,8 @@ CoverageStats analyze_coverage(const Rig& rig, double distance_mm, double step_r
     total += s.weight(j) * s.cols;
     st.r_virtual_mm = std::max(st.r_virtual_mm, r.max_covered_from);
   }
-  st.covered_fraction = covered / total;
+  // Exactly 1 when no sample has a gap (the weighted sum itself carries rounding).
+  st.covered_fraction = st.min_cameras >= 1 ? 1.0 : covered / total;
   st.mean_cameras = weighted / total;
   return st;
 }

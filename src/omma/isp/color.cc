@@ -2,10 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <opencv2/imgproc.hpp>
 #include <stdexcept>
 #include <vector>
-
-#include <opencv2/imgproc.hpp>
 
 namespace omma::isp {
 
@@ -18,9 +17,12 @@ Awb parse_awb(const std::string& name) {
 
 std::string awb_name(Awb a) {
   switch (a) {
-    case Awb::kNone: return "none";
-    case Awb::kGrayWorld: return "grayworld";
-    case Awb::kWhitePatch: return "whitepatch";
+    case Awb::kNone:
+      return "none";
+    case Awb::kGrayWorld:
+      return "grayworld";
+    case Awb::kWhitePatch:
+      return "whitepatch";
   }
   return "?";
 }
@@ -66,31 +68,46 @@ WbGains white_patch_gains_reference(const cv::Mat& bgr16) {
   return {gain_q12(double(mx[1]), double(mx[2])), gain_q12(double(mx[1]), double(mx[0]))};  // (A.34)-(A.35)
 }
 
-WbGains white_patch_gains(const cv::Mat& bgr16) {
-  check_bgr16(bgr16, "white_patch_gains");
-  const int W = bgr16.cols, H = bgr16.rows;
+WbGains white_patch_gains_planes(const cv::Mat planes[3]) {
+  const int W = planes[0].cols, H = planes[0].rows;
   std::array<int64_t, 3> mx{};
   if (W < 4 || H < 4) return {};
-  // Column sums over 4 rows, slid down the image; then a 4-wide running sum along each row.
-  std::vector<int32_t> col(size_t(W) * 3, 0);
-  for (int y = 0; y < H; ++y) {
-    const uint16_t* add = bgr16.ptr<uint16_t>(y);
-    for (int i = 0; i < 3 * W; ++i) col[size_t(i)] += add[i];
-    if (y >= 4) {
-      const uint16_t* sub = bgr16.ptr<uint16_t>(y - 4);
-      for (int i = 0; i < 3 * W; ++i) col[size_t(i)] -= sub[i];
-    }
-    if (y < 3) continue;
-    for (int c = 0; c < 3; ++c) {
-      int64_t s = col[size_t(c)] + col[size_t(3 + c)] + col[size_t(6 + c)] + col[size_t(9 + c)];
-      mx[c] = std::max(mx[c], s);
-      for (int x = 4; x < W; ++x) {
-        s += col[size_t(3 * x + c)] - col[size_t(3 * (x - 4) + c)];
-        mx[c] = std::max(mx[c], s);
+  std::vector<int32_t> col(static_cast<size_t>(W));
+  for (int c = 0; c < 3; ++c) {
+    if (planes[c].type() != CV_16UC1 || planes[c].size() != planes[0].size())
+      throw std::invalid_argument("white_patch_gains: planes must be CV_16UC1 of one size");
+    // Column sums over the last 4 rows (vectorisable), then a 4-wide running sum along the row.
+    std::fill(col.begin(), col.end(), 0);
+    int32_t* __restrict cs = col.data();
+    for (int y = 0; y < H; ++y) {
+      const uint16_t* __restrict add = planes[c].ptr<uint16_t>(y);
+      if (y >= 4) {
+        const uint16_t* __restrict sub = planes[c].ptr<uint16_t>(y - 4);
+#pragma GCC ivdep
+        for (int x = 0; x < W; ++x) cs[x] += int32_t(add[x]) - int32_t(sub[x]);
+      } else {
+#pragma GCC ivdep
+        for (int x = 0; x < W; ++x) cs[x] += add[x];
       }
+      if (y < 3) continue;
+      int64_t s = int64_t(cs[0]) + cs[1] + cs[2] + cs[3];
+      int64_t m = s;
+      for (int x = 4; x < W; ++x) {
+        s += cs[x] - cs[x - 4];
+        m = std::max(m, s);
+      }
+      mx[size_t(c)] = std::max(mx[size_t(c)], m);
     }
   }
   return {gain_q12(double(mx[1]), double(mx[2])), gain_q12(double(mx[1]), double(mx[0]))};
+}
+
+WbGains white_patch_gains(const cv::Mat& bgr16) {
+  check_bgr16(bgr16, "white_patch_gains");
+  std::vector<cv::Mat> ch;
+  cv::split(bgr16, ch);
+  const cv::Mat planes[3] = {ch[0], ch[1], ch[2]};
+  return white_patch_gains_planes(planes);
 }
 
 void apply_gains(cv::Mat& bgr16, const WbGains& g, int maxv) {
@@ -136,8 +153,8 @@ cv::Mat flat_field_gain(const cv::Mat& flat_raw) {
 cv::Mat apply_flat_field(const cv::Mat& raw16, const cv::Mat& gain, int maxv) {
   if (raw16.type() != CV_16UC1 || gain.type() != CV_16UC1 || raw16.size() != gain.size())
     throw std::invalid_argument("flat-field gain is " + std::to_string(gain.cols) + "x" +
-                                std::to_string(gain.rows) + ", the raw frame " +
-                                std::to_string(raw16.cols) + "x" + std::to_string(raw16.rows) +
+                                std::to_string(gain.rows) + ", the raw frame " + std::to_string(raw16.cols) +
+                                "x" + std::to_string(raw16.rows) +
                                 " (both must be 16-bit single-channel of one size)");
   cv::Mat out(raw16.size(), CV_16UC1);
   for (int y = 0; y < raw16.rows; ++y) {

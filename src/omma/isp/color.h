@@ -8,9 +8,8 @@
 
 #include <array>
 #include <cstdint>
-#include <string>
-
 #include <opencv2/core.hpp>
+#include <string>
 
 namespace omma::isp {
 
@@ -35,6 +34,8 @@ WbGains gray_world_gains(const cv::Mat& bgr16);
 // White patch (A.31-A.35): each channel low-passed by the 4x4 box mean over every position where
 // the 4x4 window fits (no border padding), then the maxima; gains Gmax/Rmax and Gmax/Bmax.
 WbGains white_patch_gains(const cv::Mat& bgr16);
+// The same from B, G, R planes (CV_16UC1 each), as develop() holds them.
+WbGains white_patch_gains_planes(const cv::Mat planes[3]);
 // Plain reference of white_patch_gains (nested loops over every 4x4 window).
 WbGains white_patch_gains_reference(const cv::Mat& bgr16);
 

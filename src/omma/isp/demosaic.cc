@@ -1,10 +1,9 @@
 #include "omma/isp/demosaic.h"
 
 #include <cstdlib>
-#include <stdexcept>
-
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
+#include <stdexcept>
 
 namespace omma::isp {
 
@@ -13,16 +12,19 @@ Demosaic parse_demosaic(const std::string& name) {
   if (name == "hybrid") return Demosaic::kHybrid;
   if (name == "ah") return Demosaic::kAdamsHamilton;
   if (name == "cc") return Demosaic::kColourCorrelation;
-  throw std::invalid_argument("unknown demosaicing method '" + name +
-                              "' (use bilinear, hybrid, ah or cc)");
+  throw std::invalid_argument("unknown demosaicing method '" + name + "' (use bilinear, hybrid, ah or cc)");
 }
 
 std::string demosaic_name(Demosaic m) {
   switch (m) {
-    case Demosaic::kBilinear: return "bilinear";
-    case Demosaic::kHybrid: return "hybrid";
-    case Demosaic::kAdamsHamilton: return "ah";
-    case Demosaic::kColourCorrelation: return "cc";
+    case Demosaic::kBilinear:
+      return "bilinear";
+    case Demosaic::kHybrid:
+      return "hybrid";
+    case Demosaic::kAdamsHamilton:
+      return "ah";
+    case Demosaic::kColourCorrelation:
+      return "cc";
   }
   return "?";
 }
@@ -33,17 +35,17 @@ int opencv_bayer_code_ea() { return cv::COLOR_BayerBG2BGR_EA; }
 void check_bayer(const cv::Mat& raw, int bits) {
   if (raw.empty()) throw std::invalid_argument("raw Bayer frame is empty");
   if (raw.channels() != 1)
-    throw std::invalid_argument("raw Bayer frame must have 1 channel, got " +
-                                std::to_string(raw.channels()) +
-                                " (expected a 16-bit single-channel RGGB image with " +
-                                std::to_string(bits) + "-bit values)");
+    throw std::invalid_argument("raw Bayer frame must have 1 channel, got " + std::to_string(raw.channels()) +
+                                " (expected a 16-bit single-channel RGGB image with " + std::to_string(bits) +
+                                "-bit values)");
   if (raw.depth() != CV_16U && raw.depth() != CV_8U)
     throw std::invalid_argument("raw Bayer frame must be 16-bit (or 8-bit) unsigned, got OpenCV depth " +
                                 std::to_string(raw.depth()));
   if (raw.cols % 2 || raw.rows % 2 || raw.cols < 4 || raw.rows < 4)
-    throw std::invalid_argument("raw Bayer frame must have even width and height of at least 4 (RGGB "
-                                "2x2 cells), got " + std::to_string(raw.cols) + "x" +
-                                std::to_string(raw.rows));
+    throw std::invalid_argument(
+        "raw Bayer frame must have even width and height of at least 4 (RGGB "
+        "2x2 cells), got " +
+        std::to_string(raw.cols) + "x" + std::to_string(raw.rows));
   if (bits < 1 || bits > 16) throw std::invalid_argument("bits must be in 1..16");
   double mx = 0;
   cv::minMaxLoc(raw, nullptr, &mx);
@@ -113,10 +115,14 @@ std::array<int, 3> bilinear_ref(const Window& v, Site s) {
   const int diag = v(-1, -1) + v(-1, 1) + v(1, -1) + v(1, 1);  // R7 + R9 + R17 + R19
   const int horiz = v(0, -1) + v(0, 1), vert = v(-1, 0) + v(1, 0);
   switch (s) {
-    case kR: return {c, (cross + 2) >> 2, (diag + 2) >> 2};               // (5.2), (5.5), (5.8)
-    case kB: return {(diag + 2) >> 2, (cross + 2) >> 2, c};               // (5.1), (5.5), (5.7)
-    case kGr: return {(horiz + 1) >> 1, c, (vert + 1) >> 1};              // (5.3), (5.6), (5.9)
-    case kGb: return {(vert + 1) >> 1, c, (horiz + 1) >> 1};              // (5.4), (5.6), (5.10)
+    case kR:
+      return {c, (cross + 2) >> 2, (diag + 2) >> 2};  // (5.2), (5.5), (5.8)
+    case kB:
+      return {(diag + 2) >> 2, (cross + 2) >> 2, c};  // (5.1), (5.5), (5.7)
+    case kGr:
+      return {(horiz + 1) >> 1, c, (vert + 1) >> 1};  // (5.3), (5.6), (5.9)
+    case kGb:
+      return {(vert + 1) >> 1, c, (horiz + 1) >> 1};  // (5.4), (5.6), (5.10)
   }
   return {0, 0, 0};
 }
@@ -141,10 +147,14 @@ std::array<int, 3> hybrid_ref(const Window& v, Site s, int maxv) {
   const int along_row = div16(8 * horiz + 10 * c - 2 * far_h - 2 * diag + far_v);
   const int along_col = div16(8 * vert + 10 * c - 2 * far_v - 2 * diag + far_h);
   switch (s) {
-    case kR: return {c, g_at_rb, x_at_xb};
-    case kB: return {x_at_xb, g_at_rb, c};
-    case kGr: return {along_row, c, along_col};
-    case kGb: return {along_col, c, along_row};
+    case kR:
+      return {c, g_at_rb, x_at_xb};
+    case kB:
+      return {x_at_xb, g_at_rb, c};
+    case kGr:
+      return {along_row, c, along_col};
+    case kGb:
+      return {along_col, c, along_row};
   }
   return {0, 0, 0};
 }
@@ -233,8 +243,9 @@ cv::Mat demosaic_reference(const cv::Mat& raw_in, Demosaic method, int bits) {
     for (int y = 0; y < raw.rows; ++y)
       for (int x = 0; x < raw.cols; ++x) {
         const Window v{raw, y, x};
-        put(out, y, x, method == Demosaic::kBilinear ? bilinear_ref(v, site_at(y, x))
-                                                     : hybrid_ref(v, site_at(y, x), maxv));
+        put(out, y, x,
+            method == Demosaic::kBilinear ? bilinear_ref(v, site_at(y, x))
+                                          : hybrid_ref(v, site_at(y, x), maxv));
       }
     return out;
   }
@@ -251,13 +262,19 @@ cv::Mat demosaic_reference(const cv::Mat& raw_in, Demosaic method, int bits) {
       const Window v{raw, y, x}, g{green, y, x};
       const int c = v(0, 0), gc = g(0, 0);
       switch (site_at(y, x)) {
-        case kR: put(out, y, x, {c, gc, chroma_ah_ref(v, g, true, false, maxv)}); break;
-        case kB: put(out, y, x, {chroma_ah_ref(v, g, true, false, maxv), gc, c}); break;
+        case kR:
+          put(out, y, x, {c, gc, chroma_ah_ref(v, g, true, false, maxv)});
+          break;
+        case kB:
+          put(out, y, x, {chroma_ah_ref(v, g, true, false, maxv), gc, c});
+          break;
         case kGr:  // red left/right, blue up/down
-          put(out, y, x, {chroma_ah_ref(v, g, false, true, maxv), gc, chroma_ah_ref(v, g, false, false, maxv)});
+          put(out, y, x,
+              {chroma_ah_ref(v, g, false, true, maxv), gc, chroma_ah_ref(v, g, false, false, maxv)});
           break;
         case kGb:  // red up/down, blue left/right
-          put(out, y, x, {chroma_ah_ref(v, g, false, false, maxv), gc, chroma_ah_ref(v, g, false, true, maxv)});
+          put(out, y, x,
+              {chroma_ah_ref(v, g, false, false, maxv), gc, chroma_ah_ref(v, g, false, true, maxv)});
           break;
       }
     }
@@ -425,12 +442,12 @@ void ah_fast(const cv::Mat& pad, cv::Mat& out, bool cc, int maxv, std::array<int
     };
     if (y % 2 == 0) {
       for (int x = 0; x < W; x += 2) {
-        store(o + 3 * x, c[x], gc[x], diagonal(x), sb, sg, sr);                    // R site
+        store(o + 3 * x, c[x], gc[x], diagonal(x), sb, sg, sr);                             // R site
         store(o + 3 * (x + 1), along_row(x + 1), gc[x + 1], along_col(x + 1), sb, sg, sr);  // Gr
       }
     } else {
       for (int x = 0; x < W; x += 2) {
-        store(o + 3 * x, along_col(x), gc[x], along_row(x), sb, sg, sr);        // Gb
+        store(o + 3 * x, along_col(x), gc[x], along_row(x), sb, sg, sr);           // Gb
         store(o + 3 * (x + 1), diagonal(x + 1), gc[x + 1], c[x + 1], sb, sg, sr);  // B site
       }
     }
@@ -440,7 +457,213 @@ void ah_fast(const cv::Mat& pad, cv::Mat& out, bool cc, int maxv, std::array<int
 
 }  // namespace
 
-cv::Mat demosaic(const cv::Mat& raw_in, Demosaic method, int bits, std::array<int64_t, 3>* sums) {
+namespace {
+
+// Vectorisable planar kernels for raw values of at most 10 bits: every intermediate of the hybrid
+// and bilinear filters then fits in int16 (the largest, 8 h + 10 c + fv, is at most 28 644), so
+// the compiler can run 8 (SSE2) or 16 (AVX2) pixels per instruction. Each row computes every
+// candidate estimate at every x with contiguous loads, then picks per CFA site with a parity mask.
+// Same arithmetic as the per-site code above; the tests compare against the reference.
+void linear_planar16(const cv::Mat& pad, bool hybrid, int maxv, cv::Mat planes[3]) {
+  const int W = pad.cols - 4, H = pad.rows - 4;
+  std::vector<int16_t> odd(static_cast<size_t>(W)), a(static_cast<size_t>(W)), bq(static_cast<size_t>(W)),
+      rw(static_cast<size_t>(W)), cl(static_cast<size_t>(W));
+  for (int x = 0; x < W; ++x) odd[size_t(x)] = int16_t((x & 1) ? -1 : 0);
+  const int16_t mx = int16_t(maxv);
+  for (int y = 0; y < H; ++y) {
+    const uint16_t* __restrict uu = pad.ptr<uint16_t>(y) + 2;
+    const uint16_t* __restrict u = pad.ptr<uint16_t>(y + 1) + 2;
+    const uint16_t* __restrict c = pad.ptr<uint16_t>(y + 2) + 2;
+    const uint16_t* __restrict d = pad.ptr<uint16_t>(y + 3) + 2;
+    const uint16_t* __restrict dd = pad.ptr<uint16_t>(y + 4) + 2;
+    int16_t* __restrict A = a.data();
+    int16_t* __restrict Bq = bq.data();
+    int16_t* __restrict Rw = rw.data();
+    int16_t* __restrict Cl = cl.data();
+    if (hybrid) {
+#pragma GCC ivdep
+      for (int x = 0; x < W; ++x) {
+        const int16_t cc = int16_t(c[x]);
+        const int16_t h = int16_t(c[x - 1] + c[x + 1]), v = int16_t(u[x] + d[x]);
+        const int16_t dg = int16_t(u[x - 1] + u[x + 1] + d[x - 1] + d[x + 1]);
+        const int16_t fh = int16_t(c[x - 2] + c[x + 2]), fv = int16_t(uu[x] + dd[x]);
+        int16_t g = int16_t((int16_t(4 * (h + v) + 8 * cc - 2 * (fh + fv)) + 8) >> 4);
+        int16_t o = int16_t((int16_t(4 * dg + 12 * cc - 3 * (fh + fv)) + 8) >> 4);
+        int16_t r = int16_t((int16_t(8 * h + 10 * cc - 2 * fh - 2 * dg + fv) + 8) >> 4);
+        int16_t l = int16_t((int16_t(8 * v + 10 * cc - 2 * fv - 2 * dg + fh) + 8) >> 4);
+        A[x] = std::min(std::max(g, int16_t(0)), mx);
+        Bq[x] = std::min(std::max(o, int16_t(0)), mx);
+        Rw[x] = std::min(std::max(r, int16_t(0)), mx);
+        Cl[x] = std::min(std::max(l, int16_t(0)), mx);
+      }
+    } else {
+#pragma GCC ivdep
+      for (int x = 0; x < W; ++x) {
+        const int16_t h = int16_t(c[x - 1] + c[x + 1]), v = int16_t(u[x] + d[x]);
+        const int16_t dg = int16_t(u[x - 1] + u[x + 1] + d[x - 1] + d[x + 1]);
+        A[x] = int16_t((h + v + 2) >> 2);
+        Bq[x] = int16_t((dg + 2) >> 2);
+        Rw[x] = int16_t((h + 1) >> 1);
+        Cl[x] = int16_t((v + 1) >> 1);
+      }
+    }
+    int16_t* __restrict pb = planes[0].ptr<int16_t>(y);
+    int16_t* __restrict pg = planes[1].ptr<int16_t>(y);
+    int16_t* __restrict pr = planes[2].ptr<int16_t>(y);
+    const int16_t* __restrict m = odd.data();
+    if (y % 2 == 0) {  // R at even x, Gr at odd x
+#pragma GCC ivdep
+      for (int x = 0; x < W; ++x) {
+        const int16_t cc = int16_t(c[x]);
+        pr[x] = int16_t((Rw[x] & m[x]) | (cc & ~m[x]));
+        pg[x] = int16_t((cc & m[x]) | (A[x] & ~m[x]));
+        pb[x] = int16_t((Cl[x] & m[x]) | (Bq[x] & ~m[x]));
+      }
+    } else {  // Gb at even x, B at odd x
+#pragma GCC ivdep
+      for (int x = 0; x < W; ++x) {
+        const int16_t cc = int16_t(c[x]);
+        pr[x] = int16_t((Bq[x] & m[x]) | (Cl[x] & ~m[x]));
+        pg[x] = int16_t((A[x] & m[x]) | (cc & ~m[x]));
+        pb[x] = int16_t((cc & m[x]) | (Rw[x] & ~m[x]));
+      }
+    }
+  }
+}
+
+inline int16_t abs16(int v) { return int16_t(v < 0 ? -v : v); }
+inline int16_t clamp16(int v, int16_t mx) { return int16_t(v < 0 ? 0 : (v > mx ? mx : v)); }
+
+// Adams-Hamilton / colour correlation for raw values of at most 10 bits, planar and vectorisable
+// (same arithmetic as green_ah_fast / ah_fast; every intermediate fits in int16: the largest,
+// LH + MH, is at most 3069 + 24552). Pass 1 computes the green estimate at every x of a row and
+// keeps it at the R/B sites; pass 2 computes the three chroma estimates at every x and picks.
+template <bool cc>
+void ah_planar16(const cv::Mat& pad, int maxv, cv::Mat planes[3]) {
+  const int W = pad.cols - 4, H = pad.rows - 4;
+  const int16_t mx = int16_t(maxv);
+  std::vector<int16_t> odd(static_cast<size_t>(W)), t0(static_cast<size_t>(W)), t1(static_cast<size_t>(W)),
+      t2(static_cast<size_t>(W));
+  for (int x = 0; x < W; ++x) odd[size_t(x)] = int16_t((x & 1) ? -1 : 0);
+  cv::Mat green(H, W, CV_16UC1);
+  for (int y = 0; y < H; ++y) {
+    const uint16_t* uu = pad.ptr<uint16_t>(y) + 2;
+    const uint16_t* u = pad.ptr<uint16_t>(y + 1) + 2;
+    const uint16_t* c = pad.ptr<uint16_t>(y + 2) + 2;
+    const uint16_t* d = pad.ptr<uint16_t>(y + 3) + 2;
+    const uint16_t* dd = pad.ptr<uint16_t>(y + 4) + 2;
+    int16_t* est = t0.data();
+#pragma GCC ivdep
+    for (int x = 0; x < W; ++x) {
+      const int B13 = c[x], G8 = u[x], G18 = d[x], G12 = c[x - 1], G14 = c[x + 1];
+      const int B3 = uu[x], B23 = dd[x], B11 = c[x - 2], B15 = c[x + 2];
+      int16_t LH = int16_t(abs16(G14 - G12) + abs16(2 * B13 - B11 - B15));
+      int16_t LV = int16_t(abs16(G18 - G8) + abs16(2 * B13 - B3 - B23));
+      if constexpr (cc) {
+        const int16_t kh0 = int16_t(2 * u[x - 1] - u[x - 2] - u[x]);
+        const int16_t kh1 = int16_t(2 * u[x + 1] - u[x] - u[x + 2]);
+        const int16_t kh2 = int16_t(2 * d[x - 1] - d[x - 2] - d[x]);
+        const int16_t kh3 = int16_t(2 * d[x + 1] - d[x] - d[x + 2]);
+        const int16_t kv0 = int16_t(2 * u[x - 1] - uu[x - 1] - c[x - 1]);
+        const int16_t kv1 = int16_t(2 * u[x + 1] - uu[x + 1] - c[x + 1]);
+        const int16_t kv2 = int16_t(2 * d[x - 1] - c[x - 1] - dd[x - 1]);
+        const int16_t kv3 = int16_t(2 * d[x + 1] - c[x + 1] - dd[x + 1]);
+        LH = int16_t(LH + abs16(kh0 - kh1) + abs16(kh0 - kh2) + abs16(kh0 - kh3) + abs16(kh1 - kh2) +
+                     abs16(kh1 - kh3) + abs16(kh2 - kh3));
+        LV = int16_t(LV + abs16(kv0 - kv1) + abs16(kv0 - kv2) + abs16(kv0 - kv3) + abs16(kv1 - kv2) +
+                     abs16(kv1 - kv3) + abs16(kv2 - kv3));
+      }
+      const int16_t GH4 = int16_t(2 * (G12 + G14) + 2 * B13 - B11 - B15);
+      const int16_t GV4 = int16_t(2 * (G8 + G18) + 2 * B13 - B3 - B23);
+      const int16_t gh = int16_t((GH4 + 2) >> 2), gv = int16_t((GV4 + 2) >> 2);
+      const int16_t gm = int16_t((GH4 + GV4 + 4) >> 3);
+      const int16_t g = LH < LV ? gh : (LH > LV ? gv : gm);
+      est[x] = clamp16(g, mx);
+    }
+    int16_t* gp = green.ptr<int16_t>(y);
+    const int16_t* m = odd.data();
+    if (y % 2 == 0) {  // R sites at even x
+#pragma GCC ivdep
+      for (int x = 0; x < W; ++x) gp[x] = int16_t((int16_t(c[x]) & m[x]) | (est[x] & ~m[x]));
+    } else {  // B sites at odd x
+#pragma GCC ivdep
+      for (int x = 0; x < W; ++x) gp[x] = int16_t((est[x] & m[x]) | (int16_t(c[x]) & ~m[x]));
+    }
+  }
+  cv::Mat gpad;
+  cv::copyMakeBorder(green, gpad, 1, 1, 1, 1, cv::BORDER_REFLECT_101);
+  for (int y = 0; y < H; ++y) {
+    const uint16_t* u = pad.ptr<uint16_t>(y + 1) + 2;
+    const uint16_t* c = pad.ptr<uint16_t>(y + 2) + 2;
+    const uint16_t* d = pad.ptr<uint16_t>(y + 3) + 2;
+    const int16_t* gu = gpad.ptr<int16_t>(y) + 1;
+    const int16_t* gc = gpad.ptr<int16_t>(y + 1) + 1;
+    const int16_t* gd = gpad.ptr<int16_t>(y + 2) + 1;
+    int16_t* row = t0.data();  // (A.7)
+    int16_t* col = t1.data();  // (A.6)
+    int16_t* dia = t2.data();  // (A.8)-(A.12)
+#pragma GCC ivdep
+    for (int x = 0; x < W; ++x) {
+      const int G13 = gc[x];
+      row[x] = clamp16((c[x - 1] + c[x + 1] + 2 * G13 - gc[x - 1] - gc[x + 1] + 1) >> 1, mx);
+      col[x] = clamp16((u[x] + d[x] + 2 * G13 - gu[x] - gd[x] + 1) >> 1, mx);
+      const int16_t dN = int16_t(abs16(u[x - 1] - d[x + 1]) + abs16(2 * G13 - gu[x - 1] - gd[x + 1]));
+      const int16_t dP = int16_t(abs16(u[x + 1] - d[x - 1]) + abs16(2 * G13 - gu[x + 1] - gd[x - 1]));
+      const int16_t N2 = int16_t(u[x - 1] + d[x + 1] + 2 * G13 - gu[x - 1] - gd[x + 1]);
+      const int16_t P2 = int16_t(u[x + 1] + d[x - 1] + 2 * G13 - gu[x + 1] - gd[x - 1]);
+      const int16_t vn = int16_t((N2 + 1) >> 1), vp = int16_t((P2 + 1) >> 1);
+      const int16_t vm = int16_t((N2 + P2 + 2) >> 2);
+      dia[x] = clamp16(dN < dP ? vn : (dN > dP ? vp : vm), mx);
+    }
+    int16_t* pb = planes[0].ptr<int16_t>(y);
+    int16_t* pg = planes[1].ptr<int16_t>(y);
+    int16_t* pr = planes[2].ptr<int16_t>(y);
+    const int16_t* m = odd.data();
+    std::copy(gc, gc + W, pg);
+    if (y % 2 == 0) {  // R at even x, Gr at odd x
+#pragma GCC ivdep
+      for (int x = 0; x < W; ++x) {
+        pr[x] = int16_t((row[x] & m[x]) | (int16_t(c[x]) & ~m[x]));
+        pb[x] = int16_t((col[x] & m[x]) | (dia[x] & ~m[x]));
+      }
+    } else {  // Gb at even x, B at odd x
+#pragma GCC ivdep
+      for (int x = 0; x < W; ++x) {
+        pr[x] = int16_t((dia[x] & m[x]) | (col[x] & ~m[x]));
+        pb[x] = int16_t((int16_t(c[x]) & m[x]) | (row[x] & ~m[x]));
+      }
+    }
+  }
+}
+}  // namespace
+
+void demosaic_planes(const cv::Mat& raw_in, Demosaic method, int bits, cv::Mat planes[3]) {
+  check_bayer(raw_in, bits);
+  const cv::Mat raw = as_u16(raw_in);
+  if (bits <= 10 && (method == Demosaic::kBilinear || method == Demosaic::kHybrid)) {
+    cv::Mat pad;
+    cv::copyMakeBorder(raw, pad, 2, 2, 2, 2, cv::BORDER_REFLECT_101);
+    for (int c = 0; c < 3; ++c) planes[c].create(raw.size(), CV_16UC1);
+    linear_planar16(pad, method == Demosaic::kHybrid, (1 << bits) - 1, planes);
+    return;
+  }
+  if (bits <= 10) {  // Adams-Hamilton and colour correlation
+    cv::Mat pad;
+    cv::copyMakeBorder(raw, pad, 2, 2, 2, 2, cv::BORDER_REFLECT_101);
+    for (int c = 0; c < 3; ++c) planes[c].create(raw.size(), CV_16UC1);
+    if (method == Demosaic::kColourCorrelation)
+      ah_planar16<true>(pad, (1 << bits) - 1, planes);
+    else
+      ah_planar16<false>(pad, (1 << bits) - 1, planes);
+    return;
+  }
+  cv::Mat bgr = demosaic_interleaved(raw, method, bits);
+  std::vector<cv::Mat> ch;
+  cv::split(bgr, ch);
+  for (int c = 0; c < 3; ++c) planes[c] = ch[size_t(c)];
+}
+
+cv::Mat demosaic_interleaved(const cv::Mat& raw_in, Demosaic method, int bits, std::array<int64_t, 3>* sums) {
   check_bayer(raw_in, bits);
   const cv::Mat raw = as_u16(raw_in);
   const int maxv = (1 << bits) - 1;
@@ -449,13 +672,38 @@ cv::Mat demosaic(const cv::Mat& raw_in, Demosaic method, int bits, std::array<in
   cv::Mat out(raw.size(), CV_16UC3);
   std::array<int64_t, 3> s{};
   switch (method) {
-    case Demosaic::kBilinear: bilinear_fast(pad, out, s); break;
-    case Demosaic::kHybrid: hybrid_fast(pad, out, maxv, s); break;
-    case Demosaic::kAdamsHamilton: ah_fast(pad, out, false, maxv, s); break;
-    case Demosaic::kColourCorrelation: ah_fast(pad, out, true, maxv, s); break;
+    case Demosaic::kBilinear:
+      bilinear_fast(pad, out, s);
+      break;
+    case Demosaic::kHybrid:
+      hybrid_fast(pad, out, maxv, s);
+      break;
+    case Demosaic::kAdamsHamilton:
+      ah_fast(pad, out, false, maxv, s);
+      break;
+    case Demosaic::kColourCorrelation:
+      ah_fast(pad, out, true, maxv, s);
+      break;
   }
   if (sums) *sums = s;
   return out;
+}
+
+}  // namespace omma::isp
+
+namespace omma::isp {
+
+cv::Mat demosaic(const cv::Mat& raw, Demosaic method, int bits, std::array<int64_t, 3>* sums) {
+  if (bits <= 10) {
+    cv::Mat planes[3];
+    demosaic_planes(raw, method, bits, planes);
+    if (sums)
+      for (int c = 0; c < 3; ++c) (*sums)[size_t(c)] = int64_t(cv::sum(planes[c])[0]);
+    cv::Mat out;
+    cv::merge(planes, 3, out);
+    return out;
+  }
+  return demosaic_interleaved(raw, method, bits, sums);
 }
 
 }  // namespace omma::isp

@@ -17,9 +17,8 @@
 
 #include <array>
 #include <cstdint>
-#include <string>
-
 #include <opencv2/core.hpp>
+#include <string>
 
 namespace omma::isp {
 
@@ -44,8 +43,14 @@ cv::Mat mosaic_rggb(const cv::Mat& bgr);
 
 // Fast path (the one to use). `sums`, when given, receives the per-channel sums (B, G, R) of the
 // output (for gray-world white balance without another pass).
-cv::Mat demosaic(const cv::Mat& raw, Demosaic method, int bits,
-                 std::array<int64_t, 3>* sums = nullptr);
+cv::Mat demosaic(const cv::Mat& raw, Demosaic method, int bits, std::array<int64_t, 3>* sums = nullptr);
+
+// Fast path with planar output: planes[0..2] = B, G, R as CV_16UC1 (what develop() uses).
+void demosaic_planes(const cv::Mat& raw, Demosaic method, int bits, cv::Mat planes[3]);
+// The interleaved integer path for every method and bit depth (demosaic() uses the planar one for
+// every method at <= 10 bits); exposed so that the tests can compare both with the reference.
+cv::Mat demosaic_interleaved(const cv::Mat& raw, Demosaic method, int bits,
+                             std::array<int64_t, 3>* sums = nullptr);
 
 // Plain per-pixel reference (slow, readable): identical output to demosaic().
 cv::Mat demosaic_reference(const cv::Mat& raw, Demosaic method, int bits);

@@ -2,6 +2,7 @@
 #include "omma/isp/demosaic.h"
 
 #include <gtest/gtest.h>
+
 #include <opencv2/imgproc.hpp>
 
 namespace omma::isp {
@@ -24,8 +25,8 @@ cv::Mat texture_bgr16(int w, int h) {
     for (int x = 0; x < w; ++x) {
       const double base = 500 + 300 * std::sin(0.21 * x + 0.13 * y) + 150 * std::cos(0.05 * x * y / 10.0);
       m.at<cv::Vec3w>(y, x) = {uint16_t(std::clamp(base * 0.7, 0.0, 1023.0)),
-                                          uint16_t(std::clamp(base, 0.0, 1023.0)),
-                                          uint16_t(std::clamp(base * 0.9 + 40, 0.0, 1023.0))};
+                               uint16_t(std::clamp(base, 0.0, 1023.0)),
+                               uint16_t(std::clamp(base * 0.9 + 40, 0.0, 1023.0))};
     }
   return m;
 }
@@ -43,6 +44,11 @@ TEST(Demosaic, FastEqualsReferenceOnRandomAndTexture) {
       const cv::Mat fast = demosaic(*raw, m, 10), ref = demosaic_reference(*raw, m, 10);
       ASSERT_EQ(fast.type(), CV_16UC3);
       EXPECT_EQ(cv::norm(fast, ref, cv::NORM_INF), 0.0) << demosaic_name(m);
+      // the interleaved integer path, and the 12-bit case (no int16 planar kernel)
+      EXPECT_EQ(cv::norm(demosaic_interleaved(*raw, m, 10), ref, cv::NORM_INF), 0.0) << demosaic_name(m);
+      const cv::Mat raw12 = *raw * 4;
+      EXPECT_EQ(cv::norm(demosaic(raw12, m, 12), demosaic_reference(raw12, m, 12), cv::NORM_INF), 0.0)
+          << demosaic_name(m);
     }
   // also at the smallest size (4x4: every pixel is a border pixel)
   const cv::Mat tiny = random_raw(4, 4, 10, 2);
@@ -53,7 +59,8 @@ TEST(Demosaic, FastEqualsReferenceOnRandomAndTexture) {
 TEST(Demosaic, UniformColourIsReconstructedExactly) {
   const cv::Mat img(20, 24, CV_16UC3, cv::Scalar(100, 700, 333));  // B, G, R
   const cv::Mat raw = mosaic_rggb(img);
-  for (Demosaic m : kAll) EXPECT_EQ(cv::norm(demosaic(raw, m, 10), img, cv::NORM_INF), 0.0) << demosaic_name(m);
+  for (Demosaic m : kAll)
+    EXPECT_EQ(cv::norm(demosaic(raw, m, 10), img, cv::NORM_INF), 0.0) << demosaic_name(m);
 }
 
 TEST(Demosaic, BilinearFollowsEquations51To510) {
@@ -117,8 +124,8 @@ TEST(Demosaic, GradientMethodsBeatBilinearOnEdges) {
   // the stripes and should be far more accurate than bilinear.
   cv::Mat img(64, 64, CV_16UC3);
   for (int y = 0; y < 64; ++y)
-    for (int x = 0; x < 64; ++x) img.at<cv::Vec3w>(y, x) = ((x / 3) % 2) ? cv::Vec3w(800, 900, 850)
-                                                                               : cv::Vec3w(100, 150, 120);
+    for (int x = 0; x < 64; ++x)
+      img.at<cv::Vec3w>(y, x) = ((x / 3) % 2) ? cv::Vec3w(800, 900, 850) : cv::Vec3w(100, 150, 120);
   const cv::Mat raw = mosaic_rggb(img);
   auto err = [&](Demosaic m) {
     cv::Mat d;
@@ -152,9 +159,12 @@ TEST(Demosaic, OpenCvCodeMatchesOurRggbLayout) {
 }
 
 TEST(Demosaic, RejectsBadFrames) {
-  EXPECT_THROW(demosaic(cv::Mat(10, 11, CV_16UC1, cv::Scalar(0)), Demosaic::kHybrid, 10), std::invalid_argument);
-  EXPECT_THROW(demosaic(cv::Mat(2, 10, CV_16UC1, cv::Scalar(0)), Demosaic::kHybrid, 10), std::invalid_argument);
-  EXPECT_THROW(demosaic(cv::Mat(10, 10, CV_16UC3, cv::Scalar::all(0)), Demosaic::kHybrid, 10), std::invalid_argument);
+  EXPECT_THROW(demosaic(cv::Mat(10, 11, CV_16UC1, cv::Scalar(0)), Demosaic::kHybrid, 10),
+               std::invalid_argument);
+  EXPECT_THROW(demosaic(cv::Mat(2, 10, CV_16UC1, cv::Scalar(0)), Demosaic::kHybrid, 10),
+               std::invalid_argument);
+  EXPECT_THROW(demosaic(cv::Mat(10, 10, CV_16UC3, cv::Scalar::all(0)), Demosaic::kHybrid, 10),
+               std::invalid_argument);
   EXPECT_THROW(demosaic(cv::Mat(10, 10, CV_16UC1, cv::Scalar(1024)), Demosaic::kAdamsHamilton, 10),
                std::invalid_argument);
   EXPECT_THROW(demosaic_reference(cv::Mat(9, 10, CV_16UC1, cv::Scalar(0)), Demosaic::kBilinear, 10),

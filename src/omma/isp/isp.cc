@@ -1,11 +1,11 @@
 #include "omma/isp/isp.h"
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
-#include <stdexcept>
-
 #include <opencv2/imgproc.hpp>
-#include <tbb/parallel_for.h>
+#include <stdexcept>
 
 #include "omma/core/io.h"
 
@@ -17,24 +17,49 @@ namespace {
 cv::Mat vignetting(const cv::Mat& raw, const IspOptions& o) {
   if (o.flat_gain.empty()) return raw;
   cv::Mat r16;
-  if (raw.depth() == CV_16U) r16 = raw;
-  else raw.convertTo(r16, CV_16U);
+  if (raw.depth() == CV_16U)
+    r16 = raw;
+  else
+    raw.convertTo(r16, CV_16U);
   return apply_flat_field(r16, o.flat_gain, (1 << o.bits) - 1);
 }
 
-// 8 most significant bits of a `bits`-bit value (§5.2).
-inline uint8_t to8(int v, int bits) {
-  return uint8_t(bits >= 8 ? v >> (bits - 8) : v << (8 - bits));
-}
-
-cv::Mat to_bgr8(const cv::Mat& bgr16, int bits) {
+cv::Mat to_bgr8(const cv::Mat& bgr16, int bits, bool srgb) {
+  const std::vector<uint8_t> lut = output_table(bits, srgb);
   cv::Mat out(bgr16.size(), CV_8UC3);
   for (int y = 0; y < bgr16.rows; ++y) {
     const uint16_t* p = bgr16.ptr<uint16_t>(y);
     uint8_t* o = out.ptr<uint8_t>(y);
-    for (int i = 0; i < 3 * bgr16.cols; ++i) o[i] = to8(p[i], bits);
+    for (int i = 0; i < 3 * bgr16.cols; ++i) o[i] = lut[p[i]];
   }
   return out;
+}
+
+void gain_row_lut(const uint16_t* p, uint8_t* q, int n, uint32_t gain, uint32_t maxv, const uint8_t* lut) {
+  for (int x = 0; x < n; ++x) {
+    const uint32_t v = (uint32_t(p[x]) * gain + 2048u) >> 12;
+    q[x] = lut[v < maxv ? v : maxv];
+  }
+}
+
+// One row of: v' = min(maxv, (v * gain + 2048) >> 12), then the 8 MSBs (a compile-time shift for
+// the 10-bit sensors, so that the loop vectorises).
+template <int kShift>
+void gain_row(const uint16_t* __restrict p, uint8_t* __restrict q, int n, uint32_t gain, uint32_t maxv) {
+  if (gain == 4096u) {
+    for (int x = 0; x < n; ++x) q[x] = uint8_t(p[x] >> kShift);
+    return;
+  }
+  for (int x = 0; x < n; ++x) {
+    const uint32_t v = (uint32_t(p[x]) * gain + 2048u) >> 12;
+    q[x] = uint8_t((v < maxv ? v : maxv) >> kShift);
+  }
+}
+void gain_row_any(const uint16_t* p, uint8_t* q, int n, uint32_t gain, uint32_t maxv, int shift) {
+  for (int x = 0; x < n; ++x) {
+    const uint32_t v = (uint32_t(p[x]) * gain + 2048u) >> 12;
+    q[x] = uint8_t((v < maxv ? v : maxv) >> shift);
+  }
 }
 
 void check_options(const cv::Mat& raw, const IspOptions& o) {
@@ -48,30 +73,56 @@ void check_options(const cv::Mat& raw, const IspOptions& o) {
 
 }  // namespace
 
+std::vector<uint8_t> output_table(int bits, bool srgb) {
+  if (bits < 8 || bits > 16) throw std::invalid_argument("output_table: bits must be 8..16");
+  const int n = 1 << bits;
+  std::vector<uint8_t> t(static_cast<size_t>(n));
+  for (int v = 0; v < n; ++v) {
+    if (!srgb) {
+      t[size_t(v)] = uint8_t(v >> (bits - 8));  // the 8 most significant bits (§5.2)
+    } else {
+      const double l = double(v) / double(n - 1);
+      const double e = l <= 0.0031308 ? 12.92 * l : 1.055 * std::pow(l, 1.0 / 2.4) - 0.055;
+      t[size_t(v)] = uint8_t(std::clamp(std::lround(255.0 * e), 0L, 255L));
+    }
+  }
+  return t;
+}
+
 cv::Mat develop(const cv::Mat& raw_in, const IspOptions& o) {
   check_options(raw_in, o);
   const cv::Mat raw = vignetting(raw_in, o);
   const int maxv = (1 << o.bits) - 1;
-  std::array<int64_t, 3> sums{};
-  const cv::Mat rgb = demosaic(raw, o.demosaic, o.bits, &sums);
+  cv::Mat planes[3];  // B, G, R
+  demosaic_planes(raw, o.demosaic, o.bits, planes);
   WbGains g;
-  if (o.awb == Awb::kGrayWorld) g = gray_world_gains(sums);
-  else if (o.awb == Awb::kWhitePatch) g = white_patch_gains(rgb);
-  // Gains, clamp and the 8 MSBs in one pass.
-  const int shift = o.bits - 8;
-  cv::Mat out(rgb.size(), CV_8UC3);
-  const uint32_t gb = uint32_t(g.b_q12), gr = uint32_t(g.r_q12);
-  for (int y = 0; y < rgb.rows; ++y) {
-    const uint16_t* p = rgb.ptr<uint16_t>(y);
-    uint8_t* q = out.ptr<uint8_t>(y);
-    for (int x = 0; x < rgb.cols; ++x) {
-      const uint32_t b = std::min<uint32_t>(uint32_t(maxv), (p[3 * x] * gb + 2048u) >> 12);
-      const uint32_t r = std::min<uint32_t>(uint32_t(maxv), (p[3 * x + 2] * gr + 2048u) >> 12);
-      q[3 * x] = uint8_t(b >> shift);
-      q[3 * x + 1] = uint8_t(p[3 * x + 1] >> shift);
-      q[3 * x + 2] = uint8_t(r >> shift);
+  if (o.awb == Awb::kGrayWorld) {
+    std::array<int64_t, 3> sums{};
+    for (int c = 0; c < 3; ++c) sums[size_t(c)] = int64_t(cv::sum(planes[c])[0]);
+    g = gray_world_gains(sums);
+  } else if (o.awb == Awb::kWhitePatch) {
+    g = white_patch_gains_planes(planes);
+  }
+  // Gains, clamp and the 8 MSBs, plane by plane (vectorisable loops), then interleave.
+  const uint32_t gain[3] = {uint32_t(g.b_q12), 4096u, uint32_t(g.r_q12)};
+  std::vector<uint8_t> lut;
+  if (o.srgb) lut = output_table(o.bits, true);
+  cv::Mat out8[3];
+  for (int c = 0; c < 3; ++c) {
+    out8[c].create(raw.size(), CV_8UC1);
+    for (int y = 0; y < raw.rows; ++y) {
+      const uint16_t* p = planes[c].ptr<uint16_t>(y);
+      uint8_t* q = out8[c].ptr<uint8_t>(y);
+      if (o.srgb)
+        gain_row_lut(p, q, raw.cols, gain[c], uint32_t(maxv), lut.data());
+      else if (o.bits == 10)
+        gain_row<2>(p, q, raw.cols, gain[c], uint32_t(maxv));
+      else
+        gain_row_any(p, q, raw.cols, gain[c], uint32_t(maxv), o.bits - 8);
     }
   }
+  cv::Mat out;
+  cv::merge(out8, 3, out);
   return out;
 }
 
@@ -79,9 +130,11 @@ cv::Mat develop_reference(const cv::Mat& raw_in, const IspOptions& o) {
   check_options(raw_in, o);
   const cv::Mat raw = vignetting(raw_in, o);
   cv::Mat rgb = demosaic_reference(raw, o.demosaic, o.bits);
-  if (o.awb == Awb::kGrayWorld) apply_gains(rgb, gray_world_gains(rgb), (1 << o.bits) - 1);
-  else if (o.awb == Awb::kWhitePatch) apply_gains(rgb, white_patch_gains_reference(rgb), (1 << o.bits) - 1);
-  return to_bgr8(rgb, o.bits);
+  if (o.awb == Awb::kGrayWorld)
+    apply_gains(rgb, gray_world_gains(rgb), (1 << o.bits) - 1);
+  else if (o.awb == Awb::kWhitePatch)
+    apply_gains(rgb, white_patch_gains_reference(rgb), (1 << o.bits) - 1);
+  return to_bgr8(rgb, o.bits, o.srgb);
 }
 
 std::vector<cv::Mat> develop_all(const std::vector<cv::Mat>& raws, const IspOptions& o) {
@@ -126,8 +179,8 @@ std::map<std::string, ChannelPsnr> evaluate_demosaic(const cv::Mat& photo, int b
   const cv::Mat ref = photo(cv::Rect(0, 0, photo.cols & ~1, photo.rows & ~1)).clone();
   const cv::Mat raw = mosaic_rggb(ref);  // 8-bit values in CV_16UC1
   std::map<std::string, ChannelPsnr> res;
-  for (Demosaic m : {Demosaic::kBilinear, Demosaic::kHybrid, Demosaic::kAdamsHamilton,
-                     Demosaic::kColourCorrelation}) {
+  for (Demosaic m :
+       {Demosaic::kBilinear, Demosaic::kHybrid, Demosaic::kAdamsHamilton, Demosaic::kColourCorrelation}) {
     cv::Mat out8;
     demosaic(raw, m, 8).convertTo(out8, CV_8U);
     res[demosaic_name(m)] = psnr_per_channel(out8, ref, border);

@@ -11,10 +11,9 @@
 #pragma once
 
 #include <map>
+#include <opencv2/core.hpp>
 #include <string>
 #include <vector>
-
-#include <opencv2/core.hpp>
 
 #include "omma/isp/color.h"
 #include "omma/isp/demosaic.h"
@@ -25,9 +24,16 @@ namespace omma::isp {
 struct IspOptions {
   Demosaic demosaic = Demosaic::kHybrid;
   Awb awb = Awb::kGrayWorld;
-  int bits = 10;        // bit depth of the raw values (10 on the dome's sensors)
-  cv::Mat flat_gain;    // optional Q12 vignetting gain per raw pixel, from flat_field_gain()
+  int bits = 10;      // bit depth of the raw values (10 on the dome's sensors)
+  cv::Mat flat_gain;  // optional Q12 vignetting gain per raw pixel, from flat_field_gain()
+  // Output encoding. false: the 8 most significant bits of the linear values (the thesis'
+  // hardware, §5.2). true: sRGB-encoded 8-bit (IEC 61966-2-1 curve through a 2^bits-entry table),
+  // to match sRGB images such as the simulator's cam_XX.png and truth.png (its raw is linear).
+  bool srgb = false;
 };
+
+// The output table of develop(): 2^bits entries, value -> 8-bit (linear MSBs or sRGB).
+std::vector<uint8_t> output_table(int bits, bool srgb);
 
 // Raw frame -> CV_8UC3 BGR. Throws std::invalid_argument (clear message) on a frame that is not
 // single-channel 8/16-bit, has odd or tiny sizes, values beyond `bits`, or a flat-gain size

@@ -1,13 +1,13 @@
 // Tests of the ISP pipeline (develop) and the Table A.1 ranking on real photographs.
 #include "omma/isp/isp.h"
 
+#include <gtest/gtest.h>
+
 #include <cstdio>
 #include <filesystem>
-#include <random>
-
-#include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <random>
 
 namespace omma::isp {
 namespace {
@@ -44,11 +44,12 @@ cv::Mat raw_from_photo(const cv::Mat& bgr8, double cast_r, double cast_b) {
 TEST(Isp, DevelopFastEqualsReferenceAllOptions) {
   const cv::Mat raw = random_raw(40, 26, 10, 3);
   cv::Mat flat = random_raw(40, 26, 10, 4) / 4 + 700;  // a noisy flat field
-  for (Demosaic m : {Demosaic::kBilinear, Demosaic::kHybrid, Demosaic::kAdamsHamilton,
-                     Demosaic::kColourCorrelation})
+  for (Demosaic m :
+       {Demosaic::kBilinear, Demosaic::kHybrid, Demosaic::kAdamsHamilton, Demosaic::kColourCorrelation})
     for (Awb a : {Awb::kNone, Awb::kGrayWorld, Awb::kWhitePatch})
       for (bool with_flat : {false, true}) {
         IspOptions o;
+        o.srgb = with_flat;  // both output encodings
         o.demosaic = m;
         o.awb = a;
         if (with_flat) o.flat_gain = flat_field_gain(flat);
@@ -130,7 +131,18 @@ TEST(Isp, DevelopAllMatchesDevelop) {
   o.demosaic = Demosaic::kColourCorrelation;
   const auto all = develop_all(raws, o);
   ASSERT_EQ(all.size(), raws.size());
-  for (size_t i = 0; i < raws.size(); ++i) EXPECT_EQ(cv::norm(all[i], develop(raws[i], o), cv::NORM_INF), 0.0);
+  for (size_t i = 0; i < raws.size(); ++i)
+    EXPECT_EQ(cv::norm(all[i], develop(raws[i], o), cv::NORM_INF), 0.0);
+}
+
+TEST(Isp, OutputTables) {
+  const auto lin = output_table(10, false), srgb = output_table(10, true);
+  ASSERT_EQ(lin.size(), 1024u);
+  EXPECT_EQ(lin[1023], 255);
+  EXPECT_EQ(lin[4], 1);
+  EXPECT_EQ(srgb[0], 0);
+  EXPECT_EQ(srgb[1023], 255);
+  EXPECT_EQ(srgb[220], 128);  // linear 0.215 -> sRGB 0.5
 }
 
 TEST(Isp, PsnrOfKnownError) {

@@ -50,19 +50,19 @@ ChipStream encode_link(const std::vector<LinkFrame>& frames, const LinkConfig& c
                                   std::to_string(cfg.width) + "x" + std::to_string(cfg.height));
     for (int r = 0; r < cfg.height; ++r) {
       for (int k = 0; k < cfg.row_gap_pp * cfg.clocks_per_pp(); ++k) push_bit(s, false);  // 1.1
-      for (int c = 0; c < cfg.width; ++c) {                                                  // 1.2
+      for (int c = 0; c < cfg.width; ++c) {                                               // 1.2
         const uint32_t v = f.pixels[size_t(r) * cfg.width + c];
         if (v >= limit)
-          throw std::invalid_argument("link: pixel value " + std::to_string(v) + " at (" +
-                                      std::to_string(c) + ", " + std::to_string(r) +
-                                      ") does not fit in " + std::to_string(cfg.bits) + " bits");
+          throw std::invalid_argument("link: pixel value " + std::to_string(v) + " at (" + std::to_string(c) +
+                                      ", " + std::to_string(r) + ") does not fit in " +
+                                      std::to_string(cfg.bits) + " bits");
         push_bit(s, true);  // start bit
         for (int b = cfg.bits - 1; b >= 0; --b) push_bit(s, (v >> b) & 1u);
         push_bit(s, false);  // stop bit
       }
     }
     for (int k = 0; k < (cfg.eof_pp + cfg.config_pp) * cfg.chips_per_pp(); ++k) s.push(false);  // 251, 252
-    for (int k = 0; k < cfg.resync_pp * cfg.clocks_per_pp(); ++k) push_bit(s, false);            // 253
+    for (int k = 0; k < cfg.resync_pp * cfg.clocks_per_pp(); ++k) push_bit(s, false);           // 253
   }
   return s;
 }
@@ -224,7 +224,7 @@ class Decoder {
     }
     if (idx >= 0) {
       ++rows_seen_;
-      if (ok) {  // damaged rows are not stored: they stay 0
+      if (ok) {                       // damaged rows are not stored: they stay 0
         if (frame_.pixels.empty()) {  // allocated at the first intact row
           frame_.width = cfg_.width;
           frame_.height = cfg_.height;
@@ -250,8 +250,8 @@ class Decoder {
   double anchor_pos_;
   int anchor_idx_;
   LinkFrame frame_;
-  std::vector<uint16_t> row_;       // the row being decoded
-  std::vector<int> stored_rows_;    // rows of frame_ written since the last reset
+  std::vector<uint16_t> row_;     // the row being decoded
+  std::vector<int> stored_rows_;  // rows of frame_ written since the last reset
   long rows_seen_ = 0;
   LinkStats stats_;
 };
@@ -278,8 +278,10 @@ int conceal_damaged_rows(LinkFrame& f) {
     if (f.row_ok[size_t(r)]) continue;
     for (int d = 2; d < f.height; d += 2) {
       int src = -1;
-      if (r - d >= 0 && f.row_ok[size_t(r - d)]) src = r - d;
-      else if (r + d < f.height && f.row_ok[size_t(r + d)]) src = r + d;
+      if (r - d >= 0 && f.row_ok[size_t(r - d)])
+        src = r - d;
+      else if (r + d < f.height && f.row_ok[size_t(r + d)])
+        src = r + d;
       if (src >= 0) {
         std::copy_n(f.pixels.begin() + long(src * w), w, f.pixels.begin() + long(r * w));
         ++replaced;

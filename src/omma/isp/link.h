@@ -30,15 +30,15 @@
 namespace omma::isp {
 
 struct LinkConfig {
-  int width = 250;        // pixels per row (Table 5.1)
-  int height = 250;       // rows per frame
-  int bits = 10;          // ADC resolution, bits per pixel
-  int row_gap_pp = 3;     // zeros before each row, in pixel periods
-  int eof_pp = 4;         // end-of-frame marker (constant 0), PP
-  int config_pp = 505;    // configuration window (constant 0 here), PP
-  int resync_pp = 250;    // resynchronisation pattern (zeros XOR clock), PP
+  int width = 250;      // pixels per row (Table 5.1)
+  int height = 250;     // rows per frame
+  int bits = 10;        // ADC resolution, bits per pixel
+  int row_gap_pp = 3;   // zeros before each row, in pixel periods
+  int eof_pp = 4;       // end-of-frame marker (constant 0), PP
+  int config_pp = 505;  // configuration window (constant 0 here), PP
+  int resync_pp = 250;  // resynchronisation pattern (zeros XOR clock), PP
 
-  int clocks_per_pp() const { return bits + 2; }    // start + data + stop bits
+  int clocks_per_pp() const { return bits + 2; }  // start + data + stop bits
   int chips_per_pp() const { return 2 * clocks_per_pp(); }
   size_t row_chips() const { return size_t(row_gap_pp + width) * chips_per_pp(); }
   size_t frame_chips() const {
@@ -74,10 +74,10 @@ ChipStream encode_link(const std::vector<LinkFrame>& frames, const LinkConfig& c
 ChipStream impair_link(const ChipStream& in, double flip_rate, double drop_rate, uint64_t seed);
 
 struct LinkStats {
-  int frames = 0;          // frames emitted (frames with at least one intact row)
-  long rows_ok = 0;        // rows received intact, over the emitted frames
-  long rows_damaged = 0;   // rows of emitted frames that were damaged or lost
-  size_t bytes = 0;        // input size in bytes
+  int frames = 0;         // frames emitted (frames with at least one intact row)
+  long rows_ok = 0;       // rows received intact, over the emitted frames
+  long rows_damaged = 0;  // rows of emitted frames that were damaged or lost
+  size_t bytes = 0;       // input size in bytes
 };
 
 // Decodes a chip stream. Calls on_frame for every frame with at least one intact row; rows that

@@ -1,9 +1,9 @@
 // Tests of the serial link codec (thesis §5.1.3).
 #include "omma/isp/link.h"
 
-#include <random>
-
 #include <gtest/gtest.h>
+
+#include <random>
 
 namespace omma::isp {
 namespace {
@@ -156,9 +156,12 @@ TEST(Link, TruncatedStreamCountsMissingRows) {
 TEST(Link, GarbageNeverCrashesOrFindsFrames) {
   const LinkConfig c;
   std::mt19937 rng(9);
-  std::vector<std::vector<uint8_t>> inputs = {
-      {}, {0x00}, std::vector<uint8_t>(200000, 0x00), std::vector<uint8_t>(200000, 0xFF),
-      std::vector<uint8_t>(200000, 0xAA), std::vector<uint8_t>(200000, 0x55)};
+  std::vector<std::vector<uint8_t>> inputs = {{},
+                                              {0x00},
+                                              std::vector<uint8_t>(200000, 0x00),
+                                              std::vector<uint8_t>(200000, 0xFF),
+                                              std::vector<uint8_t>(200000, 0xAA),
+                                              std::vector<uint8_t>(200000, 0x55)};
   std::vector<uint8_t> rnd(300000);
   for (auto& b : rnd) b = uint8_t(rng());
   inputs.push_back(rnd);
@@ -209,8 +212,10 @@ TEST(Link, ConcealCopiesSameColourRow) {
   f.row_ok = {1, 1, 0, 1, 1, 0};
   const LinkFrame orig = f;
   EXPECT_EQ(conceal_damaged_rows(f), 2);
-  EXPECT_TRUE(std::equal(f.pixels.begin() + 8, f.pixels.begin() + 12, orig.pixels.begin() + 0));   // row 2 <- 0
-  EXPECT_TRUE(std::equal(f.pixels.begin() + 20, f.pixels.begin() + 24, orig.pixels.begin() + 12)); // row 5 <- 3
+  EXPECT_TRUE(
+      std::equal(f.pixels.begin() + 8, f.pixels.begin() + 12, orig.pixels.begin() + 0));  // row 2 <- 0
+  EXPECT_TRUE(
+      std::equal(f.pixels.begin() + 20, f.pixels.begin() + 24, orig.pixels.begin() + 12));  // row 5 <- 3
 }
 
 }  // namespace

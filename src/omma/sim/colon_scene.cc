@@ -9,6 +9,8 @@
 #include <cmath>
 #include <cstdint>
 #include <vector>
+#include <memory>
+#include <mutex>
 
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
@@ -19,9 +21,11 @@ namespace omma::sim {
 namespace {
 
 constexpr double kPeriod = 240.0;  // mm, the tube repeats along z
-constexpr double kCell = 0.15;     // mm, table cell along z (and about along the circumference)
+constexpr double kGeoCell = 0.3;   // mm, radius table cell along z (and about along the circumference)
+constexpr double kTexCell = 0.15;  // mm, albedo table cell
 constexpr double kMaxDistance = 400.0;
 constexpr double kBlock = 4.0;     // mm, z blocks of the slope bounds
+constexpr int kSkipBlocks = 4;     // the free-space skip looks this many blocks either way
 constexpr double kTwoPi = 2 * kPi;
 
 // Fast atan2 (max error about 1e-5 rad), result in [0, 2 pi).
@@ -88,15 +92,61 @@ struct Polyp {
   double z, phi, radius, height;
 };
 
+// Bilinear interpolation cell of a periodic (z, phi) table.
+struct Cell {
+  size_t i00, i01, i10, i11;
+  float a, b;  // weights along z and phi
+};
+
+template <typename T>
+T at(const std::vector<T>& t, const Cell& c) {
+  return (t[c.i00] * (1 - c.b) + t[c.i01] * c.b) * (1 - c.a) + (t[c.i10] * (1 - c.b) + t[c.i11] * c.b) * c.a;
+}
+
+// A table over the tube surface: nz rows along z (period kPeriod), nphi columns around.
+struct TableGrid {
+  int nz = 0, nphi = 0;
+  double dz = 0, dphi = 0, inv_dz = 0, inv_dphi = 0, inv_nz = 0;
+  TableGrid() = default;
+  TableGrid(double cell_mm, double radius_mm)
+      : nz(static_cast<int>(std::lround(kPeriod / cell_mm))),
+        nphi(static_cast<int>(std::lround(kTwoPi * radius_mm / cell_mm))),
+        dz(kPeriod / nz),
+        dphi(kTwoPi / nphi),
+        inv_dz(1 / dz),
+        inv_dphi(1 / dphi),
+        inv_nz(1.0 / nz) {}
+  size_t size() const { return static_cast<size_t>(nz) * nphi; }
+  size_t idx(int iz, int ip) const {
+    iz %= nz;
+    if (iz < 0) iz += nz;
+    ip %= nphi;
+    if (ip < 0) ip += nphi;
+    return static_cast<size_t>(iz) * nphi + ip;
+  }
+  Cell cell(double z, double phi) const {
+    double u = z * inv_dz;
+    u -= nz * std::floor(u * inv_nz);
+    const double v = phi * inv_dphi;
+    const double fu = std::floor(u), fv = std::floor(v);
+    int iu = static_cast<int>(fu), iv = static_cast<int>(fv);
+    if (iu >= nz) iu -= nz;
+    if (iv >= nphi) iv -= nphi;
+    if (iv < 0) iv += nphi;
+    const int iu1 = iu + 1 == nz ? 0 : iu + 1;
+    const int iv1 = iv + 1 == nphi ? 0 : iv + 1;
+    const size_t r0 = static_cast<size_t>(iu) * nphi, r1 = static_cast<size_t>(iu1) * nphi;
+    return {r0 + iv, r0 + iv1, r1 + iv, r1 + iv1, static_cast<float>(u - fu), static_cast<float>(v - fv)};
+  }
+};
+
 class ColonScene final : public Scene {
  public:
   explicit ColonScene(const ColonParams& p) : p_(p) {
     if (!(p.radius_mm >= 10 && p.radius_mm <= 40))
       throw SceneError(fmt::format("colon scene: radius must be 10..40 mm, got {}", p.radius_mm));
-    nz_ = static_cast<int>(std::lround(kPeriod / kCell));
-    nphi_ = static_cast<int>(std::lround(kTwoPi * p.radius_mm / kCell));
-    dz_ = kPeriod / nz_;
-    dphi_ = kTwoPi / nphi_;
+    geo_ = TableGrid(kGeoCell, p.radius_mm);
+    tex_ = TableGrid(kTexCell, p.radius_mm);
     build_tables();
   }
 
@@ -124,13 +174,31 @@ class ColonScene final : public Scene {
     }
     rho_lo = std::max(rho_lo, 0.5);
     const double max_h = kBlock / std::max(adz, 1e-9);
+    const double max_skip = kSkipBlocks * kBlock / std::max(adz, 1e-9);
     double g = gap(o, d, s), s_prev = s, g_prev = g;
     while (true) {
       if (s > kMaxDistance) return {0, 0, 0};
       if (g <= 0) break;
-      const int k = block_of(o.z() + s * d.z());
+      const double z = o.z() + s * d.z();
+      const int k = block_of(z);
       const double L = 1.02 * (dxy * (1 + lphi_win_[k] / rho_lo) + lz_win_[k] * adz) + 1e-6;
-      const double h = std::min(std::max(g / L, 0.05 + 0.002 * s), max_h);
+      double h = std::min(std::max(g / L, 0.08 + 0.002 * s), max_h);
+      // Skip: while rho stays below the smallest radius of the blocks within kSkipBlocks, no hit.
+      const double px = o.x() + s * d.x(), py = o.y() + s * d.y();
+      const double rho2 = px * px + py * py, rw = rmin_skip_[k];
+      if (rho2 < rw * rw && a > 1e-12) {
+        const double b = px * d.x() + py * d.y();
+        const double t = (-b + std::sqrt(b * b - a * (rho2 - rw * rw))) / a;
+        h = std::max(h, std::min(t, max_skip));
+      } else if (rho2 < rw * rw) {
+        h = std::max(h, max_skip);
+      }
+      // Secant acceleration for grazing rays (g shrinking slowly): aim just past the predicted
+      // crossing, but never more than about a millimetre, so no fold or polyp can be jumped over.
+      if (s > s_prev && g < g_prev) {
+        const double rate = (g_prev - g) / (s - s_prev);
+        h = std::max(h, std::min(1.2 * g / rate, 2.0 + 0.02 * s));
+      }
       s_prev = s;
       g_prev = g;
       s += h;
@@ -139,9 +207,13 @@ class ColonScene final : public Scene {
     // Regula falsi (Illinois) between s_prev (g > 0, inside) and s (g <= 0, beyond the wall).
     double lo = s_prev, hi = s, glo = g_prev, ghi = g;
     int side = 0;
-    for (int i = 0; i < 8 && hi - lo > 2e-3; ++i) {
+    for (int i = 0; i < 8 && hi - lo > 0.02; ++i) {
       const double m = (lo * ghi - hi * glo) / (ghi - glo);
       const double gm = gap(o, d, m);
+      if (std::abs(gm) < 0.005) {  // within 5 um of the wall (radially)
+        hi = m;
+        break;
+      }
       if (gm > 0) {
         lo = m;
         glo = gm;
@@ -181,7 +253,7 @@ class ColonScene final : public Scene {
       const double dz = wrap_period(z - q.z), da = wrap_angle(phi - q.phi) * R0;
       const double t = (dz * dz + da * da) / (q.radius * q.radius);
       if (t < 1) {
-        const double prof = (1 - t) * (1 - t);
+        const double prof = (1 - t) * (1 + 0.8 * t);  // dome: flat top, sharp base (sessile polyp)
         r -= q.height * prof;
         pw = std::max(pw, std::sqrt(1 - t));
       }
@@ -191,19 +263,23 @@ class ColonScene final : public Scene {
   }
 
   void build_tables() {
-    polyps_ = {{18, deg2rad(40), 5.0, 4.0}, {40, deg2rad(200), 6.0, 5.5}, {62, deg2rad(110), 4.0, 3.5},
-               {95, deg2rad(300), 7.0, 6.0}};
-    radius_.assign(static_cast<size_t>(nz_) * nphi_, 0);
-    albedo_.assign(static_cast<size_t>(nz_) * nphi_, cv::Vec3f());
+    // {z mm, phi, base radius mm, height mm}: within sight of a dome at z = 0, spread around.
+    polyps_ = {{12, deg2rad(40), 6.0, 5.0}, {24, deg2rad(165), 5.0, 4.5}, {33, deg2rad(275), 7.0, 6.0},
+               {58, deg2rad(105), 5.5, 4.5}};
+    radius_.assign(geo_.size(), 0);
+    tbb::parallel_for(0, geo_.nz, [&](int iz) {
+      for (int ip = 0; ip < geo_.nphi; ++ip)
+        radius_[geo_.idx(iz, ip)] = static_cast<float>(analytic_radius(iz * geo_.dz, ip * geo_.dphi, nullptr));
+    });
+    albedo_.assign(tex_.size(), cv::Vec3f());
     const uint32_t seed = p_.seed;
     const double R0 = p_.radius_mm;
-    tbb::parallel_for(0, nz_, [&](int iz) {
-      const double z = iz * dz_;
-      for (int ip = 0; ip < nphi_; ++ip) {
-        const double phi = ip * dphi_;
+    tbb::parallel_for(0, tex_.nz, [&](int iz) {
+      const double z = iz * tex_.dz;
+      for (int ip = 0; ip < tex_.nphi; ++ip) {
+        const double phi = ip * tex_.dphi;
         double pw = 0;
-        const double r = analytic_radius(z, phi, &pw);
-        radius_[idx(iz, ip)] = static_cast<float>(r);
+        analytic_radius(z, phi, &pw);
         // Mucosa: pink-red with slow variation (linear BGR).
         const double slow = tube_noise(z, phi, 12.0, R0, 2, seed);
         cv::Vec3f c(0.16f, 0.20f, 0.62f);
@@ -219,29 +295,42 @@ class ColonScene final : public Scene {
         // Polyps: paler, with a fine pit pattern.
         if (pw > 0) {
           const double pits = tube_noise(z, phi, 0.6, R0, 1, seed + 43);
-          const cv::Vec3f polyp(0.26f, 0.33f, 0.70f);
+          const cv::Vec3f polyp(0.20f, 0.27f, 0.72f);
           const float w = static_cast<float>(smoothstep(0.0, 0.4, pw));
           c = c * (1 - w) + polyp * static_cast<float>(w * (0.85 + 0.3 * pits));
         }
-        albedo_[idx(iz, ip)] = c;
+        albedo_[tex_.idx(iz, ip)] = c;
       }
     });
-    // Bounds for the march.
+    // Normals and bounds for the march, from the geometry table.
+    const TableGrid& g = geo_;
+    slope_.resize(radius_.size());
+    for (int iz = 0; iz < g.nz; ++iz)
+      for (int ip = 0; ip < g.nphi; ++ip)
+        slope_[g.idx(iz, ip)] =
+            cv::Vec2f(static_cast<float>((radius_[g.idx(iz + 1, ip)] - radius_[g.idx(iz - 1, ip)]) / (2 * g.dz)),
+                      static_cast<float>((radius_[g.idx(iz, ip + 1)] - radius_[g.idx(iz, ip - 1)]) / (2 * g.dphi)));
     r_min_ = 1e9;
     for (float r : radius_) r_min_ = std::min(r_min_, static_cast<double>(r));
     r_min_ -= 0.01;
     // Largest slopes of R per z block, then over windows of +-1 block.
     const int nb = static_cast<int>(std::lround(kPeriod / kBlock));
-    std::vector<double> lz(nb, 0), lphi(nb, 0);
-    for (int iz = 0; iz < nz_; ++iz) {
-      const int b = std::min(nb - 1, static_cast<int>(iz * dz_ / kBlock));
-      for (int ip = 0; ip < nphi_; ++ip) {
-        const double r = radius_[idx(iz, ip)];
-        const double sz = std::max(std::abs(radius_[idx(iz + 1, ip)] - r), std::abs(radius_[idx(iz - 1, ip)] - r)) / dz_;
+    std::vector<double> lz(nb, 0), lphi(nb, 0), rmin(nb, 1e9);
+    for (int iz = 0; iz < g.nz; ++iz) {
+      const int b = std::min(nb - 1, static_cast<int>(iz * g.dz / kBlock));
+      for (int ip = 0; ip < g.nphi; ++ip) {
+        const double r = radius_[g.idx(iz, ip)];
+        const double sz =
+            std::max(std::abs(radius_[g.idx(iz + 1, ip)] - r), std::abs(radius_[g.idx(iz - 1, ip)] - r)) / g.dz;
         lz[b] = std::max(lz[b], sz);
-        lphi[b] = std::max(lphi[b], std::abs(radius_[idx(iz, ip + 1)] - r) / dphi_);
+        lphi[b] = std::max(lphi[b], std::abs(radius_[g.idx(iz, ip + 1)] - r) / g.dphi);
+        rmin[b] = std::min(rmin[b], r);
       }
     }
+    rmin_skip_.assign(nb, 1e9);
+    for (int b = 0; b < nb; ++b)
+      for (int j = -kSkipBlocks - 1; j <= kSkipBlocks + 1; ++j)
+        rmin_skip_[b] = std::min(rmin_skip_[b], rmin[(b + j + 2 * nb) % nb] - 0.01);
     lz_win_.assign(nb, 0);
     lphi_win_.assign(nb, 0);
     for (int b = 0; b < nb; ++b)
@@ -252,31 +341,7 @@ class ColonScene final : public Scene {
       }
   }
 
-  size_t idx(int iz, int ip) const {
-    iz %= nz_;
-    if (iz < 0) iz += nz_;
-    ip %= nphi_;
-    if (ip < 0) ip += nphi_;
-    return static_cast<size_t>(iz) * nphi_ + ip;
-  }
-
-  // Bilinear lookup of a table at (z mm, phi rad).
-  template <typename T>
-  T lookup(const std::vector<T>& table, double z, double phi) const {
-    double u = z / dz_, v = phi / dphi_;
-    u -= nz_ * std::floor(u / nz_);
-    const double fu = std::floor(u), fv = std::floor(v);
-    const int iu = static_cast<int>(fu), iv = static_cast<int>(fv);
-    const float a = static_cast<float>(u - fu), b = static_cast<float>(v - fv);
-    const int iu1 = iu + 1 == nz_ ? 0 : iu + 1;
-    const int iv0 = iv >= nphi_ ? iv - nphi_ : iv;
-    const int iv1 = iv0 + 1 >= nphi_ ? 0 : iv0 + 1;
-    const T* r0 = &table[static_cast<size_t>(std::min(iu, nz_ - 1)) * nphi_];
-    const T* r1 = &table[static_cast<size_t>(iu1) * nphi_];
-    return (r0[iv0] * (1 - b) + r0[iv1] * b) * (1 - a) + (r1[iv0] * (1 - b) + r1[iv1] * b) * a;
-  }
-
-  double radius_at(double z, double phi) const { return lookup(radius_, z, phi); }
+  double radius_at(double z, double phi) const { return at(radius_, geo_.cell(z, phi)); }
 
   double gap(const Vec3& o, const Vec3& d, double s) const {
     const double x = o.x() + s * d.x(), y = o.y() + s * d.y(), z = o.z() + s * d.z();
@@ -285,30 +350,29 @@ class ColonScene final : public Scene {
 
   cv::Vec3f shade(const Vec3& p, const Vec3& light) const {
     const double phi = fast_phi(p.y(), p.x()), rho = std::hypot(p.x(), p.y());
-    const double dRdz = (radius_at(p.z() + dz_, phi) - radius_at(p.z() - dz_, phi)) / (2 * dz_);
-    double pp = phi + dphi_, pm = phi - dphi_;
-    if (pp >= kTwoPi) pp -= kTwoPi;
-    if (pm < 0) pm += kTwoPi;
-    const double dRdphi = (radius_at(p.z(), pp) - radius_at(p.z(), pm)) / (2 * dphi_);
+    const cv::Vec2f slope = at(slope_, geo_.cell(p.z(), phi));  // dR/dz, dR/dphi
     // F = R(z, phi) - rho grows towards the axis; its gradient is the inward normal.
-    const Vec3 e_rho(std::cos(phi), std::sin(phi), 0), e_phi(-std::sin(phi), std::cos(phi), 0);
-    const Vec3 n = (dRdz * Vec3::UnitZ() + (dRdphi / rho) * e_phi - e_rho).normalized();
+    const double cp = p.x() / rho, sp = p.y() / rho;
+    const Vec3 e_rho(cp, sp, 0), e_phi(-sp, cp, 0);
+    const Vec3 n = (slope[0] * Vec3::UnitZ() + (slope[1] / rho) * e_phi - e_rho).normalized();
     const Vec3 to_light = light - p;
     const double dist = to_light.norm();
     const double cos_i = std::max(0.0, n.dot(to_light) / std::max(dist, 1e-9));
     const double falloff = (p_.light_distance_mm * p_.light_distance_mm) / std::max(dist * dist, 1.0);
     const double shading = p_.light_power * falloff * (0.85 * cos_i + 0.15);  // 0.15: interreflection
-    return lookup(albedo_, p.z(), phi) * static_cast<float>(shading);
+    return at(albedo_, tex_.cell(p.z(), phi)) * static_cast<float>(shading);
   }
 
   ColonParams p_;
   std::vector<Polyp> polyps_;
-  int nz_ = 0, nphi_ = 0;
-  double dz_ = 0, dphi_ = 0;
+  TableGrid geo_;  // radius and slopes (kGeoCell)
+  TableGrid tex_;  // albedo (kTexCell)
+  std::vector<cv::Vec2f> slope_;  // dR/dz (mm/mm), dR/dphi (mm/rad), central differences
   std::vector<float> radius_;
   std::vector<cv::Vec3f> albedo_;
   double r_min_ = 0;
-  std::vector<double> lz_win_, lphi_win_;  // slope bounds of R per z block (+-1 block window)
+  std::vector<double> lz_win_, lphi_win_;
+  std::vector<double> rmin_skip_;  // smallest R within +-(kSkipBlocks + 1) blocks
 
   int block_of(double z) const {
     const int nb = static_cast<int>(lz_win_.size());
@@ -317,8 +381,34 @@ class ColonScene final : public Scene {
   }
 };
 
+// Building the tables takes about a second of CPU; the last colon built is kept and shared, so
+// tests, the demo and the engine pay it once per process.
+class SharedScene final : public Scene {
+ public:
+  explicit SharedScene(std::shared_ptr<const Scene> s) : s_(std::move(s)) {}
+  cv::Vec3f radiance(const Vec3& o, const Vec3& d, const Vec3& l) const override { return s_->radiance(o, d, l); }
+  std::string spec() const override { return s_->spec(); }
+
+ private:
+  std::shared_ptr<const Scene> s_;
+};
+
 }  // namespace
 
-std::unique_ptr<Scene> make_colon_scene(const ColonParams& params) { return std::make_unique<ColonScene>(params); }
+std::unique_ptr<Scene> make_colon_scene(const ColonParams& params) {
+  static std::mutex mutex;
+  static std::shared_ptr<const Scene> last;
+  static ColonParams last_params;
+  std::lock_guard lock(mutex);
+  const bool same = last && last_params.radius_mm == params.radius_mm &&
+                    last_params.light_distance_mm == params.light_distance_mm &&
+                    last_params.light_power == params.light_power && last_params.seed == params.seed;
+  if (!same) {
+    last = std::make_shared<const ColonScene>(params);
+    last_params = params;
+  }
+  return std::make_unique<SharedScene>(last);
+}
+
 
 }  // namespace omma::sim

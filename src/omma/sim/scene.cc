@@ -81,6 +81,13 @@ class PhotoScene final : public Scene {
 };
 
 // ---------------------------------------------------------------- checker sphere
+unsigned hash_cell(int a, int b) {
+  unsigned h = static_cast<unsigned>(a) * 73856093u ^ static_cast<unsigned>(b) * 19349663u;
+  h ^= h >> 13;
+  h *= 0x5bd1e995u;
+  return h ^ (h >> 15);
+}
+
 class CheckerScene final : public Scene {
  public:
   explicit CheckerScene(double radius) : radius_(radius) {
@@ -98,7 +105,7 @@ class CheckerScene final : public Scene {
     const int it = static_cast<int>(std::floor(td / 10)), ip = static_cast<int>(std::floor(pd / 10));
     static const cv::Vec3f kColours[6] = {{0.60f, 0.15f, 0.10f}, {0.10f, 0.55f, 0.15f}, {0.12f, 0.15f, 0.65f},
                                           {0.55f, 0.55f, 0.10f}, {0.55f, 0.10f, 0.50f}, {0.10f, 0.50f, 0.55f}};
-    cv::Vec3f c0 = ((it + ip) % 2 == 0) ? cv::Vec3f(0.8f, 0.8f, 0.8f) : kColours[(it * 7 + ip * 3) % 6];
+    cv::Vec3f c0 = ((it + ip) % 2 == 0) ? cv::Vec3f(0.8f, 0.8f, 0.8f) : kColours[(hash_cell(it, ip)) % 6];
     // Fine dark lines every 2 degrees (detail for resolution / blur checks).
     const double ft = std::fmod(td, 2.0), fp = std::fmod(pd, 2.0);
     if (ft < 0.2 || fp < 0.2) c0 *= 0.25f;

@@ -48,7 +48,7 @@ std::unique_ptr<Scene> make_photo_scene(const cv::Mat& equirect, const std::stri
 // Procedural colon: a tube along the scene z axis (periodic in z, period 240 mm, so an animated dome
 // can travel any distance), mean diameter about 42 mm varying between about 36 and 48 mm, with
 // haustral folds every 24 mm (semilunar ridges up to 5 mm high), a reddish mucosa with a vascular
-// texture, and four polyps (3-6 mm high, at z = 18, 40, 62, 95 mm). Lit by a point source at `light`
+// texture, and four polyps (4.5-6 mm high, at z = 12, 24, 33, 58 mm). Lit by a point source at `light`
 // (Lambert, inverse-square), so brightness falls with distance. Ray-surface intersection marches a
 // precomputed radius table R(z, phi) (0.15 mm cells) with Lipschitz-safe steps, then bisects.
 // Rays travelling more than 400 mm, or starting outside the tube, see black.

@@ -316,3 +316,43 @@ TEST(SimSimulate, FramesFolderIsComplete) {
 
 }  // namespace
 }  // namespace omma::sim
+
+namespace omma::sim {
+namespace {
+
+TEST(SimUsaf, TruthResolutionFollowsThePanoramaPixelSize) {
+  const auto scene = make_usaf_scene(25);
+  auto limit_bar_deg = [&](int size) {
+    const PanoGrid grid{Projection::kVr180, size, size};
+    const UsafMeasurement m = measure_usaf(render_truth(*scene, grid, {}, 2), grid, 25, 0.1);
+    EXPECT_NE(m.limit(), nullptr) << size;
+    EXPECT_NE(m.strict_limit(), nullptr) << size;
+    return m.limit() ? m.limit()->bar_deg : 99.0;
+  };
+  const double px360 = 180.0 / 360, px900 = 180.0 / 900;
+  const double coarse = limit_bar_deg(360), fine = limit_bar_deg(900);
+  EXPECT_LT(fine, coarse);
+  // A bar needs at least about one pixel, and about two pixels suffice (box-filtered truth).
+  EXPECT_GE(coarse, 0.9 * px360);
+  EXPECT_LE(coarse, 2.5 * px360);
+  EXPECT_GE(fine, 0.9 * px900);
+  EXPECT_LE(fine, 2.5 * px900);
+}
+
+TEST(SimRender, MovingTheDomeRotatesWhatTheCamerasSee) {
+  // Rotating the dome by R equals rendering a camera whose frame is turned by R (far-field scene).
+  const auto scene = make_photo_scene(photo());
+  const RigCamera cam = test_camera(1, direction_from_spherical(deg2rad(40), deg2rad(10)), 64);
+  DomePose pose;
+  pose.rotation = Eigen::AngleAxisd(deg2rad(30), Vec3(1, 2, 3).normalized()).toRotationMatrix();
+  pose.translation_mm = Vec3(3, -2, 40);
+  RigCamera turned = cam;
+  turned.frame.t = pose.rotation * cam.frame.t;
+  turned.frame.u = pose.rotation * cam.frame.u;
+  turned.frame.v = pose.rotation * cam.frame.v;
+  const cv::Mat a = render_radiance(*scene, cam, pose, 1), b = render_radiance(*scene, turned, {}, 1);
+  EXPECT_LT(cv::norm(a, b, cv::NORM_INF), 1e-5);
+}
+
+}  // namespace
+}  // namespace omma::sim

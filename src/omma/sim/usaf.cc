@@ -1,6 +1,10 @@
 #include "omma/sim/usaf.h"
 
+#include <algorithm>
 #include <cmath>
+#include <stdexcept>
+
+#include <fmt/format.h>
 
 namespace omma::sim {
 
@@ -88,6 +92,106 @@ UsafPaint usaf_paint(const Vec2& p) {
       return UsafPaint::kBlack;
   }
   return UsafPaint::kWhite;
+}
+
+namespace {
+
+// Bilinear luma (BT.601 on BGR) of `img` (CV_32F, 1 or 3 channels) at continuous pixel (x, y).
+double luma_at(const cv::Mat& img, const PanoGrid& grid, double x, double y) {
+  const bool wrap = grid.projection != Projection::kVr180;
+  const double sx = x - 0.5, sy = std::clamp(y - 0.5, 0.0, img.rows - 1.0);
+  const int x0f = static_cast<int>(std::floor(sx)), y0 = static_cast<int>(std::floor(sy));
+  const double ax = sx - x0f, ay = sy - y0;
+  auto col = [&](int c) { return wrap ? ((c % img.cols) + img.cols) % img.cols : std::clamp(c, 0, img.cols - 1); };
+  const int xa = col(x0f), xb = col(x0f + 1), y1 = std::min(y0 + 1, img.rows - 1);
+  auto px = [&](int r, int c) {
+    if (img.channels() == 1) return static_cast<double>(img.at<float>(r, c));
+    const cv::Vec3f v = img.at<cv::Vec3f>(r, c);
+    return 0.114 * v[0] + 0.587 * v[1] + 0.299 * v[2];
+  };
+  return (px(y0, xa) * (1 - ax) + px(y0, xb) * ax) * (1 - ay) + (px(y1, xa) * (1 - ax) + px(y1, xb) * ax) * ay;
+}
+
+}  // namespace
+
+// The viewpoint an element is seen from in the panorama (see usaf.h).
+int choose_viewpoint(const Vec3& X, const std::vector<UsafViewpoint>& cams) {
+  int best = -1, best_any = -1;
+  double best_dot = -2, best_any_dot = -2;
+  for (size_t c = 0; c < cams.size(); ++c) {
+    const Vec3 w = (X - cams[c].position_mm).normalized();
+    const double dc = w.dot(cams[c].axis);
+    if (dc > best_any_dot) best_any_dot = dc, best_any = static_cast<int>(c);
+    bool nearest = true;
+    for (size_t k = 0; k < cams.size() && nearest; ++k) nearest = w.dot(cams[k].axis) <= dc + 1e-12;
+    if (nearest && dc > best_dot) best_dot = dc, best = static_cast<int>(c);
+  }
+  return best >= 0 ? best : best_any;
+}
+
+UsafMeasurement measure_usaf(const cv::Mat& pano, const PanoGrid& grid, double distance, double min_contrast,
+                             const std::vector<UsafViewpoint>& cameras) {
+  if (pano.empty() || pano.cols != grid.width || pano.rows != grid.height)
+    throw std::invalid_argument(fmt::format("panorama is {}x{} but the grid is {}x{}", pano.cols, pano.rows,
+                                            grid.width, grid.height));
+  if (!(distance > 0)) throw std::invalid_argument("the chart distance must be positive");
+  Vec3 observer = Vec3::Zero();
+  cv::Mat img;
+  const double scale = pano.depth() == CV_8U ? 1.0 / 255 : pano.depth() == CV_16U ? 1.0 / 65535 : 1.0;
+  pano.convertTo(img, CV_MAKETYPE(CV_32F, pano.channels()), scale);
+  if (img.channels() == 4) cv::extractChannel(img, img, 0);
+  auto sample = [&](const Vec2& p) {
+    const auto px = grid.pixel(Vec3(p.x(), p.y(), distance) - observer);
+    if (!px) throw std::invalid_argument("the USAF chart is not inside the panorama grid");
+    return luma_at(img, grid, px->x(), px->y());
+  };
+  UsafMeasurement m;
+  m.min_contrast = min_contrast;
+  // Level at offset `k` bar widths across the bars (k = -2, 0, 2: bars; -1, 1: gaps), averaged over
+  // the central half of that bar or gap and over the middle 60 % of the bar length.
+  auto level = [&](const Vec2& c, double b, bool across_x, double k) {
+    double sum = 0;
+    int n = 0;
+    for (int i = -2; i <= 2; ++i)
+      for (int j = -3; j <= 3; ++j) {
+        const double a = (k + 0.25 * i / 2) * b;  // across: within +-0.25 b of the centre
+        const double l = 1.5 * b * j / 3;          // along: within +-1.5 b (60 % of 5 b)
+        sum += sample(across_x ? c + Vec2(a, l) : c + Vec2(l, a));
+        ++n;
+      }
+    return sum / n;
+  };
+  auto contrast = [&](const Vec2& c, double b, bool across_x) {
+    const double bar = std::max({level(c, b, across_x, -2), level(c, b, across_x, 0), level(c, b, across_x, 2)});
+    const double gap = std::min(level(c, b, across_x, -1), level(c, b, across_x, 1));
+    return (gap - bar) / std::max(gap + bar, 1e-9);
+  };
+  bool all = true;
+  for (const auto& e : usaf_chart()) {
+    UsafReading r;
+    r.element = e;
+    // Each bar set is located from its own viewpoint (the two sets may come from different cameras).
+    auto view = [&](const Vec2& centre) {
+      const Vec3 X(centre.x(), centre.y(), distance);
+      const int cam = cameras.empty() ? -1 : choose_viewpoint(X, cameras);
+      observer = cam >= 0 ? cameras[cam].position_mm : Vec3::Zero();
+      return cam;
+    };
+    r.camera = view(e.vertical_bars_mm);
+    r.contrast_x = contrast(e.vertical_bars_mm, e.bar_mm, true);
+    const Vec3 c = Vec3(e.vertical_bars_mm.x(), e.vertical_bars_mm.y(), distance) - observer;
+    r.bar_deg = rad2deg(std::atan2(e.bar_mm * c.z() / c.norm(), c.norm()));
+    r.bar_deg_centre = rad2deg(std::atan(e.bar_mm / distance));
+    view(e.horizontal_bars_mm);
+    r.contrast_y = contrast(e.horizontal_bars_mm, e.bar_mm, false);
+    r.resolved = r.contrast_x >= min_contrast && r.contrast_y >= min_contrast;
+    all = all && r.resolved;
+    const int i = static_cast<int>(m.readings.size());
+    if (all) m.strict_limit_index = i;
+    if (r.resolved && i > 0 && m.readings.back().resolved) m.limit_index = i;
+    m.readings.push_back(r);
+  }
+  return m;
 }
 
 }  // namespace omma::sim

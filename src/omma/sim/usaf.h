@@ -12,7 +12,10 @@
 
 #include <vector>
 
+#include <opencv2/core.hpp>
+
 #include "omma/core/geometry.h"
+#include "omma/core/grid.h"
 
 namespace omma::sim {
 
@@ -37,5 +40,50 @@ UsafPaint usaf_paint(const Vec2& xy_mm);
 
 // Extent of the white card: |x| <= half_width, |y| <= half_height (mm).
 Vec2 usaf_card_half_size_mm();
+
+// Reading the chart in a panorama (thesis §5.5.2): for each element and bar direction, the image is
+// sampled (bilinear, luma of the stored values) along lines across the three bars, averaged over
+// the middle 60 % of the bar length; Ibar = the largest of the three bar-centre levels, Igap = the
+// smaller of the two gap-centre levels (each over the central half of its bar/gap). The element is
+// resolved in that direction if the modulation (Igap - Ibar) / (Igap + Ibar) >= min_contrast.
+struct UsafReading {
+  UsafElement element;
+  double contrast_x = 0;    // vertical bars, detail along chart x
+  double contrast_y = 0;    // horizontal bars, detail along chart y
+  double bar_deg = 0;       // angle of one bar seen from the viewpoint, degrees
+  double bar_deg_centre = 0;  // atan(bar / distance): the thesis's figure (seen from the dome centre)
+  int camera = -1;          // index into `cameras` of the viewpoint used, -1: the dome centre
+  bool resolved = false;    // both directions reach min_contrast
+};
+// Reading the limit: `limit` is the finest element resolved together with the next coarser one
+// (two in a row: an isolated pass is aliasing, an isolated failure of a large element is a seam
+// cutting through it); `strict_limit` is the last element of the unbroken run of resolved elements
+// from the coarsest one.
+struct UsafMeasurement {
+  std::vector<UsafReading> readings;  // every element, coarsest first
+  int limit_index = -1;               // -1: none
+  int strict_limit_index = -1;        // -1: the coarsest element is not resolved
+  double min_contrast = 0.1;
+  const UsafReading* limit() const { return limit_index >= 0 ? &readings[limit_index] : nullptr; }
+  const UsafReading* strict_limit() const {
+    return strict_limit_index >= 0 ? &readings[strict_limit_index] : nullptr;
+  }
+};
+
+// Where a chart point appears in the panorama. A stitched panorama is built for far objects: a
+// near chart point X seen by camera c (centre p_c) lands at direction X - p_c, not X (parallax: the
+// chart is only 25 mm away, the cameras 5 mm off centre). With `cameras` given, each element is
+// located as camera c puts it, c being the camera whose optical axis is nearest to X - p_c among
+// those that are also the nearest-axis camera of that direction (the nn rule, eq. 2.6-2.7); with no
+// cameras (a ground truth), as seen from the dome centre. Blending methods that mix cameras show
+// ghosts there, which lowers the contrast: that is part of what the measurement measures.
+struct UsafViewpoint {
+  Vec3 position_mm = Vec3::Zero();
+  Vec3 axis = Vec3::UnitZ();
+};
+// `pano`: 8U/16U/32F, 1 or 3 channels, on `grid`; the chart is the plane z = distance_mm of the
+// dome frame. Throws std::invalid_argument if the chart is not inside the grid.
+UsafMeasurement measure_usaf(const cv::Mat& pano, const PanoGrid& grid, double distance_mm = 25.0,
+                             double min_contrast = 0.1, const std::vector<UsafViewpoint>& cameras = {});
 
 }  // namespace omma::sim

@@ -1,0 +1,418 @@
+#include "omma/calib/calibrate.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <memory>
+#include <numeric>
+#include <stdexcept>
+
+#include <ceres/ceres.h>
+#include <ceres/rotation.h>
+#include <fmt/format.h>
+
+#include "omma/core/log.h"
+#include "omma/core/progress.h"
+
+namespace omma::calib {
+namespace {
+
+// eq. 5.21-5.26 on a camera-frame point p = (p_t, p_u, p_v).
+template <typename T>
+void project_camera_point(const T* fcc, const T* k, const T* p, T* px) {
+  const T x = p[1] / p[0], y = p[2] / p[0];
+  const T r2 = x * x + y * y;
+  const T rad = T(1) + k[0] * r2 + k[1] * r2 * r2 + k[4] * r2 * r2 * r2;
+  const T xd = rad * x + T(2) * k[3] * x * y + k[2] * (r2 + T(2) * x * x);
+  const T yd = rad * y + T(2) * k[2] * x * y + k[3] * (r2 + T(2) * y * y);
+  px[0] = fcc[2] + fcc[0] * xd;
+  px[1] = fcc[3] + fcc[1] * yd;
+}
+
+// Far field: the scene point is a unit direction s (dome frame).
+struct FarCost {
+  Vec2 obs;
+  Mat3 r_nom;
+  template <typename T>
+  bool operator()(const T* delta, const T* fcc, const T* k, const T* s, T* res) const {
+    T p0[3], p[3], px[2];
+    for (int r = 0; r < 3; ++r) p0[r] = T(r_nom(r, 0)) * s[0] + T(r_nom(r, 1)) * s[1] + T(r_nom(r, 2)) * s[2];
+    ceres::AngleAxisRotatePoint(delta, p0, p);
+    if (p[0] <= T(1e-6)) return false;
+    project_camera_point(fcc, k, p, px);
+    res[0] = px[0] - T(obs.x());
+    res[1] = px[1] - T(obs.y());
+    return true;
+  }
+};
+
+// Near field: homogeneous scene point X = (P, h), camera centre c fixed: w = P - h c.
+struct NearCost {
+  Vec2 obs;
+  Mat3 r_nom;
+  Vec3 c;
+  template <typename T>
+  bool operator()(const T* delta, const T* fcc, const T* k, const T* x, T* res) const {
+    T w[3], p0[3], p[3], px[2];
+    for (int i = 0; i < 3; ++i) w[i] = x[i] - x[3] * T(c[i]);
+    for (int r = 0; r < 3; ++r) p0[r] = T(r_nom(r, 0)) * w[0] + T(r_nom(r, 1)) * w[1] + T(r_nom(r, 2)) * w[2];
+    ceres::AngleAxisRotatePoint(delta, p0, p);
+    if (p[0] <= T(1e-9)) return false;
+    project_camera_point(fcc, k, p, px);
+    res[0] = px[0] - T(obs.x());
+    res[1] = px[1] - T(obs.y());
+    return true;
+  }
+};
+
+struct RotationPrior {
+  double inv_sigma;
+  template <typename T>
+  bool operator()(const T* delta, T* res) const {
+    for (int i = 0; i < 3; ++i) res[i] = delta[i] * T(inv_sigma);
+    return true;
+  }
+};
+
+struct Observation {
+  int cam = 0;  // rig index
+  Vec2 px;
+};
+
+struct UnionFind {
+  std::vector<int> parent;
+  explicit UnionFind(int n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
+  int find(int x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  }
+  void unite(int a, int b) { parent[find(a)] = find(b); }
+};
+
+Mat3 exp_rotation(const double* delta, const Mat3& r_nom) {
+  double rm[9];
+  ceres::AngleAxisToRotationMatrix(delta, ceres::ColumnMajorAdapter3x3(rm));
+  Mat3 r;
+  for (int c = 0; c < 3; ++c)
+    for (int rr = 0; rr < 3; ++rr) r(rr, c) = rm[c * 3 + rr];
+  return r * r_nom;
+}
+
+// Midpoint triangulation of rays (c_i + l d_i); false if ill-conditioned or behind a camera.
+bool triangulate(const std::vector<Vec3>& c, const std::vector<Vec3>& d, Vec3* p) {
+  Mat3 a = Mat3::Zero();
+  Vec3 b = Vec3::Zero();
+  for (size_t i = 0; i < c.size(); ++i) {
+    const Mat3 m = Mat3::Identity() - d[i] * d[i].transpose();
+    a += m;
+    b += m * c[i];
+  }
+  Eigen::SelfAdjointEigenSolver<Mat3> es(a);
+  if (es.eigenvalues()(0) < 1e-6) return false;
+  *p = a.ldlt().solve(b);
+  for (size_t i = 0; i < c.size(); ++i)
+    if ((*p - c[i]).dot(d[i]) <= 0) return false;
+  return true;
+}
+
+}  // namespace
+
+CalibrationResult calibrate_rig(const Rig& nominal, const std::vector<cv::Mat>& frames,
+                                const CalibrationOptions& opt) {
+  const int n = static_cast<int>(nominal.cameras.size());
+  if (static_cast<int>(frames.size()) != n)
+    throw std::invalid_argument(fmt::format("calibrate: {} frames for a rig of {} cameras", frames.size(), n));
+  if (n < 2) throw std::invalid_argument("calibrate: the rig needs at least 2 cameras");
+  for (int i = 0; i < n; ++i)
+    if (frames[i].cols != nominal.cameras[i].in.width || frames[i].rows != nominal.cameras[i].in.height)
+      throw std::invalid_argument(fmt::format("calibrate: frame of camera {} is {}x{}, the rig says {}x{}",
+                                              nominal.cameras[i].id, frames[i].cols, frames[i].rows,
+                                              nominal.cameras[i].in.width, nominal.cameras[i].in.height));
+  CalibrationResult res;
+  res.rig = nominal;
+
+  // 1. Features.
+  std::vector<CameraFeatures> feats(n);
+  {
+    Progress progress("calibrate: features", n);
+    for (int i = 0; i < n; ++i) {
+      feats[i] = detect_features(frames[i], opt.features);
+      progress.step();
+    }
+  }
+  // 2. Pairwise matching between overlapping cameras.
+  const auto pairs = overlapping_pairs(nominal, deg2rad(opt.overlap_margin_deg));
+  res.pairs = static_cast<int>(pairs.size());
+  std::vector<PairMatches> pms;
+  int near_votes = 0, far_votes = 0;
+  {
+    Progress progress("calibrate: matching", pairs.size());
+    for (const auto& [a, b] : pairs) {
+      PairMatches pm = match_pair(nominal, a, b, feats[a], feats[b], opt.scene, opt.match);
+      res.matches += pm.putative;
+      if (!pm.inliers.empty()) {
+        if (pm.prefers_near()) ++near_votes;
+        else ++far_votes;
+      }
+      pms.push_back(std::move(pm));
+      progress.step();
+    }
+  }
+  SceneModel scene = opt.scene;
+  if (scene == SceneModel::kAuto) {
+    scene = near_votes > far_votes ? SceneModel::kNear : SceneModel::kFar;
+    // All pairs use the one chosen model.
+    for (auto& pm : pms) pm.choose(scene, opt.match.min_inliers);
+  }
+  res.scene = scene;
+  for (const auto& pm : pms) res.inliers += static_cast<int>(pm.inliers.size());
+  spdlog::info("calibrate: {} cameras, {} overlapping pairs, {} matches, {} RANSAC inliers, {} scene", n,
+               res.pairs, res.matches, res.inliers, to_string(scene));
+
+  // 3. Tracks (union-find over keypoints), tracks seen twice by one camera are dropped.
+  std::vector<int> offset(n + 1, 0);
+  for (int i = 0; i < n; ++i) offset[i + 1] = offset[i] + static_cast<int>(feats[i].px.size());
+  UnionFind uf(offset[n]);
+  std::vector<char> used(offset[n], 0);
+  for (const auto& pm : pms)
+    for (const auto& m : pm.inliers) {
+      const int ga = offset[pm.cam_a] + m.a, gb = offset[pm.cam_b] + m.b;
+      uf.unite(ga, gb);
+      used[ga] = used[gb] = 1;
+    }
+  std::map<int, std::vector<int>> groups;
+  for (int g = 0; g < offset[n]; ++g)
+    if (used[g]) groups[uf.find(g)].push_back(g);
+  auto cam_of = [&](int g) { return static_cast<int>(std::upper_bound(offset.begin(), offset.end(), g) - offset.begin()) - 1; };
+  std::vector<std::vector<Observation>> tracks;
+  for (const auto& [root, members] : groups) {
+    std::vector<Observation> t;
+    std::vector<char> seen(n, 0);
+    bool conflict = false;
+    for (int g : members) {
+      const int c = cam_of(g);
+      if (seen[c]) conflict = true;
+      seen[c] = 1;
+      t.push_back({c, feats[c].px[g - offset[c]]});
+    }
+    if (!conflict && t.size() >= 2) tracks.push_back(std::move(t));
+  }
+
+  // 4. Cameras with too few observations keep their nominal values.
+  std::vector<int> obs_count(n, 0);
+  for (const auto& t : tracks)
+    for (const auto& o : t) ++obs_count[o.cam];
+  std::vector<char> active(n, 0);
+  for (int i = 0; i < n; ++i) {
+    active[i] = obs_count[i] >= opt.min_observations;
+    if (!active[i]) res.uncalibrated_ids.push_back(nominal.cameras[i].id);
+  }
+  if (std::count(active.begin(), active.end(), 1) < 2)
+    throw std::runtime_error(fmt::format(
+        "calibrate: too few feature matches to calibrate anything ({} matches, {} inliers over {} camera "
+        "pairs); are the frames textureless, or do they not belong to this rig?",
+        res.matches, res.inliers, res.pairs));
+  if (!res.uncalibrated_ids.empty()) {
+    std::string ids;
+    for (int id : res.uncalibrated_ids) ids += (ids.empty() ? "" : ", ") + std::to_string(id);
+    res.warnings.push_back(fmt::format("cameras with fewer than {} matched observations keep their nominal values: {}",
+                                       opt.min_observations, ids));
+    spdlog::warn("calibrate: {}", res.warnings.back());
+  }
+  for (auto& t : tracks)
+    t.erase(std::remove_if(t.begin(), t.end(), [&](const Observation& o) { return !active[o.cam]; }), t.end());
+  tracks.erase(std::remove_if(tracks.begin(), tracks.end(), [](const auto& t) { return t.size() < 2; }),
+               tracks.end());
+
+  // 5. Parameters.
+  std::vector<Mat3> r_nom(n);
+  std::vector<std::array<double, 3>> delta(n, {0, 0, 0});
+  std::vector<std::array<double, 4>> fcc(n);
+  std::vector<std::array<double, 5>> kk(n);
+  for (int i = 0; i < n; ++i) {
+    const auto& c = nominal.cameras[i];
+    r_nom[i] = c.frame.dome_to_camera();
+    fcc[i] = {c.in.fu, c.in.fv, c.in.cu, c.in.cv};
+    kk[i] = c.in.k;
+  }
+  auto fcc_block = [&](int i) { return fcc[opt.share_focal || opt.share_center ? 0 : i].data(); };
+  auto k_block = [&](int i) { return kk[opt.share_distortion ? 0 : i].data(); };
+  // Sharing focal and centre is handled with one block for both when either is shared (documented
+  // simplification: sharing one of them shares both).
+
+  const bool near = scene == SceneModel::kNear;
+  std::vector<std::array<double, 4>> points(tracks.size());
+  for (size_t ti = 0; ti < tracks.size(); ++ti) {
+    std::vector<Vec3> cs, ds;
+    Vec3 mean = Vec3::Zero();
+    for (const auto& o : tracks[ti]) {
+      const Vec3 d = nominal.cameras[o.cam].model().unproject(o.px);
+      cs.push_back(nominal.cameras[o.cam].position_mm);
+      ds.push_back(d);
+      mean += d;
+    }
+    mean.normalize();
+    Vec3 p;
+    if (near && triangulate(cs, ds, &p)) {
+      Eigen::Vector4d x(p.x(), p.y(), p.z(), 1.0);
+      x.normalize();
+      points[ti] = {x[0], x[1], x[2], x[3]};
+    } else {
+      points[ti] = {mean.x(), mean.y(), mean.z(), 0.0};
+    }
+  }
+
+  auto evaluate = [&](std::vector<double>* err2) {
+    err2->clear();
+    for (size_t ti = 0; ti < tracks.size(); ++ti)
+      for (const auto& o : tracks[ti]) {
+        double r[2] = {1e3, 1e3};
+        const int i = o.cam;
+        const Vec2 obs = o.px;
+        bool ok;
+        if (near) ok = NearCost{obs, r_nom[i], nominal.cameras[i].position_mm}(delta[i].data(), fcc_block(i), k_block(i), points[ti].data(), r);
+        else ok = FarCost{obs, r_nom[i]}(delta[i].data(), fcc_block(i), k_block(i), points[ti].data(), r);
+        err2->push_back(ok ? r[0] * r[0] + r[1] * r[1] : 1e6);
+      }
+  };
+  // Per-observation keep mask (outlier removal between the solves).
+  std::vector<std::vector<char>> keep(tracks.size());
+  for (size_t ti = 0; ti < tracks.size(); ++ti) keep[ti].assign(tracks[ti].size(), 1);
+  {
+    std::vector<double> e2;
+    evaluate(&e2);
+    double s = 0;
+    for (double v : e2) s += std::min(v, 1e4);
+    res.initial_rms_px = e2.empty() ? 0 : std::sqrt(s / e2.size());
+  }
+
+  std::vector<int> k_const;
+  for (int j = opt.radial_terms; j < 3; ++j) k_const.push_back(j == 0 ? 0 : j == 1 ? 1 : 4);
+  if (!opt.estimate_tangential) k_const.insert(k_const.end(), {2, 3});
+  std::vector<int> fcc_const;
+  if (!opt.estimate_focal) fcc_const.insert(fcc_const.end(), {0, 1});
+  if (!opt.estimate_center) fcc_const.insert(fcc_const.end(), {2, 3});
+
+  for (int pass = 0; pass < 2; ++pass) {
+    ceres::Problem::Options popt;
+    popt.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    ceres::Problem problem(popt);
+    ceres::SphereManifold<3> sphere3;
+    ceres::SphereManifold<4> sphere4;
+    std::unique_ptr<ceres::Manifold> k_manifold, fcc_manifold;
+    if (!k_const.empty() && k_const.size() < 5) k_manifold = std::make_unique<ceres::SubsetManifold>(5, k_const);
+    if (!fcc_const.empty() && fcc_const.size() < 4) fcc_manifold = std::make_unique<ceres::SubsetManifold>(4, fcc_const);
+    auto make_loss = [&]() -> ceres::LossFunction* {
+      if (opt.loss == "huber") return new ceres::HuberLoss(opt.loss_scale_px);
+      if (opt.loss == "cauchy") return new ceres::CauchyLoss(opt.loss_scale_px);
+      return nullptr;
+    };
+    for (size_t ti = 0; ti < tracks.size(); ++ti) {
+      int kept = 0;
+      for (size_t oi = 0; oi < tracks[ti].size(); ++oi) kept += keep[ti][oi];
+      if (kept < 2) continue;
+      for (size_t oi = 0; oi < tracks[ti].size(); ++oi) {
+        if (!keep[ti][oi]) continue;
+        const auto& o = tracks[ti][oi];
+        const int i = o.cam;
+        if (near) {
+          auto* cost = new ceres::AutoDiffCostFunction<NearCost, 2, 3, 4, 5, 4>(
+              new NearCost{o.px, r_nom[i], nominal.cameras[i].position_mm});
+          problem.AddResidualBlock(cost, make_loss(), delta[i].data(), fcc_block(i), k_block(i), points[ti].data());
+        } else {
+          auto* cost = new ceres::AutoDiffCostFunction<FarCost, 2, 3, 4, 5, 3>(new FarCost{o.px, r_nom[i]});
+          problem.AddResidualBlock(cost, make_loss(), delta[i].data(), fcc_block(i), k_block(i), points[ti].data());
+        }
+      }
+      if (problem.HasParameterBlock(points[ti].data()))
+        problem.SetManifold(points[ti].data(), near ? static_cast<ceres::Manifold*>(&sphere4) : &sphere3);
+    }
+    for (int i = 0; i < n; ++i) {
+      if (!problem.HasParameterBlock(delta[i].data())) continue;
+      if (!opt.estimate_rotation) {
+        problem.SetParameterBlockConstant(delta[i].data());
+      } else if (opt.prior_rotation_deg > 0) {
+        problem.AddResidualBlock(new ceres::AutoDiffCostFunction<RotationPrior, 3, 3>(
+                                     new RotationPrior{1.0 / deg2rad(opt.prior_rotation_deg)}),
+                                 nullptr, delta[i].data());
+      }
+    }
+    for (int i = 0; i < n; ++i) {
+      for (double* blk : {fcc_block(i), k_block(i)}) {
+        if (!problem.HasParameterBlock(blk)) continue;
+        const bool is_k = blk == k_block(i);
+        const auto& cst = is_k ? k_const : fcc_const;
+        if (cst.size() == (is_k ? 5u : 4u)) problem.SetParameterBlockConstant(blk);
+        else if (!cst.empty()) problem.SetManifold(blk, is_k ? k_manifold.get() : fcc_manifold.get());
+      }
+    }
+    ceres::Solver::Options so;
+    so.linear_solver_type = ceres::SPARSE_SCHUR;
+    if (!ceres::IsSparseLinearAlgebraLibraryTypeAvailable(ceres::SUITE_SPARSE) &&
+        !ceres::IsSparseLinearAlgebraLibraryTypeAvailable(ceres::EIGEN_SPARSE))
+      so.linear_solver_type = ceres::DENSE_SCHUR;
+    so.max_num_iterations = opt.max_iterations;
+    so.num_threads = opt.threads;
+    so.minimizer_progress_to_stdout = false;
+    so.logging_type = ceres::SILENT;
+    ceres::Solver::Summary summary;
+    ceres::Solve(so, &problem, &summary);
+    spdlog::info("calibrate: bundle adjustment pass {}: {} residual blocks, {} iterations, cost {:.4g} -> {:.4g}",
+                 pass + 1, summary.num_residual_blocks, summary.iterations.size(), summary.initial_cost,
+                 summary.final_cost);
+    if (pass == 0) {
+      std::vector<double> e2;
+      evaluate(&e2);
+      size_t idx = 0;
+      for (size_t ti = 0; ti < tracks.size(); ++ti)
+        for (size_t oi = 0; oi < tracks[ti].size(); ++oi, ++idx)
+          if (e2[idx] > opt.outlier_px * opt.outlier_px) keep[ti][oi] = 0, ++res.rejected;
+    }
+  }
+
+  // 6. Statistics over the kept observations of tracks with >= 2 kept observations.
+  std::vector<double> e2;
+  evaluate(&e2);
+  std::vector<double> cam_sum(n, 0);
+  std::vector<int> cam_n(n, 0);
+  double sum = 0;
+  size_t idx = 0;
+  for (size_t ti = 0; ti < tracks.size(); ++ti) {
+    int kept = 0;
+    for (char k : keep[ti]) kept += k;
+    bool counted = kept >= 2;
+    if (counted) ++res.tracks;
+    for (size_t oi = 0; oi < tracks[ti].size(); ++oi, ++idx) {
+      if (!counted || !keep[ti][oi]) continue;
+      cam_sum[tracks[ti][oi].cam] += e2[idx];
+      ++cam_n[tracks[ti][oi].cam];
+      sum += e2[idx];
+      ++res.observations;
+    }
+  }
+  res.rms_px = res.observations ? std::sqrt(sum / res.observations) : 0;
+  for (int i = 0; i < n; ++i) {
+    RigCamera& c = res.rig.cameras[i];
+    CameraReport rep;
+    rep.id = c.id;
+    rep.matches = cam_n[i];
+    rep.rms_px = cam_n[i] ? std::sqrt(cam_sum[i] / cam_n[i]) : 0;
+    rep.calibrated = active[i];
+    res.per_camera.push_back(rep);
+    if (!active[i]) continue;
+    const Mat3 r = exp_rotation(delta[i].data(), r_nom[i]);
+    c.frame.t = r.row(0).transpose();
+    c.frame.u = r.row(1).transpose();
+    c.frame.v = r.row(2).transpose();
+    const double* f = fcc_block(i);
+    c.in.fu = f[0], c.in.fv = f[1], c.in.cu = f[2], c.in.cv = f[3];
+    const double* k = k_block(i);
+    for (int j = 0; j < 5; ++j) c.in.k[j] = k[j];
+  }
+  res.rig.validate();
+  spdlog::info("calibrate: reprojection RMS {:.3f} px (nominal rig {:.3f} px), {} tracks, {} observations, {} rejected",
+               res.rms_px, res.initial_rms_px, res.tracks, res.observations, res.rejected);
+  return res;
+}
+
+}  // namespace omma::calib

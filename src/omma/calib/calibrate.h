@@ -1,0 +1,91 @@
+// Rig calibration from one set of camera frames (thesis §3.6): SIFT features in every camera,
+// matching between cameras whose nominal cones of view intersect, RANSAC outlier rejection, then
+// a Ceres bundle adjustment of per-camera rotation, focal lengths, principal point and radial
+// distortion, with a robust loss.
+//
+// Model (conventions.h, eq. 3.13, eq. 5.21-5.26). Camera i maps a dome-frame direction w to
+//   p = Exp(delta_i) * R_nom_i * w          (R_nom_i = rows t, u, v of the NOMINAL camera i;
+//                                             delta_i = angle-axis correction in the camera frame)
+//   x = p_u / p_t,  y = p_v / p_t,  (x', y') = distort(k_i, x, y),  pixel = (cu + fu x', cv + fv y').
+// The calibrated frame is (t, u, v) = rows of Exp(delta_i) R_nom_i; ypr follow from eq. 3.13.
+//
+// Scene points (one per feature track, built by union-find over the pairwise matches):
+//   * far field: a unit direction s on S^2 (Ceres SphereManifold<3>), w = s. The cameras sit on a
+//     5 mm dome, so a distant scene is seen along parallel rays: rotation-only.
+//   * near field (parallax, e.g. the 35 mm colon tube): a homogeneous point X = (P, h) on S^3 and
+//     the camera centres c_i FIXED at their nominal positions: w = P - h c_i (mm).
+//   The scene model is chosen per run (auto: near when the essential-matrix consensus clearly beats
+//   the rotation-only one in most camera pairs).
+//
+// Gauge: in the far field the whole rig can rotate freely without changing any image, so a weak
+// prior |delta_i| / sigma (sigma = prior_rotation_deg) pulls the rotations towards the nominal
+// ones; it only fixes the free global rotation (the rig's mean orientation stays nominal). With
+// parallax the fixed camera positions fix the gauge and the prior is negligible.
+//
+// Residuals are in pixels; the robust loss (Huber or Cauchy, scale loss_scale_px) tames remaining
+// outliers, then observations above outlier_px are dropped and the problem is solved again.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "omma/calib/features.h"
+#include "omma/core/rig.h"
+
+namespace omma::calib {
+
+struct CalibrationOptions {
+  FeatureOptions features;
+  MatchOptions match;
+  SceneModel scene = SceneModel::kAuto;
+  double overlap_margin_deg = 0;  // pairs need nominal cones intersecting by more than this
+
+  bool estimate_rotation = true;
+  bool estimate_focal = true;     // fu, fv
+  bool estimate_center = true;    // cu, cv
+  int radial_terms = 1;           // how many radial coefficients to estimate: 0..3 = k1, k2, k5
+  bool estimate_tangential = false;  // k3, k4
+  bool share_focal = false;       // one fu, fv for all cameras
+  bool share_center = false;      // one cu, cv for all cameras
+  bool share_distortion = false;  // one k1..k5 for all cameras
+
+  std::string loss = "huber";     // "huber", "cauchy" or "none"
+  double loss_scale_px = 1.0;
+  double outlier_px = 3.0;        // after the first solve, drop observations with a larger error
+  double prior_rotation_deg = 5;  // gauge prior (see above)
+  int max_iterations = 50;        // Ceres iterations per solve
+  int min_observations = 30;      // a camera with fewer keeps its nominal values (warning)
+  int threads = 2;
+};
+
+struct CameraReport {
+  int id = 0;
+  double rms_px = 0;     // reprojection RMS over this camera's observations
+  int matches = 0;       // observations (feature track members) of this camera used in the fit
+  bool calibrated = true;
+};
+
+struct CalibrationResult {
+  Rig rig;                       // the calibrated rig (uncalibrated cameras keep nominal values)
+  SceneModel scene = SceneModel::kFar;  // the model used
+  int matches = 0;               // pairwise matches after the ratio test, all pairs
+  int inliers = 0;               // pairwise matches after RANSAC
+  int pairs = 0;                 // camera pairs matched (nominal cones intersect)
+  int tracks = 0;                // scene points in the bundle adjustment
+  int observations = 0;          // residual blocks in the final solve
+  int rejected = 0;              // observations dropped as outliers after the first solve
+  double rms_px = 0;             // final reprojection RMS, pixels
+  double initial_rms_px = 0;     // RMS with the nominal rig (same observations), pixels
+  std::vector<CameraReport> per_camera;
+  std::vector<int> uncalibrated_ids;  // cameras with too few matches (kept nominal)
+  std::vector<std::string> warnings;
+};
+
+// Throws std::runtime_error if nothing can be calibrated (e.g. textureless frames: no camera has
+// enough matches). `frames` are in rig order (see omma/core/frames.h load_frames).
+CalibrationResult calibrate_rig(const Rig& nominal, const std::vector<cv::Mat>& frames,
+                                const CalibrationOptions& opt = {});
+
+}  // namespace omma::calib
