@@ -73,6 +73,13 @@ EngineStats run_engine(const Rig& rig, std::vector<std::unique_ptr<CameraSource>
                pano::to_string(mopt.method), map->bytes_per_pixel(), first.from_cache ? "loaded" : "compiled",
                first.seconds);
 
+  // Warm-up render (black frames) from this thread, so that the renderer's worker threads are
+  // created here at normal priority (threads inherit the nice value of their creator).
+  {
+    FrameStore warm(map->layout);
+    cv::Mat out;
+    render(*map, warm, out, {.threads = opt.threads});
+  }
   std::vector<std::unique_ptr<Latest>> latest;
   for (size_t c = 0; c < n; ++c) latest.push_back(std::make_unique<Latest>());
   std::atomic<bool> stop{false};
@@ -84,7 +91,7 @@ EngineStats run_engine(const Rig& rig, std::vector<std::unique_ptr<CameraSource>
     threads.emplace_back([&, c] {
       // Camera threads run at a lower priority than the render loop: on a busy machine a camera
       // may deliver late (its frame is reused), but the panorama is never starved by decoding.
-      setpriority(PRIO_PROCESS, static_cast<id_t>(::gettid()), 5);
+      setpriority(PRIO_PROCESS, static_cast<id_t>(::gettid()), 15);
       CameraSource& src = *sources[c];
       Latest& slot = *latest[c];
       const double fps = src.fps();
@@ -240,6 +247,8 @@ EngineStats run_engine(const Rig& rig, std::vector<std::unique_ptr<CameraSource>
         stats.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
         stats.fps = stats.frames / stats.seconds;
         stats.latency_ms_mean = latency_sum / stats.frames;
+        stats.camera_frames = 0;
+        for (size_t c = 0; c < n; ++c) stats.camera_frames += used_seq[c];
         nlohmann::json j = stats.to_json();
         j["latency_ms"] = stats.latency_ms_mean;
         j["cameras_live"] = std::count(live.begin(), live.end(), true);
@@ -274,6 +283,7 @@ EngineStats run_engine(const Rig& rig, std::vector<std::unique_ptr<CameraSource>
     throw std::runtime_error(why);
   }
   for (auto& s : sinks) s->finish();
+  stats.camera_frames = 0;
   for (size_t c = 0; c < n; ++c) stats.camera_frames += latest[c]->seq;
   stats.fps = stats.frames / stats.seconds;
   stats.render_ms_mean = render_ms_sum / stats.frames;
