@@ -77,6 +77,25 @@ struct RotationPrior {
   }
 };
 
+// The mean relative focal length over cameras, pulled to 1: residuals (mean fu/fu_nom - 1, mean
+// fv/fv_nom - 1) / sigma; one parameter block (fu, fv, cu, cv) per camera.
+struct MeanFocalPrior {
+  std::vector<double> fu_nom, fv_nom;
+  double inv_sigma;
+  template <typename T>
+  bool operator()(T const* const* fcc, T* res) const {
+    T su(0), sv(0);
+    const int m = static_cast<int>(fu_nom.size());
+    for (int i = 0; i < m; ++i) {
+      su += fcc[i][0] / fu_nom[i];
+      sv += fcc[i][1] / fv_nom[i];
+    }
+    res[0] = (su / T(m) - T(1)) * T(inv_sigma);
+    res[1] = (sv / T(m) - T(1)) * T(inv_sigma);
+    return true;
+  }
+};
+
 struct Observation {
   int cam = 0;  // rig index
   Vec2 px;
@@ -211,6 +230,12 @@ CalibrationResult calibrate_rig(const Rig& nominal, const std::vector<cv::Mat>& 
     if (!conflict && t.size() >= 2) tracks.push_back(std::move(t));
   }
 
+  {
+    std::vector<int> hist(6, 0);
+    for (const auto& t : tracks) ++hist[std::min<size_t>(t.size(), 5)];
+    spdlog::info("calibrate: {} tracks, by length 2: {}, 3: {}, 4: {}, 5+: {}", tracks.size(), hist[2], hist[3],
+                 hist[4], hist[5]);
+  }
   // 4. Cameras with too few observations keep their nominal values.
   std::vector<int> obs_count(n, 0);
   for (const auto& t : tracks)
@@ -320,9 +345,10 @@ CalibrationResult calibrate_rig(const Rig& nominal, const std::vector<cv::Mat>& 
     std::unique_ptr<ceres::Manifold> k_manifold, fcc_manifold;
     if (!k_const.empty() && k_const.size() < 5) k_manifold = std::make_unique<ceres::SubsetManifold>(5, k_const);
     if (!fcc_const.empty() && fcc_const.size() < 4) fcc_manifold = std::make_unique<ceres::SubsetManifold>(4, fcc_const);
+    const std::string loss = opt.loss != "auto" ? opt.loss : near ? "cauchy" : "huber";
     auto make_loss = [&]() -> ceres::LossFunction* {
-      if (opt.loss == "huber") return new ceres::HuberLoss(opt.loss_scale_px);
-      if (opt.loss == "cauchy") return new ceres::CauchyLoss(opt.loss_scale_px);
+      if (loss == "huber") return new ceres::HuberLoss(opt.loss_scale_px);
+      if (loss == "cauchy") return new ceres::CauchyLoss(opt.loss_scale_px);
       return nullptr;
     };
     for (size_t ti = 0; ti < tracks.size(); ++ti) {
@@ -354,6 +380,21 @@ CalibrationResult calibrate_rig(const Rig& nominal, const std::vector<cv::Mat>& 
                                      new RotationPrior{1.0 / deg2rad(opt.prior_rotation_deg)}),
                                  nullptr, delta[i].data());
       }
+    }
+    if (near && intrinsics_free && opt.prior_mean_focal > 0 && opt.estimate_focal && !(opt.share_focal || opt.share_center)) {
+      auto* prior = new MeanFocalPrior{{}, {}, 1.0 / opt.prior_mean_focal};
+      auto* cost = new ceres::DynamicAutoDiffCostFunction<MeanFocalPrior>(prior);
+      std::vector<double*> blocks;
+      for (int i = 0; i < n; ++i) {
+        if (!problem.HasParameterBlock(fcc_block(i))) continue;
+        prior->fu_nom.push_back(nominal.cameras[i].in.fu);
+        prior->fv_nom.push_back(nominal.cameras[i].in.fv);
+        cost->AddParameterBlock(4);
+        blocks.push_back(fcc_block(i));
+      }
+      cost->SetNumResiduals(2);
+      if (blocks.empty()) delete cost;
+      else problem.AddResidualBlock(cost, nullptr, blocks);
     }
     for (int i = 0; i < n; ++i) {
       for (double* blk : {fcc_block(i), k_block(i)}) {
