@@ -192,9 +192,10 @@ CalibrationResult calibrate_rig(const Rig& nominal, const std::vector<cv::Mat>& 
   res.scene = scene;
   if (scene == SceneModel::kNear) {
     res.warnings.push_back(
-        "near-field scene (parallax): scene points with camera positions fixed at nominal; on the simulated colon "
-        "the intrinsics are poorly constrained by this model (focal and principal point errors of several %/px), "
-        "prefer a far-field calibration scene or --focal/--center fixed");
+        "near-field scene (parallax): scene points with camera positions fixed at nominal; the mean focal length "
+        "is held at the nominal one (prior, the focal/depth ambiguity) and principal point trades against "
+        "rotation (on the simulated colon: ~0.8 deg, ~0.8 % focal, ~2.5 px centre errors, panorama as good as "
+        "with the true rig); prefer a far-field calibration scene for accurate intrinsics");
     spdlog::warn("calibrate: {}", res.warnings.back());
   }
   for (const auto& pm : pms) res.inliers += static_cast<int>(pm.inliers.size());
