@@ -96,10 +96,7 @@ struct MeanFocalPrior {
   }
 };
 
-struct Observation {
-  int cam = 0;  // rig index
-  Vec2 px;
-};
+using Observation = TrackObservation;
 
 struct UnionFind {
   std::vector<int> parent;
@@ -137,106 +134,11 @@ bool triangulate(const std::vector<Vec3>& c, const std::vector<Vec3>& d, Vec3* p
   return true;
 }
 
-}  // namespace
-
-CalibrationResult calibrate_rig(const Rig& nominal, const std::vector<cv::Mat>& frames,
-                                const CalibrationOptions& opt) {
+// Steps 4-6 of calibrate_rig on given tracks: cameras with too few observations, bundle
+// adjustment, statistics and the calibrated rig.
+CalibrationResult solve_tracks(const Rig& nominal, std::vector<std::vector<TrackObservation>> tracks, SceneModel scene,
+                               const CalibrationOptions& opt, CalibrationResult res) {
   const int n = static_cast<int>(nominal.cameras.size());
-  if (static_cast<int>(frames.size()) != n)
-    throw std::invalid_argument(fmt::format("calibrate: {} frames for a rig of {} cameras", frames.size(), n));
-  if (n < 2) throw std::invalid_argument("calibrate: the rig needs at least 2 cameras");
-  for (int i = 0; i < n; ++i)
-    if (frames[i].cols != nominal.cameras[i].in.width || frames[i].rows != nominal.cameras[i].in.height)
-      throw std::invalid_argument(fmt::format("calibrate: frame of camera {} is {}x{}, the rig says {}x{}",
-                                              nominal.cameras[i].id, frames[i].cols, frames[i].rows,
-                                              nominal.cameras[i].in.width, nominal.cameras[i].in.height));
-  CalibrationResult res;
-  res.rig = nominal;
-
-  // 1. Features.
-  std::vector<CameraFeatures> feats(n);
-  {
-    Progress progress("calibrate: features", n);
-    for (int i = 0; i < n; ++i) {
-      feats[i] = detect_features(frames[i], opt.features);
-      progress.step();
-    }
-  }
-  // 2. Pairwise matching between overlapping cameras.
-  const auto pairs = overlapping_pairs(nominal, deg2rad(opt.overlap_margin_deg));
-  res.pairs = static_cast<int>(pairs.size());
-  std::vector<PairMatches> pms;
-  long rot_total = 0, ess_total = 0;
-  {
-    Progress progress("calibrate: matching", pairs.size());
-    for (const auto& [a, b] : pairs) {
-      PairMatches pm = match_pair(nominal, a, b, feats[a], feats[b], opt.scene, opt.match);
-      res.matches += pm.putative;
-      rot_total += pm.rotation_inliers;
-      ess_total += pm.essential_inliers;
-      pms.push_back(std::move(pm));
-      progress.step();
-    }
-  }
-  SceneModel scene = opt.scene;
-  if (scene == SceneModel::kAuto) {
-    // Parallax shows as matches that no rotation explains but an essential matrix does.
-    scene = ess_total > opt.near_ratio * rot_total ? SceneModel::kNear : SceneModel::kFar;
-    spdlog::info("calibrate: consensus over all pairs: rotation-only {}, essential matrix {} -> {} scene", rot_total,
-                 ess_total, to_string(scene));
-    // All pairs use the one chosen model.
-    for (auto& pm : pms) pm.choose(scene, opt.match.min_inliers);
-  } else {
-    for (auto& pm : pms) pm.choose(scene, opt.match.min_inliers);
-  }
-  res.scene = scene;
-  if (scene == SceneModel::kNear) {
-    res.warnings.push_back(
-        "near-field scene (parallax): scene points with camera positions fixed at nominal; the mean focal length "
-        "is held at the nominal one (prior, the focal/depth ambiguity) and principal point trades against "
-        "rotation (on the simulated colon: ~0.8 deg, ~0.8 % focal, ~2.5 px centre errors, panorama as good as "
-        "with the true rig); prefer a far-field calibration scene for accurate intrinsics");
-    spdlog::warn("calibrate: {}", res.warnings.back());
-  }
-  for (const auto& pm : pms) res.inliers += static_cast<int>(pm.inliers.size());
-  spdlog::info("calibrate: {} cameras, {} overlapping pairs, {} matches, {} RANSAC inliers, {} scene", n,
-               res.pairs, res.matches, res.inliers, to_string(scene));
-
-  // 3. Tracks (union-find over keypoints), tracks seen twice by one camera are dropped.
-  std::vector<int> offset(n + 1, 0);
-  for (int i = 0; i < n; ++i) offset[i + 1] = offset[i] + static_cast<int>(feats[i].px.size());
-  UnionFind uf(offset[n]);
-  std::vector<char> used(offset[n], 0);
-  for (const auto& pm : pms)
-    for (const auto& m : pm.inliers) {
-      const int ga = offset[pm.cam_a] + m.a, gb = offset[pm.cam_b] + m.b;
-      uf.unite(ga, gb);
-      used[ga] = used[gb] = 1;
-    }
-  std::map<int, std::vector<int>> groups;
-  for (int g = 0; g < offset[n]; ++g)
-    if (used[g]) groups[uf.find(g)].push_back(g);
-  auto cam_of = [&](int g) { return static_cast<int>(std::upper_bound(offset.begin(), offset.end(), g) - offset.begin()) - 1; };
-  std::vector<std::vector<Observation>> tracks;
-  for (const auto& [root, members] : groups) {
-    std::vector<Observation> t;
-    std::vector<char> seen(n, 0);
-    bool conflict = false;
-    for (int g : members) {
-      const int c = cam_of(g);
-      if (seen[c]) conflict = true;
-      seen[c] = 1;
-      t.push_back({c, feats[c].px[g - offset[c]]});
-    }
-    if (!conflict && t.size() >= 2) tracks.push_back(std::move(t));
-  }
-
-  {
-    std::vector<int> hist(6, 0);
-    for (const auto& t : tracks) ++hist[std::min<size_t>(t.size(), 5)];
-    spdlog::info("calibrate: {} tracks, by length 2: {}, 3: {}, 4: {}, 5+: {}", tracks.size(), hist[2], hist[3],
-                 hist[4], hist[5]);
-  }
   // 4. Cameras with too few observations keep their nominal values.
   std::vector<int> obs_count(n, 0);
   for (const auto& t : tracks)
@@ -416,6 +318,7 @@ CalibrationResult calibrate_rig(const Rig& nominal, const std::vector<cv::Mat>& 
         !ceres::IsSparseLinearAlgebraLibraryTypeAvailable(ceres::EIGEN_SPARSE))
       so.linear_solver_type = ceres::DENSE_SCHUR;
     so.max_num_iterations = opt.max_iterations;
+
     so.num_threads = opt.threads;
     so.minimizer_progress_to_stdout = false;
     so.logging_type = ceres::SILENT;
@@ -486,6 +389,122 @@ CalibrationResult calibrate_rig(const Rig& nominal, const std::vector<cv::Mat>& 
   spdlog::info("calibrate: reprojection RMS {:.3f} px (nominal rig {:.3f} px), {} tracks, {} observations, {} rejected",
                res.rms_px, res.initial_rms_px, res.tracks, res.observations, res.rejected);
   return res;
+}
+
+}  // namespace
+
+CalibrationResult calibrate_rig(const Rig& nominal, const std::vector<cv::Mat>& frames,
+                                const CalibrationOptions& opt) {
+  const int n = static_cast<int>(nominal.cameras.size());
+  if (static_cast<int>(frames.size()) != n)
+    throw std::invalid_argument(fmt::format("calibrate: {} frames for a rig of {} cameras", frames.size(), n));
+  if (n < 2) throw std::invalid_argument("calibrate: the rig needs at least 2 cameras");
+  for (int i = 0; i < n; ++i)
+    if (frames[i].cols != nominal.cameras[i].in.width || frames[i].rows != nominal.cameras[i].in.height)
+      throw std::invalid_argument(fmt::format("calibrate: frame of camera {} is {}x{}, the rig says {}x{}",
+                                              nominal.cameras[i].id, frames[i].cols, frames[i].rows,
+                                              nominal.cameras[i].in.width, nominal.cameras[i].in.height));
+  CalibrationResult res;
+  res.rig = nominal;
+
+  // 1. Features.
+  std::vector<CameraFeatures> feats(n);
+  {
+    Progress progress("calibrate: features", n);
+    for (int i = 0; i < n; ++i) {
+      feats[i] = detect_features(frames[i], opt.features);
+      progress.step();
+    }
+  }
+  // 2. Pairwise matching between overlapping cameras.
+  const auto pairs = overlapping_pairs(nominal, deg2rad(opt.overlap_margin_deg));
+  res.pairs = static_cast<int>(pairs.size());
+  std::vector<PairMatches> pms;
+  long rot_total = 0, ess_total = 0;
+  {
+    Progress progress("calibrate: matching", pairs.size());
+    for (const auto& [a, b] : pairs) {
+      PairMatches pm = match_pair(nominal, a, b, feats[a], feats[b], opt.scene, opt.match);
+      res.matches += pm.putative;
+      rot_total += pm.rotation_inliers;
+      ess_total += pm.essential_inliers;
+      pms.push_back(std::move(pm));
+      progress.step();
+    }
+  }
+  SceneModel scene = opt.scene;
+  if (scene == SceneModel::kAuto) {
+    // Parallax shows as matches that no rotation explains but an essential matrix does.
+    scene = ess_total > opt.near_ratio * rot_total ? SceneModel::kNear : SceneModel::kFar;
+    spdlog::info("calibrate: consensus over all pairs: rotation-only {}, essential matrix {} -> {} scene", rot_total,
+                 ess_total, to_string(scene));
+    // All pairs use the one chosen model.
+    for (auto& pm : pms) pm.choose(scene, opt.match.min_inliers);
+  } else {
+    for (auto& pm : pms) pm.choose(scene, opt.match.min_inliers);
+  }
+  res.scene = scene;
+  if (scene == SceneModel::kNear) {
+    res.warnings.push_back(
+        "near-field scene (parallax): scene points with camera positions fixed at nominal; the mean focal length "
+        "is held at the nominal one (prior, the focal/depth ambiguity) and principal point trades against "
+        "rotation (on the simulated colon: ~0.8 deg, ~0.8 % focal, ~2.5 px centre errors, panorama as good as "
+        "with the true rig); prefer a far-field calibration scene for accurate intrinsics");
+    spdlog::warn("calibrate: {}", res.warnings.back());
+  }
+  for (const auto& pm : pms) res.inliers += static_cast<int>(pm.inliers.size());
+  spdlog::info("calibrate: {} cameras, {} overlapping pairs, {} matches, {} RANSAC inliers, {} scene", n,
+               res.pairs, res.matches, res.inliers, to_string(scene));
+
+  // 3. Tracks (union-find over keypoints), tracks seen twice by one camera are dropped.
+  std::vector<int> offset(n + 1, 0);
+  for (int i = 0; i < n; ++i) offset[i + 1] = offset[i] + static_cast<int>(feats[i].px.size());
+  UnionFind uf(offset[n]);
+  std::vector<char> used(offset[n], 0);
+  for (const auto& pm : pms)
+    for (const auto& m : pm.inliers) {
+      const int ga = offset[pm.cam_a] + m.a, gb = offset[pm.cam_b] + m.b;
+      uf.unite(ga, gb);
+      used[ga] = used[gb] = 1;
+    }
+  std::map<int, std::vector<int>> groups;
+  for (int g = 0; g < offset[n]; ++g)
+    if (used[g]) groups[uf.find(g)].push_back(g);
+  auto cam_of = [&](int g) { return static_cast<int>(std::upper_bound(offset.begin(), offset.end(), g) - offset.begin()) - 1; };
+  std::vector<std::vector<Observation>> tracks;
+  for (const auto& [root, members] : groups) {
+    std::vector<Observation> t;
+    std::vector<char> seen(n, 0);
+    bool conflict = false;
+    for (int g : members) {
+      const int c = cam_of(g);
+      if (seen[c]) conflict = true;
+      seen[c] = 1;
+      t.push_back({c, feats[c].px[g - offset[c]]});
+    }
+    if (!conflict && t.size() >= 2) tracks.push_back(std::move(t));
+  }
+
+  {
+    std::vector<int> hist(6, 0);
+    for (const auto& t : tracks) ++hist[std::min<size_t>(t.size(), 5)];
+    spdlog::info("calibrate: {} tracks, by length 2: {}, 3: {}, 4: {}, 5+: {}", tracks.size(), hist[2], hist[3],
+                 hist[4], hist[5]);
+  }
+  return solve_tracks(nominal, std::move(tracks), scene, opt, std::move(res));
+}
+
+CalibrationResult calibrate_from_tracks(const Rig& nominal, std::vector<std::vector<TrackObservation>> tracks,
+                                        SceneModel scene, const CalibrationOptions& opt) {
+  if (scene == SceneModel::kAuto) throw std::invalid_argument("calibrate_from_tracks: scene must be far or near");
+  const int n = static_cast<int>(nominal.cameras.size());
+  for (const auto& t : tracks)
+    for (const auto& o : t)
+      if (o.cam < 0 || o.cam >= n) throw std::invalid_argument(fmt::format("calibrate_from_tracks: camera index {} out of range", o.cam));
+  CalibrationResult res;
+  res.rig = nominal;
+  res.scene = scene;
+  return solve_tracks(nominal, std::move(tracks), scene, opt, std::move(res));
 }
 
 }  // namespace omma::calib

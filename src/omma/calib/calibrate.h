@@ -107,4 +107,19 @@ struct CalibrationResult {
 CalibrationResult calibrate_rig(const Rig& nominal, const std::vector<cv::Mat>& frames,
                                 const CalibrationOptions& opt = {});
 
+// One observation of a feature track: camera (rig index) and continuous pixel (centres at
+// integer + 0.5, conventions.h).
+struct TrackObservation {
+  int cam = 0;
+  Vec2 px;
+};
+
+// The bundle adjustment of calibrate_rig alone, on given feature tracks (one scene point per track,
+// scene kFar or kNear; tracks with fewer than 2 observations of calibrated cameras are ignored).
+// Used to check the model: tracks made by projecting known points through a rig must give that
+// rig back. Throws std::invalid_argument on a bad camera index or kAuto, std::runtime_error if
+// fewer than 2 cameras have min_observations.
+CalibrationResult calibrate_from_tracks(const Rig& nominal, std::vector<std::vector<TrackObservation>> tracks,
+                                        SceneModel scene, const CalibrationOptions& opt = {});
+
 }  // namespace omma::calib
