@@ -14,9 +14,9 @@ namespace omma::app {
 namespace {
 struct CalibrateArgs {
   std::string rig, frames, out, scene = "auto", focal = "per-camera", center = "per-camera",
-                                distortion = "per-camera", loss = "huber";
+                                distortion = "per-camera", loss = "auto";
   int radial_terms = 1, max_iterations = 50, min_matches = 30, upsample = 2;
-  double loss_scale = 1.0, ransac_px = 5, prior_deg = 5;
+  double loss_scale = 1.0, ransac_px = 5, prior_deg = 5, prior_mean_focal = 0.002;
   bool json = false;
 };
 
@@ -47,10 +47,13 @@ void add_calibrate_command(CLI::App& root) {
   cmd->add_option("--distortion", a.distortion, "radial k: per-camera (default), shared or fixed");
   cmd->add_option("--radial-terms", a.radial_terms, "How many radial coefficients to estimate: 1 = k1 (default), "
                                                     "2 = k1, k2, 3 = k1, k2, k5");
-  cmd->add_option("--loss", a.loss, "Robust loss: huber (default), cauchy or none");
+  cmd->add_option("--loss", a.loss, "Robust loss: auto (default: huber in the far field, cauchy in the near field), huber, cauchy or none");
   cmd->add_option("--loss-scale", a.loss_scale, "Robust loss scale, pixels (default 1)");
   cmd->add_option("--ransac-px", a.ransac_px, "RANSAC inlier threshold, pixels (default 5)");
   cmd->add_option("--prior-deg", a.prior_deg, "Gauge prior on the rotation corrections, degrees (default 5)");
+  cmd->add_option("--prior-mean-focal", a.prior_mean_focal,
+                  "Near field only: sigma (relative) of the prior holding the cameras' MEAN focal length at the "
+                  "nominal one, against the focal/depth ambiguity of small-baseline parallax (default 0.002; 0 = off)");
   cmd->add_option("--max-iterations", a.max_iterations, "Ceres iterations per solve (default 50)");
   cmd->add_option("--min-matches", a.min_matches, "Matched observations a camera needs to be calibrated "
                                                   "(default 30)");
@@ -70,12 +73,14 @@ void add_calibrate_command(CLI::App& root) {
     opt.share_distortion = share;
     if (a.radial_terms < 0 || a.radial_terms > 3) throw std::invalid_argument("--radial-terms must be 0..3");
     opt.radial_terms = est_k ? a.radial_terms : 0;
-    if (a.loss != "huber" && a.loss != "cauchy" && a.loss != "none")
-      throw std::invalid_argument("--loss must be huber, cauchy or none");
+    if (a.loss != "auto" && a.loss != "huber" && a.loss != "cauchy" && a.loss != "none")
+      throw std::invalid_argument("--loss must be auto, huber, cauchy or none");
     opt.loss = a.loss;
     opt.loss_scale_px = a.loss_scale;
     opt.match.ransac_threshold_px = a.ransac_px;
     opt.prior_rotation_deg = a.prior_deg;
+    if (a.prior_mean_focal < 0) throw std::invalid_argument("--prior-mean-focal must be >= 0");
+    opt.prior_mean_focal = a.prior_mean_focal;
     opt.max_iterations = a.max_iterations;
     opt.min_observations = a.min_matches;
     opt.features.upsample = a.upsample;

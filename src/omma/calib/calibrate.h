@@ -22,6 +22,19 @@
 // ones; it only fixes the free global rotation (the rig's mean orientation stays nominal). With
 // parallax the fixed camera positions fix the gauge and the prior is negligible.
 //
+// Near-field focal ambiguity: the baseline (cameras on a 5 mm dome) is small against the scene
+// depth (the colon wall at ~20 mm), so scaling every focal length by s and pushing the scene away
+// (points radially out from the dome centre) changes the images only in second order (measured on
+// the simulated colon: the free solution drifts to 5-40 % focal error at a reprojection RMS no worse
+// than the truth's). A prior (sigma = prior_mean_focal) holds the MEAN of fu/fu_nominal over the
+// cameras at 1 in the near field: it fixes that one direction (the lens batch's mean focal length is
+// taken as designed), the cameras' focal lengths relative to each other stay free. The near field
+// also uses a Cauchy loss (loss = "auto"): with the nominal rig's errors (~20 px on the colon) and
+// wrong matches that lie along epipolar lines, Huber lets outliers drag the rotations away.
+// Principal point and a small rotation about u or v are nearly the same thing for a 64 deg lens
+// (a shift of c px ~ c / f rad), which the near-field overlaps (narrow bands) hardly separate: on
+// the colon the orientation error is essentially the centre error / f. The panorama does not care.
+//
 // Residuals are in pixels; the robust loss (Huber or Cauchy, scale loss_scale_px) tames remaining
 // outliers, then observations above outlier_px are dropped and the problem is solved again.
 #pragma once
@@ -53,10 +66,14 @@ struct CalibrationOptions {
   bool share_center = false;      // one cu, cv for all cameras
   bool share_distortion = false;  // one k1..k5 for all cameras
 
-  std::string loss = "huber";     // "huber", "cauchy" or "none"
+  std::string loss = "auto";      // "huber", "cauchy", "none" or "auto": Huber in the far field,
+                                  // Cauchy in the near field (see "Near field" above)
   double loss_scale_px = 1.0;
   double outlier_px = 3.0;        // after the first solve, drop observations with a larger error
   double prior_rotation_deg = 5;  // gauge prior (see above)
+  double prior_mean_focal = 0.002;  // near field only: sigma (relative) of a prior pulling the MEAN
+                                  // of fu/fu_nominal (and fv) over the calibrated cameras to 1;
+                                  // 0 = off (see "Near-field focal ambiguity" above)
   int max_iterations = 50;        // Ceres iterations per solve
   int min_observations = 30;      // a camera with fewer keeps its nominal values (warning)
   int threads = 2;
@@ -89,5 +106,20 @@ struct CalibrationResult {
 // enough matches). `frames` are in rig order (see omma/core/frames.h load_frames).
 CalibrationResult calibrate_rig(const Rig& nominal, const std::vector<cv::Mat>& frames,
                                 const CalibrationOptions& opt = {});
+
+// One observation of a feature track: camera (rig index) and continuous pixel (centres at
+// integer + 0.5, conventions.h).
+struct TrackObservation {
+  int cam = 0;
+  Vec2 px;
+};
+
+// The bundle adjustment of calibrate_rig alone, on given feature tracks (one scene point per track,
+// scene kFar or kNear; tracks with fewer than 2 observations of calibrated cameras are ignored).
+// Used to check the model: tracks made by projecting known points through a rig must give that
+// rig back. Throws std::invalid_argument on a bad camera index or kAuto, std::runtime_error if
+// fewer than 2 cameras have min_observations.
+CalibrationResult calibrate_from_tracks(const Rig& nominal, std::vector<std::vector<TrackObservation>> tracks,
+                                        SceneModel scene, const CalibrationOptions& opt = {});
 
 }  // namespace omma::calib

@@ -53,6 +53,7 @@ CameraFeatures detect_features(const cv::Mat& image, const FeatureOptions& opt) 
   if (gray.channels() == 4) cv::cvtColor(gray, gray, cv::COLOR_BGRA2GRAY);
   if (gray.depth() == CV_16U) gray.convertTo(gray, CV_8U, 1.0 / 257);
   if (gray.depth() == CV_32F) gray.convertTo(gray, CV_8U, 255.0);
+  if (opt.blur_sigma > 0) cv::GaussianBlur(gray, gray, cv::Size(), opt.blur_sigma);
   CameraFeatures f = detect(gray, opt, false);
   if (opt.clahe_clip > 0 && static_cast<int>(f.px.size()) < opt.clahe_below) {
     CameraFeatures g = detect(gray, opt, true);

@@ -32,6 +32,7 @@ struct FeatureOptions {
   int border_px = 2;              // drop keypoints this close to the image border
   int upsample = 2;               // run SIFT on the image upsampled this much (more, finer
                                   // keypoints on 250x250 frames; 1 = off)
+  double blur_sigma = 0;          // Gaussian pre-smoothing (pixels, 0: off) against sensor noise
   double clahe_clip = 3.0;        // contrast-limited histogram equalisation (0: off), applied only
   int clahe_below = 200;          // when plain SIFT finds fewer keypoints than this: brings out
                                   // texture in dark, low-contrast views (night sky)
