@@ -5,12 +5,15 @@
 #include <ctime>
 #include <stdexcept>
 
+#include <fmt/format.h>
+
 #include <opencv2/imgproc.hpp>
 #include <opencv2/stitching/detail/blenders.hpp>
 #include <tbb/parallel_for.h>
 
 #include "omma/design/prototype.h"
 #include "omma/engine/synthetic.h"
+#include "omma/isp/isp.h"
 
 namespace omma::engine {
 namespace {
@@ -162,6 +165,19 @@ double measure_fps(const Workload& w, double min_seconds, int min_iterations, do
   return n / elapsed;
 }
 
+namespace {
+// One raw 10-bit RGGB frame per camera: the random-texture frames mosaiced (x4 to 10 bits).
+std::vector<cv::Mat> random_raw_frames(const Rig& rig, uint32_t seed) {
+  std::vector<cv::Mat> raws;
+  for (const cv::Mat& f : random_frames(rig, seed)) {
+    cv::Mat f16;
+    f.convertTo(f16, CV_16UC3, 4.0);
+    raws.push_back(isp::mosaic_rggb(f16));
+  }
+  return raws;
+}
+}  // namespace
+
 std::vector<BenchEntry> run_bench_suite(const Rig& rig_in, const BenchOptions& opt,
                                         std::vector<std::string>* skipped) {
   const Rig rig = rig_in.cameras.empty() ? design::thesis_prototype_rig() : rig_in;
@@ -206,6 +222,28 @@ std::vector<BenchEntry> run_bench_suite(const Rig& rig_in, const BenchOptions& o
     if (wanted("opencv-remap-" + size_tag(g))) add(opencv_remap_workload(rig, g, frames));
     if (wanted("opencv-multiband-" + size_tag(g))) add(opencv_multiband_workload(rig, g, frames));
     if (bound_map && wanted("memcpy-bound-" + size_tag(g))) add(memcpy_workload(*bound_map, size_tag(g)));
+  }
+  // The ISP (issue 4 point 7): one set = every camera's raw frame, developed (hybrid demosaicing +
+  // gray world, thesis appendix A) against OpenCV's cvtColor bilinear Bayer conversion of the same
+  // frames, both over the cameras with oneTBB. fps = sets per second.
+  const auto raws = random_raw_frames(rig, 7);
+  const std::string set_tag = fmt::format("{}x{}x{}", raws.size(), raws[0].cols, raws[0].rows);
+  if (wanted("isp-hybrid-grayworld-" + set_tag)) {
+    Workload w{"isp-hybrid-grayworld-" + set_tag, 0, [&raws] {
+                 isp::IspOptions o;  // hybrid + gray world by default
+                 const auto developed = isp::develop_all(raws, o);
+                 if (developed.empty()) throw std::logic_error("no frames");
+               }, {{"unit", "sets of frames"}}};
+    add(w);
+  }
+  if (wanted("opencv-bayer-bilinear-" + set_tag)) {
+    Workload w{"opencv-bayer-bilinear-" + set_tag, 0, [&raws] {
+                 std::vector<cv::Mat> out(raws.size());
+                 tbb::parallel_for(size_t(0), raws.size(), [&](size_t i) {
+                   cv::cvtColor(raws[i], out[i], cv::COLOR_BayerBG2BGR);  // RGGB with (0,0) = R
+                 });
+               }, {{"unit", "sets of frames"}}};
+    add(w);
   }
   return out;
 }
