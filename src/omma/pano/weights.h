@@ -37,9 +37,6 @@ struct BlendParams {
   // sigma_d of eq. 2.9 as a fraction of the camera's cone radius in pixels, fu * tan(aov/2).
   // 0.5 gives a candidate pixel at the cone edge exp(-2) = 0.135 of the centre's confidence.
   double gaussian_sigma_rel = 0.5;
-  // Deprecated and unused (the first API put sigma_d on the w-plane in mm; eq. 2.9 measures d on
-  // the camera's image plane, see gaussian_sigma_rel). Kept only so that existing code compiles.
-  double gaussian_sigma_mm = 1.0;
   // eq. 4.18: the SAD evidence is 1 / (SAD_i + sad_epsilon); intensities are gray (Y) in [0, 1].
   double sad_epsilon = 1.0 / 255;
 };
