@@ -122,6 +122,18 @@ int CompiledMap::camera_of(uint32_t w) const {
   return int(it - layout.row0.begin()) - 1;
 }
 
+ActiveRig active_cameras(const Rig& rig, const std::vector<bool>& active) {
+  ActiveRig a;
+  a.rig = rig;
+  a.rig.cameras.clear();
+  for (size_t i = 0; i < rig.cameras.size(); ++i)
+    if (active.empty() || active[i]) {
+      a.rig.cameras.push_back(rig.cameras[i]);
+      a.to_full.push_back(static_cast<int>(i));
+    }
+  return a;
+}
+
 CompiledMap compile_map(const Rig& rig, const MapOptions& opt) {
   if (!opt.active.empty() && opt.active.size() != rig.cameras.size())
     throw std::invalid_argument("compile_map: active set has " + std::to_string(opt.active.size()) +
@@ -133,14 +145,7 @@ CompiledMap compile_map(const Rig& rig, const MapOptions& opt) {
   map.sad_epsilon = static_cast<float>(opt.params.sad_epsilon);
   map.layout = StoreLayout::for_rig(rig);
   // The rig of the active cameras, and its camera index -> rig camera index.
-  Rig sub = rig;
-  std::vector<int> to_full;
-  sub.cameras.clear();
-  for (size_t i = 0; i < rig.cameras.size(); ++i)
-    if (opt.active.empty() || opt.active[i]) {
-      sub.cameras.push_back(rig.cameras[i]);
-      to_full.push_back(static_cast<int>(i));
-    }
+  const auto [sub, to_full] = active_cameras(rig, opt.active);
   const int W = map.width, H = map.height;
   std::vector<PixelTaps> px(size_t(W) * H);
   const StoreLayout& L = map.layout;

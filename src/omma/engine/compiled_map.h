@@ -77,6 +77,15 @@ struct MapOptions {
   bool cull = true;
 };
 
+// The rig of the cameras that `active` selects (all if empty), and for each of its cameras the
+// index of that camera in the full rig.
+struct ActiveRig {
+  Rig rig;
+  std::vector<int> to_full;
+};
+ActiveRig active_cameras(const Rig& rig, const std::vector<bool>& active);
+
+
 struct CompiledMap {
   int width = 0, height = 0;
   // kSad: the taps hold the geometric prior of eq. 4.18 (the mrf weights) and render() computes

@@ -192,14 +192,7 @@ void render(const CompiledMap& map, const FrameStore& store, cv::Mat& out, const
 cv::Mat reference_render(const Rig& rig, const MapOptions& opt, const std::vector<cv::Mat>& frames) {
   if (frames.size() != rig.cameras.size())
     throw std::invalid_argument("reference_render: need one frame per camera");
-  Rig sub = rig;
-  std::vector<int> to_full;
-  sub.cameras.clear();
-  for (size_t i = 0; i < rig.cameras.size(); ++i)
-    if (opt.active.empty() || opt.active[i]) {
-      sub.cameras.push_back(rig.cameras[i]);
-      to_full.push_back(int(i));
-    }
+  const auto [sub, to_full] = active_cameras(rig, opt.active);
   const PanoGrid& g = opt.grid;
   cv::Mat out(g.height, g.width, CV_8UC3, cv::Scalar::all(0));
   // Bilinear sample with replicated edges; centres at integer + 0.5.
