@@ -150,6 +150,44 @@ TEST(EngineCli, FailingCameraIsDroppedAndItsRegionFilledFromNeighbours) {
   fs::remove_all(dir);
 }
 
+// One video file per camera (OpenCV videoio): the run ends when the videos end.
+TEST(EngineCli, VideoFilePerCameraAndFramesFolderSources) {
+  const auto dir = temp_dir("engine-video");
+  const auto rig = write_rig(dir, 64);
+  for (int id = 0; id < 24; ++id) {
+    cv::VideoWriter w((dir / ("cam_" + std::string(id < 10 ? "0" : "") + std::to_string(id) + ".avi")).string(),
+                      cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 20, cv::Size(64, 64));
+    ASSERT_TRUE(w.isOpened());
+    for (int f = 0; f < 10; ++f) w.write(cv::Mat(64, 64, CV_8UC3, cv::Scalar(camera_colour(id))));
+  }
+  RunResult r = run_omma("run --rig " + rig.string() + " --source '" + (dir / "cam_{id}.avi").string() +
+                         "' --method nn --size 96x96 --fps 20 --no-cache --sink png:" + (dir / "out").string() +
+                         " --json", 60);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  auto j = r.json();
+  EXPECT_GE(j["frames"].get<long>(), 3);
+  EXPECT_LE(j["seconds"].get<double>(), 5.0);  // 10 frames at 20 fps, then the videos end
+  EXPECT_GE(j["camera_frames"].get<long>(), 24 * 8);
+  const cv::Mat last = cv::imread((dir / "out" / "frame_000000.png").string());
+  ASSERT_FALSE(last.empty());
+  std::set<int> seen;
+  for (int y = 0; y < last.rows; y += 4)
+    for (int x = 0; x < last.cols; x += 4)
+      for (int id = 0; id < 24; ++id)
+        if (cv::norm(cv::Vec3i(last.at<cv::Vec3b>(y, x)) - cv::Vec3i(camera_colour(id)), cv::NORM_INF) <= 8) seen.insert(id);
+  EXPECT_GE(seen.size(), 18u);
+  // A frames folder (cam_XX.png) as still cameras.
+  fs::create_directories(dir / "frames");
+  for (int id = 0; id < 24; ++id)
+    cv::imwrite((dir / "frames" / ((id < 10 ? "cam_0" : "cam_") + std::to_string(id) + ".png")).string(),
+                cv::Mat(64, 64, CV_8UC3, cv::Scalar(camera_colour(id))));
+  r = run_omma("run --rig " + rig.string() + " --source frames:" + (dir / "frames").string() +
+               " --size 96x96 --frames 5 --no-cache --json", 60);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  if (r.exit_code == 0) EXPECT_EQ(r.json()["frames"], 5);
+  fs::remove_all(dir);
+}
+
 TEST(EngineCli, BadInputGivesClearErrorsAndLeavesNoOutput) {
   const auto dir = temp_dir("engine-bad");
   const auto rig = write_rig(dir, 64);
