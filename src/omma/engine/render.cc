@@ -22,6 +22,15 @@ namespace {
 
 constexpr uint32_t kIndexMask = (1u << kIndexBits) - 1;
 
+// Fixed-point bilinear sample (5-bit fractions fx, fy) of channel ch of the 2x2 neighbourhood whose
+// top-left pixel is at a (row below at a + stride_bytes): the value times 1024.
+inline int32_t bilinear_x1024(const uint8_t* a, size_t stride_bytes, int32_t fx, int32_t fy, int ch) {
+  const uint8_t* c = a + stride_bytes;
+  const int32_t top = a[ch] * (32 - fy) + c[ch] * fy;
+  const int32_t bot = a[ch + 3] * (32 - fy) + c[ch + 3] * fy;
+  return top * (32 - fx) + bot * fx;
+}
+
 // Portable kernel: one output row. Same arithmetic as the SIMD kernel (bit-identical).
 void render_row_scalar(const CompiledMap& map, const uint8_t* store, size_t stride_bytes, int row,
                        uint8_t* out) {
@@ -34,12 +43,7 @@ void render_row_scalar(const CompiledMap& map, const uint8_t* store, size_t stri
       const int32_t wt = int32_t(map.weight[k]) + 1;
       const int32_t fx = (w >> 22) & 31, fy = w >> 27;
       const uint8_t* a = store + size_t(w & kIndexMask) * 3;
-      const uint8_t* c = a + stride_bytes;
-      for (int ch = 0; ch < 3; ++ch) {
-        const int32_t top = a[ch] * (32 - fy) + c[ch] * fy;
-        const int32_t bot = a[ch + 3] * (32 - fy) + c[ch + 3] * fy;
-        acc[ch] += top * ((32 - fx) * wt) + bot * (fx * wt);
-      }
+      for (int ch = 0; ch < 3; ++ch) acc[ch] += wt * bilinear_x1024(a, stride_bytes, fx, fy, ch);
     }
     for (int ch = 0; ch < 3; ++ch) out[ch] = static_cast<uint8_t>((acc[ch] + (1 << 17)) >> 18);
   }
@@ -58,12 +62,7 @@ void render_row_sad(const CompiledMap& map, const uint8_t* store, size_t stride_
       const uint32_t wd = map.word[k];
       const int32_t fx = (wd >> 22) & 31, fy = wd >> 27;
       const uint8_t* a = store + size_t(wd & kIndexMask) * 3;
-      const uint8_t* c = a + stride_bytes;
-      for (int ch = 0; ch < 3; ++ch) {
-        const int32_t top = a[ch] * (32 - fy) + c[ch] * fy;
-        const int32_t bot = a[ch + 3] * (32 - fy) + c[ch + 3] * fy;
-        s[t][ch] = float(top * (32 - fx) + bot * fx);  // value * 1024
-      }
+      for (int ch = 0; ch < 3; ++ch) s[t][ch] = float(bilinear_x1024(a, stride_bytes, fx, fy, ch));
       y[t] = (0.114f * s[t][0] + 0.587f * s[t][1] + 0.299f * s[t][2]) * (1.0f / (1024.0f * 255.0f));
       w[t] = float(map.weight[k] + 1);
     }
