@@ -80,56 +80,177 @@ void render_row_sad(const CompiledMap& map, const uint8_t* store, size_t stride_
 }
 
 #ifdef OMMA_X86
-// SSSE3 kernel. Per tap: two 8-byte loads (pixels a,b of row y and c,d of row y+1), interleave
-// rows, pmaddubsw with (32-fy, fy) -> vertical sums per channel of a/c and b/d, shuffle the a and b
-// halves into pairs, pmaddwd with ((32-fx) w, fx w) -> 32-bit channel sums.
-__attribute__((target("ssse3,sse4.1"))) void render_row_simd(const CompiledMap& map, const uint8_t* store,
-                                                             size_t stride_bytes, int row, uint8_t* out) {
-  const uint8_t* count = map.count.data() + size_t(row) * map.width;
-  const uint32_t* word = map.word.data();
-  const uint8_t* weight = map.weight.data();
-  size_t k = map.row_start[row];
-  // After unpack+maddubs, 16-bit lanes: [v0 v1 v2 v3 v4 v5 x x] = a0' a1' a2' b0' b1' b2'.
-  // Interleave to [a0' b0' a1' b1' a2' b2' 0 0] (bytes).
-  const __m128i pair = _mm_setr_epi8(0, 1, 6, 7, 2, 3, 8, 9, 4, 5, 10, 11, -1, -1, -1, -1);
-  const __m128i round = _mm_set1_epi32(1 << 17);
-  const __m128i pack = _mm_setr_epi8(0, 4, 8, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1);
-  const int W = map.width;
-  // (32 - fy, fy) byte pairs for pmaddubsw, one register per fy.
-  alignas(16) static const auto vy_lut = [] {
-    std::array<std::array<uint8_t, 16>, 32> t{};
-    for (int fy = 0; fy < 32; ++fy)
-      for (int i = 0; i < 16; i += 2) t[fy][i] = uint8_t(32 - fy), t[fy][i + 1] = uint8_t(fy);
-    return t;
-  }();
-  for (int col = 0; col < W; ++col, out += 3) {
-    __m128i acc = round;
-    const int n = count[col];
-    for (int t = 0; t < n; ++t, ++k) {
-      const uint32_t w = word[k];
-      const int32_t wt = int32_t(weight[k]) + 1;
-      const int32_t fx = (w >> 22) & 31, fy = w >> 27;
-      const uint8_t* a = store + size_t(w & kIndexMask) * 3;
-      const __m128i r0 = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(a));
-      const __m128i r1 = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(a + stride_bytes));
-      const __m128i il = _mm_unpacklo_epi8(r0, r1);
-      const __m128i vy = _mm_load_si128(reinterpret_cast<const __m128i*>(vy_lut[fy].data()));
-      const __m128i v = _mm_maddubs_epi16(il, vy);
-      const __m128i hp = _mm_shuffle_epi8(v, pair);
-      // ((32 - fx) w, fx w) as two int16 in one int32: w * (fx << 16 | (32 - fx)), no carry.
-      const __m128i wx = _mm_set1_epi32(wt * ((fx << 16) + 32 - fx));
-      acc = _mm_add_epi32(acc, _mm_madd_epi16(hp, wx));
-    }
-    const __m128i px = _mm_shuffle_epi8(_mm_srli_epi32(acc, 18), pack);
-    if (col + 1 < W) {
-      const uint32_t v32 = static_cast<uint32_t>(_mm_cvtsi128_si32(px));
-      std::memcpy(out, &v32, 4);  // the 4th byte is overwritten by the next pixel
-    } else {
-      const uint32_t v32 = static_cast<uint32_t>(_mm_cvtsi128_si32(px));
-      std::memcpy(out, &v32, 3);
-    }
+// The SIMD kernel, in two passes over the taps of one output row.
+//
+// Pass 1 (decode, 4 or 8 taps per step): from each tap's packed word and weight, the byte offset of
+// its 2x2 neighbourhood in the store, the vertical weights as the byte pairs (32 - fy, fy) and the
+// horizontal weights pre-multiplied by the blend weight, ((32 - fx) w, fx w) as two int16, into
+// per-thread arrays (12 bytes per tap, one row's worth: L1/L2 resident).
+//
+// Pass 2 (PixelKernel, no scalar arithmetic per tap: ~10 instructions per tap, ~20 per pixel).
+// Integer arithmetic without intermediate rounding, so the result is bit-identical to the scalar
+// kernel's. Measured on the 2-core AMD EPYC machine (mrf 1080x1080, 1 thread): ~10 % faster than
+// the previous one-pass kernel with scalar decoding, at 30 % fewer instructions; about a quarter of
+// the time is the gather from the 4.5 MB frame store.
+struct DecodedTaps {
+  std::vector<uint32_t> off, vy, wx;
+  void reserve(size_t n) {
+    if (off.size() >= n) return;
+    off.resize(n + 8), vy.resize(n + 8), wx.resize(n + 8);
+  }
+};
+
+// The same decoding, one tap at a time (taps i..n-1).
+void decode_taps_tail(const uint32_t* word, const uint8_t* weight, size_t i, size_t n, DecodedTaps& d) {
+  for (; i < n; ++i) {
+    const uint32_t w = word[i], fx = (w >> 22) & 31, fy = w >> 27;
+    d.off[i] = (w & kIndexMask) * 3;
+    d.vy[i] = ((fy << 8) | (32 - fy)) * 0x10001u;
+    d.wx[i] = (uint32_t(weight[i]) + 1) * ((fx << 16) + 32 - fx);
   }
 }
+
+__attribute__((target("sse4.1"))) void decode_taps_sse(const uint32_t* word, const uint8_t* weight, size_t n,
+                                                       DecodedTaps& d) {
+  const __m128i mask = _mm_set1_epi32(int(kIndexMask)), m31 = _mm_set1_epi32(31), c32 = _mm_set1_epi32(32);
+  const __m128i one = _mm_set1_epi32(1), dup = _mm_set1_epi32(0x10001);
+  size_t i = 0;
+  for (; i + 4 <= n; i += 4) {
+    const __m128i w = _mm_loadu_si128(reinterpret_cast<const __m128i*>(word + i));
+    int32_t wt4;
+    std::memcpy(&wt4, weight + i, 4);
+    const __m128i wt = _mm_add_epi32(_mm_cvtepu8_epi32(_mm_cvtsi32_si128(wt4)), one);
+    const __m128i idx = _mm_and_si128(w, mask);
+    const __m128i fx = _mm_and_si128(_mm_srli_epi32(w, 22), m31);
+    const __m128i fy = _mm_srli_epi32(w, 27);
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(d.off.data() + i), _mm_add_epi32(idx, _mm_slli_epi32(idx, 1)));
+    const __m128i vy = _mm_mullo_epi32(_mm_or_si128(_mm_slli_epi32(fy, 8), _mm_sub_epi32(c32, fy)), dup);
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(d.vy.data() + i), vy);
+    const __m128i wx = _mm_mullo_epi32(wt, _mm_add_epi32(_mm_slli_epi32(fx, 16), _mm_sub_epi32(c32, fx)));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(d.wx.data() + i), wx);
+  }
+  decode_taps_tail(word, weight, i, n, d);
+}
+
+__attribute__((target("avx2"))) void decode_taps_avx2(const uint32_t* word, const uint8_t* weight, size_t n,
+                                                      DecodedTaps& d) {
+  const __m256i mask = _mm256_set1_epi32(int(kIndexMask)), m31 = _mm256_set1_epi32(31);
+  const __m256i c32 = _mm256_set1_epi32(32), one = _mm256_set1_epi32(1), dup = _mm256_set1_epi32(0x10001);
+  size_t i = 0;
+  for (; i + 8 <= n; i += 8) {
+    const __m256i w = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(word + i));
+    const __m256i wt = _mm256_add_epi32(
+        _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(weight + i))), one);
+    const __m256i idx = _mm256_and_si256(w, mask);
+    const __m256i fx = _mm256_and_si256(_mm256_srli_epi32(w, 22), m31);
+    const __m256i fy = _mm256_srli_epi32(w, 27);
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(d.off.data() + i),
+                        _mm256_add_epi32(idx, _mm256_slli_epi32(idx, 1)));
+    const __m256i vy = _mm256_mullo_epi32(_mm256_or_si256(_mm256_slli_epi32(fy, 8), _mm256_sub_epi32(c32, fy)), dup);
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(d.vy.data() + i), vy);
+    const __m256i wx =
+        _mm256_mullo_epi32(wt, _mm256_add_epi32(_mm256_slli_epi32(fx, 16), _mm256_sub_epi32(c32, fx)));
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(d.wx.data() + i), wx);
+  }
+  decode_taps_tail(word, weight, i, n, d);
+}
+
+bool has_avx2() {
+  static const bool ok = __builtin_cpu_supports("avx2");
+  return ok;
+}
+
+// A 32-bit value from memory in all four lanes (AVX: one broadcast load).
+template <bool kAvx2>
+__attribute__((always_inline, target("ssse3,sse4.1"))) inline __m128i broadcast32(const uint32_t* p) {
+  if constexpr (kAvx2) {
+    __m128i r;
+    asm("vbroadcastss %1, %0" : "=x"(r) : "m"(*p));
+    return r;
+  } else {
+    return _mm_set1_epi32(int(*p));
+  }
+}
+
+// One output pixel from its decoded taps.
+#define OMMA_SIMD_INLINE __attribute__((always_inline, target("ssse3,sse4.1"))) inline
+template <bool kAvx2>
+struct PixelKernel {
+  const uint8_t* store;   // top row of the 2x2 neighbourhoods
+  const uint8_t* store2;  // store + one store row: bottom row
+  const uint32_t *off, *vyw, *wxw;
+
+  // Tap i added to acc: two 8-byte loads (pixels a,b of row y and c,d of row y+1), interleave rows,
+  // pmaddubsw with (32-fy, fy) -> vertical sums per channel of a/c and b/d, shuffle the a and b
+  // halves into pairs, pmaddwd with ((32-fx) w, fx w) -> 32-bit channel sums.
+  OMMA_SIMD_INLINE static __m128i tap(__m128i acc, const uint8_t* s0, const uint8_t* s1, const uint32_t* o,
+                                      const uint32_t* vy, const uint32_t* wx) {
+    // After unpack+maddubs, 16-bit lanes: [v0 v1 v2 v3 v4 v5 x x] = a0' a1' a2' b0' b1' b2'.
+    // Interleave to [a0' b0' a1' b1' a2' b2' 0 0] (bytes).
+    const __m128i pair = _mm_setr_epi8(0, 1, 6, 7, 2, 3, 8, 9, 4, 5, 10, 11, -1, -1, -1, -1);
+    const __m128i r0 = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(s0 + *o));
+    const __m128i r1 = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(s1 + *o));
+    const __m128i v = _mm_maddubs_epi16(_mm_unpacklo_epi8(r0, r1), broadcast32<kAvx2>(vy));
+    return _mm_add_epi32(acc, _mm_madd_epi16(_mm_shuffle_epi8(v, pair), broadcast32<kAvx2>(wx)));
+  }
+  // The pixel of taps i..i+c-1 (advances i), as 3 bytes B G R in the low bytes of the result. The
+  // taps are unrolled by a switch on c (counts come in long runs, so the jump is well predicted).
+  OMMA_SIMD_INLINE uint32_t pixel(size_t& i, int c) const {
+    const __m128i pack = _mm_setr_epi8(0, 4, 8, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1);
+    __m128i acc = _mm_set1_epi32(1 << 17);
+    const uint8_t *s0 = store, *s1 = store2;
+    const uint32_t *o = off + i, *vy = vyw + i, *wx = wxw + i;
+    switch (c) {
+      case 8: acc = tap(acc, s0, s1, o + 7, vy + 7, wx + 7); [[fallthrough]];
+      case 7: acc = tap(acc, s0, s1, o + 6, vy + 6, wx + 6); [[fallthrough]];
+      case 6: acc = tap(acc, s0, s1, o + 5, vy + 5, wx + 5); [[fallthrough]];
+      case 5: acc = tap(acc, s0, s1, o + 4, vy + 4, wx + 4); [[fallthrough]];
+      case 4: acc = tap(acc, s0, s1, o + 3, vy + 3, wx + 3); [[fallthrough]];
+      case 3: acc = tap(acc, s0, s1, o + 2, vy + 2, wx + 2); [[fallthrough]];
+      case 2: acc = tap(acc, s0, s1, o + 1, vy + 1, wx + 1); [[fallthrough]];
+      case 1: acc = tap(acc, s0, s1, o + 0, vy + 0, wx + 0); [[fallthrough]];
+      default: break;
+    }
+    i += c;
+    return static_cast<uint32_t>(_mm_cvtsi128_si32(_mm_shuffle_epi8(_mm_srli_epi32(acc, 18), pack)));
+  }
+};
+
+// One output row. Decodes the whole row first: decoding just before use (in small blocks) measured
+// much slower (the decoder's wide stores do not forward to the kernel's narrow loads). Instantiated
+// for SSSE3 and for AVX2 (VEX encoding, broadcast loads). Two taps per 256-bit step (AVX2) measured
+// slower than one per 128-bit step.
+template <bool kAvx2>
+OMMA_SIMD_INLINE void render_row_simd(const CompiledMap& map, const uint8_t* store, size_t stride_bytes, int row,
+                                      uint8_t* out) {
+  const uint8_t* count = map.count.data() + size_t(row) * map.width;
+  const size_t k0 = map.row_start[row], n = map.row_start[row + 1] - k0;
+  static thread_local DecodedTaps d;
+  d.reserve(n);
+  if (kAvx2)
+    decode_taps_avx2(map.word.data() + k0, map.weight.data() + k0, n, d);
+  else
+    decode_taps_sse(map.word.data() + k0, map.weight.data() + k0, n, d);
+  const PixelKernel<kAvx2> px{store, store + stride_bytes, d.off.data(), d.vy.data(), d.wx.data()};
+  const int W = map.width;
+  size_t i = 0;
+  for (int col = 0; col + 1 < W; ++col, out += 3) {
+    const uint32_t v32 = px.pixel(i, count[col]);
+    std::memcpy(out, &v32, 4);  // the 4th byte is overwritten by the next pixel
+  }
+  const uint32_t v32 = px.pixel(i, count[W - 1]);
+  std::memcpy(out, &v32, 3);
+}
+
+__attribute__((target("ssse3,sse4.1"))) void render_row_ssse3(const CompiledMap& map, const uint8_t* store,
+                                                              size_t stride_bytes, int row, uint8_t* out) {
+  render_row_simd<false>(map, store, stride_bytes, row, out);
+}
+__attribute__((target("avx2"))) void render_row_avx2(const CompiledMap& map, const uint8_t* store,
+                                                     size_t stride_bytes, int row, uint8_t* out) {
+  render_row_simd<true>(map, store, stride_bytes, row, out);
+}
+#undef OMMA_SIMD_INLINE
 #endif
 
 }  // namespace
@@ -151,6 +272,9 @@ void render(const CompiledMap& map, const FrameStore& store, cv::Mat& out, const
   const uint8_t* data = store.data();
   const bool simd = opt.simd && simd_available();
   const bool sad = map.method == pano::Method::kSad;
+#ifdef OMMA_X86
+  const bool avx2 = simd && opt.avx2 && has_avx2();
+#endif
   auto rows = [&](int r0, int r1) {
     for (int r = r0; r < r1; ++r) {
       uint8_t* o = out.ptr<uint8_t>(r);
@@ -160,7 +284,7 @@ void render(const CompiledMap& map, const FrameStore& store, cv::Mat& out, const
       }
 #ifdef OMMA_X86
       if (simd) {
-        render_row_simd(map, data, stride_bytes, r, o);
+        (avx2 ? render_row_avx2 : render_row_ssse3)(map, data, stride_bytes, r, o);
         continue;
       }
 #endif

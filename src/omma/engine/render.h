@@ -1,5 +1,7 @@
-// The fast CPU renderer of compiled maps (sad: its own kernel with per-frame weights) (thesis §5.4: the FPGA's per-pixel tap pipeline, here as
-// an SSSE3 kernel over rows split among oneTBB threads), and the plain reference it must match.
+// The fast CPU renderer of compiled maps (thesis §5.4: the FPGA's per-pixel tap pipeline, here as
+// SIMD kernels over rows split among oneTBB threads; sad has its own kernel with per-frame
+// weights), and the plain reference it must match. Kernels, chosen at run time: AVX2, SSSE3,
+// portable scalar; all three give bit-identical results (integer arithmetic, one final rounding).
 #pragma once
 
 #include <vector>
@@ -12,7 +14,8 @@ namespace omma::engine {
 
 struct RenderOptions {
   int threads = 0;       // 0 = all hardware threads (oneTBB default), 1 = the calling thread only
-  bool simd = true;      // false: the portable scalar kernel (bit-identical to the SIMD one)
+  bool simd = true;      // false: the portable scalar kernel (bit-identical to the SIMD ones)
+  bool avx2 = true;      // false: the SSSE3 kernel even where the CPU has AVX2 (bit-identical)
 };
 
 // Renders `map` from the frames in `store` into `out` (resized to CV_8UC3 height x width).

@@ -102,16 +102,21 @@ TEST(EngineRender, MatchesPanoStitchOnThePrototypeRigAtLeast50dB) {
 
 TEST(EngineRender, SimdKernelIsBitIdenticalToScalarKernelAndThreadCountDoesNotMatter) {
   const Rig rig = ring_rig_24();
-  MapOptions opt;
-  opt.grid = PanoGrid{Projection::kVr180, 200, 200};
-  const CompiledMap map = compile_map(rig, opt);
-  const FrameStore store = store_of(map, random_frames(rig, 7));
-  cv::Mat a, b, c;
-  render(map, store, a, {.threads = 0, .simd = true});
-  render(map, store, b, {.threads = 1, .simd = false});
-  render(map, store, c, {.threads = 2, .simd = true});
-  EXPECT_EQ(cv::norm(a, b, cv::NORM_INF), 0.0);
-  EXPECT_EQ(cv::norm(a, c, cv::NORM_INF), 0.0);
+  for (pano::Method m : {pano::Method::kNearest, pano::Method::kLinear, pano::Method::kMrf}) {
+    MapOptions opt;
+    opt.grid = PanoGrid{Projection::kVr180, 200, 200};
+    opt.method = m;
+    const CompiledMap map = compile_map(rig, opt);
+    const FrameStore store = store_of(map, random_frames(rig, 7));
+    cv::Mat a, b, c, d;
+    render(map, store, a, {.threads = 0, .simd = true});                 // AVX2 where available
+    render(map, store, b, {.threads = 1, .simd = false});                // scalar
+    render(map, store, c, {.threads = 2, .simd = true});
+    render(map, store, d, {.threads = 1, .simd = true, .avx2 = false});  // SSSE3
+    EXPECT_EQ(cv::norm(a, b, cv::NORM_INF), 0.0) << pano::to_string(m);
+    EXPECT_EQ(cv::norm(a, c, cv::NORM_INF), 0.0) << pano::to_string(m);
+    EXPECT_EQ(cv::norm(a, d, cv::NORM_INF), 0.0) << pano::to_string(m);
+  }
 }
 
 TEST(EngineMap, WeightsSumTo256AndBytesPerPixelIsCompact) {
