@@ -1,6 +1,8 @@
 #include "omma/engine/render.h"
 
 #include <array>
+#include <type_traits>
+#include <utility>
 #include <cmath>
 
 #include "omma/pano/stitch.h"
@@ -193,6 +195,26 @@ struct PixelKernel {
     const __m128i v = _mm_maddubs_epi16(_mm_unpacklo_epi8(r0, r1), broadcast32<kAvx2>(vy));
     return _mm_add_epi32(acc, _mm_madd_epi16(_mm_shuffle_epi8(v, pair), broadcast32<kAvx2>(wx)));
   }
+  // The pixel of the C taps i..i+C-1 (advances i), as 3 bytes B G R in the low bytes of the result.
+  template <int C>
+  OMMA_SIMD_INLINE uint32_t pixel_n(size_t& i) const {
+    const __m128i pack = _mm_setr_epi8(0, 4, 8, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1);
+    __m128i acc = _mm_set1_epi32(1 << 17);
+    const uint32_t *o = off + i, *vy = vyw + i, *wx = wxw + i;
+#pragma GCC unroll 8
+    for (int j = 0; j < C; ++j) acc = tap(acc, store, store2, o + j, vy + j, wx + j);
+    i += C;
+    return static_cast<uint32_t>(_mm_cvtsi128_si32(_mm_shuffle_epi8(_mm_srli_epi32(acc, 18), pack)));
+  }
+  // Pixels col..end-1, all with C taps, into out (4-byte stores: the 4th byte is overwritten by the
+  // next pixel). Advances col, i and out.
+  template <int C>
+  OMMA_SIMD_INLINE void run(int& col, int end, size_t& i, uint8_t*& out) const {
+    for (; col < end; ++col, out += 3) {
+      const uint32_t v32 = pixel_n<C>(i);
+      std::memcpy(out, &v32, 4);
+    }
+  }
   // The pixel of taps i..i+c-1 (advances i), as 3 bytes B G R in the low bytes of the result. The
   // taps are unrolled by a switch on c (counts come in long runs, so the jump is well predicted).
   OMMA_SIMD_INLINE uint32_t pixel(size_t& i, int c) const {
@@ -234,9 +256,22 @@ OMMA_SIMD_INLINE void render_row_simd(const CompiledMap& map, const uint8_t* sto
   const PixelKernel<kAvx2> px{store, store + stride_bytes, d.off.data(), d.vy.data(), d.wx.data()};
   const int W = map.width;
   size_t i = 0;
-  for (int col = 0; col + 1 < W; ++col, out += 3) {
-    const uint32_t v32 = px.pixel(i, count[col]);
-    std::memcpy(out, &v32, 4);  // the 4th byte is overwritten by the next pixel
+  // Runs of pixels with the same tap count, each rendered by a loop specialised for that count.
+  for (int col = 0; col + 1 < W;) {
+    const int c = count[col];
+    int end = col + 1;
+    while (end + 1 < W && count[end] == c) ++end;
+    switch (c) {
+      case 0: px.template run<0>(col, end, i, out); break;
+      case 1: px.template run<1>(col, end, i, out); break;
+      case 2: px.template run<2>(col, end, i, out); break;
+      case 3: px.template run<3>(col, end, i, out); break;
+      case 4: px.template run<4>(col, end, i, out); break;
+      case 5: px.template run<5>(col, end, i, out); break;
+      case 6: px.template run<6>(col, end, i, out); break;
+      case 7: px.template run<7>(col, end, i, out); break;
+      default: px.template run<8>(col, end, i, out); break;
+    }
   }
   const uint32_t v32 = px.pixel(i, count[W - 1]);
   std::memcpy(out, &v32, 3);
