@@ -191,34 +191,52 @@ CompiledMap compile_map(const Rig& rig, const MapOptions& opt) {
                           opt.method == pano::Method::kSad;
     const int bx0 = std::max(0, c0 - 1), by0 = std::max(0, r0 - 1);
     const int bx1 = std::min(W, c1 + 1), by1 = std::min(H, r1 + 1), bw = bx1 - bx0;
-    std::vector<std::vector<pano::Contributor>> found(size_t(bw) * (by1 - by0));
+    // Per node: its contributors and, for the mrf family, their potentials (eq. 4.8), each
+    // computed once although every node is visited as the centre and as 4 neighbours.
+    struct Node {
+      std::vector<pano::Contributor> cs;
+      std::vector<double> phi;
+    };
+    const bool spherical = opt.method == pano::Method::kMrfSpherical;
+    std::vector<Node> found(size_t(bw) * (by1 - by0));
     std::vector<uint8_t> done(found.size(), 0);
-    std::array<std::vector<pano::Contributor>, 4> outside;
-    auto contributors = [&](int col, int row, int slot) -> const std::vector<pano::Contributor>& {
+    std::array<Node, 4> outside;
+    auto fill = [&](Node& n, int col, int row) {
+      n.cs = pano::find_contributors(tile_rig, opt.grid.pixel_direction(col, row), opt.params.search);
+      if (needs_nb) n.phi = pano::node_potentials(n.cs, spherical);
+    };
+    auto node = [&](int col, int row, int slot) -> const Node& {
       if (col >= bx0 && col < bx1 && row >= by0 && row < by1) {
         const size_t i = size_t(row - by0) * bw + (col - bx0);
         if (!done[i]) {
-          found[i] = pano::find_contributors(tile_rig, opt.grid.pixel_direction(col, row), opt.params.search);
+          fill(found[i], col, row);
           done[i] = 1;
         }
         return found[i];
       }
-      outside[slot] = pano::find_contributors(tile_rig, opt.grid.pixel_direction(col, row), opt.params.search);
+      fill(outside[slot], col, row);  // equirect wrap-around neighbours
       return outside[slot];
     };
     for (int row = r0; row < r1; ++row)
       for (int col = c0; col < c1; ++col) {
         PixelTaps& out = px[size_t(row) * W + col];
         if (tile_rig.cameras.empty()) continue;
-        const std::vector<pano::Contributor>& cs = contributors(col, row, 0);
+        const Node& u = node(col, row, 0);
+        const std::vector<pano::Contributor>& cs = u.cs;
         if (cs.empty()) continue;
-        std::array<const std::vector<pano::Contributor>*, 4> nb{nullptr, nullptr, nullptr, nullptr};
-        if (needs_nb) {
+        std::vector<double> mw;
+        if (needs_nb) {  // = pano::method_weights, with the cached potentials
+          std::array<pano::MrfNode, 4> nb;
           const auto nbs = pano::grid_neighbours(opt.grid, col, row);
           for (int k = 0; k < 4; ++k)
-            if (nbs[k][0] >= 0) nb[k] = &contributors(nbs[k][0], nbs[k][1], k);
+            if (nbs[k][0] >= 0) {
+              const Node& v = node(nbs[k][0], nbs[k][1], k);
+              nb[k] = {&v.cs, &v.phi};
+            }
+          mw = pano::mrf_posterior(cs, u.phi, nb);
+        } else {
+          mw = pano::method_weights(tile_rig, opt.method, cs, {nullptr, nullptr, nullptr, nullptr}, opt.params);
         }
-        const std::vector<double> mw = pano::method_weights(tile_rig, opt.method, cs, nb, opt.params);
         std::vector<pano::Tap> taps;
         for (size_t i = 0; i < cs.size(); ++i)
           if (mw[i] > 0) taps.push_back({cs[i].camera, cs[i].px, mw[i]});

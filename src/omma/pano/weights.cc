@@ -15,9 +15,14 @@ std::vector<double> normalise(std::vector<double> w) {
   return w;
 }
 
-// phi of eq. 4.8 for every contributor of one node: 1/|r| (mrf) or 1/a (mrf-spherical, eq. 4.10),
-// normalised over the node's cameras (a per-node constant, absorbed by Z of eq. 4.8; it keeps the
-// product of five factors in range).
+double potential_of_camera(const std::vector<Contributor>& cs, const std::vector<double>& phi, int camera) {
+  for (size_t k = 0; k < cs.size(); ++k)
+    if (cs[k].camera == camera) return phi[k];
+  return 0.0;  // camera does not see this neighbour: probability 0
+}
+
+}  // namespace
+
 std::vector<double> node_potentials(const std::vector<Contributor>& cs, bool spherical) {
   std::vector<double> phi(cs.size());
   double r_max = 0;
@@ -27,13 +32,18 @@ std::vector<double> node_potentials(const std::vector<Contributor>& cs, bool sph
   return normalise(phi);
 }
 
-double potential_of_camera(const std::vector<Contributor>& cs, const std::vector<double>& phi, int camera) {
-  for (size_t k = 0; k < cs.size(); ++k)
-    if (cs[k].camera == camera) return phi[k];
-  return 0.0;  // camera does not see this neighbour: probability 0
+std::vector<double> mrf_posterior(const std::vector<Contributor>& cs, const std::vector<double>& phi_u,
+                                  const std::array<MrfNode, 4>& neighbours) {
+  std::vector<double> weight = phi_u;
+  for (const MrfNode& nb : neighbours) {
+    if (nb.cs == nullptr) continue;
+    for (size_t i = 0; i < cs.size(); ++i) weight[i] *= potential_of_camera(*nb.cs, *nb.phi, cs[i].camera);
+  }
+  double sum = 0;
+  for (double x : weight) sum += x;
+  if (!(sum > 0)) weight = phi_u;  // no camera sees the whole neighbourhood: prior alone
+  return normalise(weight);
 }
-
-}  // namespace
 
 double spherical_arc_distance(double r, double r_max) {
   if (r_max <= 0) return r;
@@ -80,17 +90,14 @@ std::vector<double> method_weights(const Rig& rig, Method method, const std::vec
     case Method::kMrfSpherical:  // eq. 4.10-4.11 combined with 4.8
     case Method::kSad: {         // prior of eq. 4.18 = the mrf posterior of §4.2.2
       const bool spherical = method == Method::kMrfSpherical;
-      const std::vector<double> phi_u = node_potentials(cs, spherical);
-      weight = phi_u;
-      for (const auto* nb : neighbours) {
-        if (nb == nullptr) continue;
-        const std::vector<double> phi_v = node_potentials(*nb, spherical);
-        for (size_t i = 0; i < cs.size(); ++i) weight[i] *= potential_of_camera(*nb, phi_v, cs[i].camera);
-      }
-      double sum = 0;
-      for (double x : weight) sum += x;
-      if (!(sum > 0)) weight = phi_u;  // no camera sees the whole neighbourhood: prior alone
-      break;
+      std::array<std::vector<double>, 4> phi_v;
+      std::array<MrfNode, 4> nodes;
+      for (int k = 0; k < 4; ++k)
+        if (neighbours[k] != nullptr) {
+          phi_v[k] = node_potentials(*neighbours[k], spherical);
+          nodes[k] = {neighbours[k], &phi_v[k]};
+        }
+      return mrf_posterior(cs, node_potentials(cs, spherical), nodes);
     }
   }
   return normalise(weight);

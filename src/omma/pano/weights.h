@@ -62,6 +62,25 @@ std::vector<double> method_weights(const Rig& rig, Method method, const std::vec
                                    const std::array<const std::vector<Contributor>*, 4>& neighbours,
                                    const BlendParams& params = {});
 
+// eq. 4.8: the potential phi_i of every contributor of one node, 1/|r_i| (mrf, sad) or 1/a_i
+// (mrf-spherical, eq. 4.10), normalised over the node's cameras (a per-node constant, absorbed by Z
+// of eq. 4.8; it keeps the product of five factors in range).
+std::vector<double> node_potentials(const std::vector<Contributor>& cs, bool spherical);
+
+// One node of the 4-neighbourhood for mrf_posterior: its contributors and their potentials
+// (node_potentials); cs == nullptr where the neighbour is off the grid.
+struct MrfNode {
+  const std::vector<Contributor>* cs = nullptr;
+  const std::vector<double>* phi = nullptr;
+};
+
+// eq. 4.8-4.9: p_i = phi_i(u) * prod over the neighbours v of phi_i(v) (0 where camera i does not
+// see v), normalised; the prior phi(u) alone if no camera sees the whole neighbourhood. This is
+// what method_weights computes for mrf, mrf-spherical and sad; callers that visit every node
+// (the engine's map compiler) compute each node's potentials once and call this directly.
+std::vector<double> mrf_posterior(const std::vector<Contributor>& centre, const std::vector<double>& phi_centre,
+                                  const std::array<MrfNode, 4>& neighbours);
+
 // The 4-connected neighbours (left, right, up, down) of (col, row) on `grid`, as (col, row) pairs;
 // {-1, -1} where there is none. Equirect grids wrap around horizontally (phi is periodic).
 std::array<std::array<int, 2>, 4> grid_neighbours(const PanoGrid& grid, int col, int row);
