@@ -31,7 +31,9 @@ void add_bench_command(CLI::App& root) {
       ->check(CLI::Range(0.01, 60.0));
   cmd->add_option("--only", o.only, "Run only workloads whose name contains one of these strings");
   cmd->add_flag("--quick", o.quick, "Small panoramas (216x216, 384x102) for smoke tests");
-  cmd->add_flag("--json", o.json, "Print {\"results\": [{\"name\", \"fps\", ...}]} on stdout");
+  cmd->add_flag("--json", o.json,
+                "Print {\"results\": [{\"name\", \"fps\", ...}], \"ratios\": [{\"name\", \"vs_opencv_remap\", "
+                "\"vs_opencv_multiband\", \"memcpy_bound_over_ours\", targets met}]} on stdout");
   cmd->callback([] {
     set_json_mode(o.json);
     const Rig rig = o.rig.empty() ? design::thesis_prototype_rig() : load_rig(o.rig);
@@ -48,14 +50,26 @@ void add_bench_command(CLI::App& root) {
       for (auto it = e.info.begin(); it != e.info.end(); ++it) r[it.key()] = it.value();
       results.push_back(r);
     }
+    const auto ratios = engine::bench_ratios(entries);
+    nlohmann::json ratios_json = nlohmann::json::array();
+    for (const auto& r : ratios) ratios_json.push_back(r.to_json());
     if (o.json) {
-      print_json({{"results", results}, {"skipped", skipped}, {"rig", rig.name},
+      print_json({{"results", results}, {"ratios", ratios_json}, {"skipped", skipped}, {"rig", rig.name},
                   {"cameras", rig.cameras.size()}, {"hardware_threads", std::thread::hardware_concurrency()}});
       return;
     }
     std::cout << fmt::format("{:<36} {:>12}\n", "workload", "fps");
     for (const auto& e : entries) std::cout << fmt::format("{:<36} {:>12.1f}\n", e.name, e.fps);
     for (const auto& s : skipped) std::cout << "skipped: " << s << "\n";
+    if (!ratios.empty()) {
+      std::cout << fmt::format("\n{:<36} {:>12} {:>14} {:>14}\n", "ours (all threads)", "x remap (A)",
+                               "x multiband (B)", "bound / ours");
+      auto num = [](double v) { return v > 0 ? fmt::format("{:.2f}", v) : std::string("-"); };
+      for (const auto& r : ratios)
+        std::cout << fmt::format("{:<36} {:>12} {:>14} {:>14}\n", r.name, num(r.vs_remap), num(r.vs_multiband),
+                                 num(r.bound_over));
+      std::cout << "targets (issue 5, mrf 1080x1080): >= 400 fps, >= 10x A, >= 100x B, bound / ours <= 2\n";
+    }
   });
 }
 

@@ -290,7 +290,17 @@ TEST(EngineCli, BenchJsonListsOursAndThePeers) {
     ASSERT_TRUE(fps.count(name)) << name;
     EXPECT_GT(fps[name], 1.0) << name;
   }
-  // Speed itself is measured by the benchmark, not asserted here (the CI machine is shared).
+  // Speed itself is measured by the benchmark, not asserted here (the CI machine is shared); the
+  // ratios are the results divided by each other.
+  bool found_ratio = false;
+  for (const auto& q : j["ratios"])
+    if (q["name"] == "omma-linear-216x216") {
+      found_ratio = true;
+      EXPECT_NEAR(q["vs_opencv_remap"].get<double>(), fps["omma-linear-216x216"] / fps["opencv-remap-216x216"], 1e-9);
+      EXPECT_NEAR(q["memcpy_bound_over_ours"].get<double>(), fps["memcpy-bound-216x216"] / fps["omma-linear-216x216"],
+                  1e-9);
+    }
+  EXPECT_TRUE(found_ratio);
   for (const auto& e : j["results"])
     if (std::string(e["name"]).rfind("omma-", 0) == 0) EXPECT_GT(e["bytes_per_pixel"].get<double>(), 1.0);
 }

@@ -248,4 +248,33 @@ std::vector<BenchEntry> run_bench_suite(const Rig& rig_in, const BenchOptions& o
   return out;
 }
 
+nlohmann::json BenchRatio::to_json() const {
+  nlohmann::json j = {{"name", name}, {"fps", fps}};
+  if (vs_remap > 0) j["vs_opencv_remap"] = vs_remap, j["target_10x_opencv_remap_met"] = vs_remap >= 10;
+  if (vs_multiband > 0)
+    j["vs_opencv_multiband"] = vs_multiband, j["target_100x_opencv_multiband_met"] = vs_multiband >= 100;
+  if (bound_over > 0) j["memcpy_bound_over_ours"] = bound_over, j["target_within_2x_bound_met"] = bound_over <= 2;
+  if (name.rfind("omma-mrf-1080x1080", 0) == 0) j["target_400fps_met"] = fps >= 400;
+  return j;
+}
+
+std::vector<BenchRatio> bench_ratios(const std::vector<BenchEntry>& entries) {
+  auto fps_of = [&](const std::string& name) {
+    for (const auto& e : entries)
+      if (e.name == name) return e.fps;
+    return 0.0;
+  };
+  std::vector<BenchRatio> out;
+  for (const auto& e : entries) {
+    if (e.name.rfind("omma-", 0) != 0 || e.name.find("-1thread") != std::string::npos || !(e.fps > 0)) continue;
+    const std::string size = e.name.substr(e.name.rfind('-') + 1);  // "1080x1080"
+    BenchRatio r{e.name, e.fps};
+    if (const double a = fps_of("opencv-remap-" + size); a > 0) r.vs_remap = e.fps / a;
+    if (const double b = fps_of("opencv-multiband-" + size); b > 0) r.vs_multiband = e.fps / b;
+    if (const double m = fps_of("memcpy-bound-" + size); m > 0) r.bound_over = m / e.fps;
+    out.push_back(r);
+  }
+  return out;
+}
+
 }  // namespace omma::engine

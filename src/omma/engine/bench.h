@@ -61,4 +61,19 @@ struct BenchOptions {
 std::vector<BenchEntry> run_bench_suite(const Rig& rig, const BenchOptions& opt,
                                         std::vector<std::string>* skipped = nullptr);
 
+// The issue's comparisons for one of our workloads (e.g. "omma-mrf-1080x1080") against the peers
+// of the same size in the same run: ours / peer A, ours / peer B, bound / ours (0 where a workload
+// is missing), and whether the targets of issue 5 point 4 are met (>= 400 fps for mrf at
+// 1080x1080, >= 10x peer A, >= 100x peer B, within 2x of the bound).
+struct BenchRatio {
+  std::string name;
+  double fps = 0;
+  double vs_remap = 0;      // fps / opencv-remap fps
+  double vs_multiband = 0;  // fps / opencv-multiband fps
+  double bound_over = 0;    // memcpy-bound fps / fps (1 = at the bound)
+  nlohmann::json to_json() const;
+};
+// One BenchRatio per "omma-*" entry with all threads (not the -1thread ones).
+std::vector<BenchRatio> bench_ratios(const std::vector<BenchEntry>& entries);
+
 }  // namespace omma::engine

@@ -1,0 +1,36 @@
+// bench_ratios (issue 5 point 4): the comparisons `omma bench` reports.
+#include "omma/engine/bench.h"
+
+#include <gtest/gtest.h>
+
+namespace omma::engine {
+namespace {
+
+TEST(EngineBench, RatiosCompareOursWithThePeersOfTheSameSize) {
+  const std::vector<BenchEntry> e = {{"omma-mrf-1080x1080", 300, {}},    {"omma-mrf-1080x1080-1thread", 160, {}},
+                                     {"opencv-remap-1080x1080", 60, {}},  {"opencv-multiband-1080x1080", 10, {}},
+                                     {"memcpy-bound-1080x1080", 900, {}}, {"omma-nn-1920x512", 500, {}},
+                                     {"opencv-remap-1920x512", 25, {}},   {"memcpy-bound-1920x512", 750, {}}};
+  const auto r = bench_ratios(e);
+  ASSERT_EQ(r.size(), 2u);  // the -1thread entry and the peers are not compared
+  EXPECT_EQ(r[0].name, "omma-mrf-1080x1080");
+  EXPECT_DOUBLE_EQ(r[0].vs_remap, 5.0);
+  EXPECT_DOUBLE_EQ(r[0].vs_multiband, 30.0);
+  EXPECT_DOUBLE_EQ(r[0].bound_over, 3.0);
+  const auto j = r[0].to_json();
+  EXPECT_FALSE(j["target_400fps_met"].get<bool>());
+  EXPECT_FALSE(j["target_10x_opencv_remap_met"].get<bool>());
+  EXPECT_FALSE(j["target_within_2x_bound_met"].get<bool>());
+  EXPECT_EQ(r[1].name, "omma-nn-1920x512");
+  EXPECT_DOUBLE_EQ(r[1].vs_remap, 20.0);
+  EXPECT_DOUBLE_EQ(r[1].vs_multiband, 0.0);  // no peer B of that size in this run
+  EXPECT_DOUBLE_EQ(r[1].bound_over, 1.5);
+  const auto j1 = r[1].to_json();
+  EXPECT_TRUE(j1["target_10x_opencv_remap_met"].get<bool>());
+  EXPECT_TRUE(j1["target_within_2x_bound_met"].get<bool>());
+  EXPECT_FALSE(j1.contains("vs_opencv_multiband"));
+  EXPECT_FALSE(j1.contains("target_400fps_met"));
+}
+
+}  // namespace
+}  // namespace omma::engine
