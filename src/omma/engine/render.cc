@@ -238,6 +238,19 @@ struct PixelKernel {
   }
 };
 
+// The first index in [from, last) whose count differs from c (last if none), 16 at a time.
+inline int run_end(const uint8_t* count, int from, int last, int c) {
+  int e = from;
+  const __m128i cv = _mm_set1_epi8(char(c));
+  for (; e + 16 <= last; e += 16) {
+    const uint32_t same =
+        uint32_t(_mm_movemask_epi8(_mm_cmpeq_epi8(_mm_loadu_si128(reinterpret_cast<const __m128i*>(count + e)), cv)));
+    if (same != 0xFFFFu) return e + __builtin_ctz(~same);
+  }
+  while (e < last && count[e] == c) ++e;
+  return e;
+}
+
 // One output row. Decodes the whole row first: decoding just before use (in small blocks) measured
 // much slower (the decoder's wide stores do not forward to the kernel's narrow loads). Instantiated
 // for SSSE3 and for AVX2 (VEX encoding, broadcast loads). Two taps per 256-bit step (AVX2) measured
@@ -259,8 +272,7 @@ OMMA_SIMD_INLINE void render_row_simd(const CompiledMap& map, const uint8_t* sto
   // Runs of pixels with the same tap count, each rendered by a loop specialised for that count.
   for (int col = 0; col + 1 < W;) {
     const int c = count[col];
-    int end = col + 1;
-    while (end + 1 < W && count[end] == c) ++end;
+    const int end = run_end(count, col + 1, W - 1, c);
     switch (c) {
       case 0: px.template run<0>(col, end, i, out); break;
       case 1: px.template run<1>(col, end, i, out); break;
