@@ -29,15 +29,17 @@ void add_rig_diff_command(CLI::App& root) {
       print_json({{"orientation_error_deg", stat(d.orientation_error_deg)},
                   {"focal_error_rel", stat(d.focal_error_rel)},
                   {"center_error_px", stat(d.center_error_px)},
+                  {"ray_error_deg", stat(d.ray_error_deg)},
                   {"cameras", d.per_camera_orientation_deg.size()},
                   {"aligned", align},
                   {"alignment_deg", align_deg}});
     } else {
       std::cout << fmt::format(
           "orientation error {:.4f} deg median, {:.4f} max; focal error {:.3f} % median, {:.3f} % max; centre error "
-          "{:.3f} px median, {:.3f} px max\n",
+          "{:.3f} px median, {:.3f} px max; ray error {:.4f} deg median, {:.4f} max\n",
           d.orientation_error_deg.median, d.orientation_error_deg.max, 100 * d.focal_error_rel.median,
-          100 * d.focal_error_rel.max, d.center_error_px.median, d.center_error_px.max);
+          100 * d.focal_error_rel.max, d.center_error_px.median, d.center_error_px.max, d.ray_error_deg.median,
+          d.ray_error_deg.max);
     }
   });
 }

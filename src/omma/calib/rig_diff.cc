@@ -70,6 +70,23 @@ Rig rotate_rig(const Rig& rig, const Mat3& g) {
   return out;
 }
 
+double ray_error_deg(const RigCamera& a, const RigCamera& b) {
+  const CameraModel ma = a.model(), mb = b.model();
+  constexpr int kN = 9;
+  double sum = 0;
+  int n = 0;
+  for (int j = 0; j < kN; ++j)
+    for (int i = 0; i < kN; ++i) {
+      const Vec2 px((i + 0.5) * b.in.width / kN, (j + 0.5) * b.in.height / kN);
+      const Vec3 wb = mb.unproject(px);
+      if (!mb.sees(wb)) continue;
+      const double e = angle_between(ma.unproject(px), wb);
+      sum += e * e;
+      ++n;
+    }
+  return n ? rad2deg(std::sqrt(sum / n)) : 0.0;
+}
+
 RigDiff diff_rigs(const Rig& a_in, const Rig& b, bool align) {
   if (a_in.cameras.size() != b.cameras.size())
     throw std::invalid_argument(fmt::format("rig-diff: rig A has {} cameras, rig B has {}", a_in.cameras.size(),
@@ -81,7 +98,7 @@ RigDiff diff_rigs(const Rig& a_in, const Rig& b, bool align) {
     d.alignment = best_alignment(a_in, b).transpose();
     a = rotate_rig(a_in, d.alignment);
   }
-  std::vector<double> orient, focal, center;
+  std::vector<double> orient, focal, center, ray;
   for (const auto& ca : a.cameras) {
     const auto& cb = find_camera(b, ca.id, "B");
     const Mat3 rel = ca.frame.dome_to_camera() * cb.frame.dome_to_camera().transpose();
@@ -89,11 +106,13 @@ RigDiff diff_rigs(const Rig& a_in, const Rig& b, bool align) {
     orient.push_back(rad2deg(angle));
     focal.push_back(std::max(std::abs(ca.in.fu - cb.in.fu) / cb.in.fu, std::abs(ca.in.fv - cb.in.fv) / cb.in.fv));
     center.push_back(std::hypot(ca.in.cu - cb.in.cu, ca.in.cv - cb.in.cv));
+    ray.push_back(ray_error_deg(ca, cb));
   }
   d.per_camera_orientation_deg = orient;
   d.orientation_error_deg = make_stat(orient);
   d.focal_error_rel = make_stat(focal);
   d.center_error_px = make_stat(center);
+  d.ray_error_deg = make_stat(ray);
   return d;
 }
 

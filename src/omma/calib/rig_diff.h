@@ -2,7 +2,12 @@
 //   orientation error: angle of the relative rotation R_a R_b^T between the two cameras' frames
 //                      (rows t, u, v, eq. 3.13), degrees;
 //   focal error:       |f_a - f_b| / f_b per axis (fu and fv, the larger of the two), unitless;
-//   centre error:      |(cu, cv)_a - (cu, cv)_b|, pixels.
+//   centre error:      |(cu, cv)_a - (cu, cv)_b|, pixels;
+//   ray error:         per camera, the RMS over a 9 x 9 grid of pixels inside b's angle of view of
+//                      the angle between the rays a and b assign to the same pixel (unproject, with
+//                      distortion), degrees. This is what a stitch sees: a principal-point error
+//                      compensated by a small rotation (nearly the same ray bundle) has a large
+//                      orientation error but a small ray error.
 // Cameras are paired by id; both rigs must hold the same ids.
 #pragma once
 
@@ -20,6 +25,7 @@ struct RigDiff {
   Stat orientation_error_deg;
   Stat focal_error_rel;
   Stat center_error_px;
+  Stat ray_error_deg;
   std::vector<double> per_camera_orientation_deg;  // in the order of rig a
   Mat3 alignment = Mat3::Identity();  // global rotation applied to rig a (identity unless aligned)
 };
@@ -35,5 +41,8 @@ Mat3 best_alignment(const Rig& a, const Rig& b);
 Rig rotate_rig(const Rig& rig, const Mat3& g);
 
 Stat make_stat(std::vector<double> v);
+
+// The ray error of one camera (see above): a and b are the same camera in two rigs.
+double ray_error_deg(const RigCamera& a, const RigCamera& b);
 
 }  // namespace omma::calib
