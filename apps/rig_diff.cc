@@ -14,7 +14,8 @@ void add_rig_diff_command(CLI::App& root) {
       "rig-diff",
       "Compare two rigs camera by camera (paired by id): orientation error = angle of the relative rotation\n"
       "of the (t, u, v) frames (degrees), focal error = |f_A - f_B| / f_B (larger of fu, fv), centre error =\n"
-      "|(cu, cv)_A - (cu, cv)_B| (pixels); median and max over the cameras.");
+      "|(cu, cv)_A - (cu, cv)_B| (pixels), ray error = RMS angle between the rays A and B give the same\n"
+      "pixels (degrees; what a stitch sees); median and max over the cameras.");
   cmd->add_option("A", a_path, "First rig (JSON), e.g. the calibrated one")->required();
   cmd->add_option("B", b_path, "Second rig (JSON), e.g. the true one")->required();
   cmd->add_flag("--align", align, "First remove the global rotation between the rigs (the far-field gauge: a "
