@@ -45,6 +45,7 @@
 #include <opencv2/core.hpp>
 
 #include "omma/calib/features.h"
+#include "omma/calib/subpixel.h"
 #include "omma/core/rig.h"
 
 namespace omma::calib {
@@ -74,6 +75,10 @@ struct CalibrationOptions {
   double prior_mean_focal = 0.002;  // near field only: sigma (relative) of a prior pulling the MEAN
                                   // of fu/fu_nominal (and fv) over the calibrated cameras to 1;
                                   // 0 = off (see "Near-field focal ambiguity" above)
+  int refine_rounds = 1;          // subpixel refinement rounds after the first solve (0 = off):
+                                  // ECC patch alignment of every observation, then solve again
+  SubpixelOptions subpixel;
+  double refine_outlier_px = 1.0; // outlier_px of the solves on refined observations
   int max_iterations = 50;        // Ceres iterations per solve
   int min_observations = 30;      // a camera with fewer keeps its nominal values (warning)
   int threads = 2;
