@@ -587,7 +587,7 @@ CalibrationResult calibrate_rig(const Rig& nominal, const std::vector<cv::Mat>& 
     res.warnings.push_back(
         "near-field scene (parallax): scene points with camera positions fixed at nominal; the mean focal length "
         "is held at the nominal one (prior, the focal/depth ambiguity) and principal point trades against "
-        "rotation (on the simulated colon: ~0.8 deg, ~0.8 % focal, ~2.5 px centre errors, panorama as good as "
+        "rotation (on the simulated colon: ~0.6 deg, ~1 % focal, ~2.3 px centre errors, panorama as good as "
         "with the true rig); prefer a far-field calibration scene for accurate intrinsics");
     spdlog::warn("calibrate: {}", res.warnings.back());
   }
