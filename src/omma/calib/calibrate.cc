@@ -643,6 +643,15 @@ CalibrationResult calibrate_rig(const Rig& nominal, const std::vector<cv::Mat>& 
       auto rtracks = refine_tracks(res.rig, gray, st, scene == SceneModel::kNear, opt.subpixel, &attempted, &refined);
       spdlog::info("calibrate: subpixel refinement round {}: {} of {} observations aligned, {} tracks", round + 1,
                    refined, attempted, rtracks.size());
+      if (refined < opt.refine_min_fraction * attempted) {
+        // Texture the alignment cannot lock onto (flat cells, repetitive patterns): keep the
+        // unrefined solution rather than solve again from a few observations.
+        res.warnings.push_back(fmt::format(
+            "subpixel refinement skipped: only {} of {} observations aligned; the unrefined solution is kept",
+            refined, attempted));
+        spdlog::warn("calibrate: {}", res.warnings.back());
+        break;
+      }
       const Rig start = res.rig;
       res = solve_tracks(nominal, start, std::move(rtracks), scene, ropt, std::move(res), &st);
     }
