@@ -55,8 +55,10 @@
 //                 centre 2.6 -> 2.3 px, RMS 0.32 -> 0.13 px; nn PSNR at the true rig's.
 // The colon stays far from the 0.1 deg / 0.5 %: the refined observations fit the TRUE rig
 // only to 0.14 px RMS there (0.09 px without sensor noise, with 2x2 or 4x4 supersampling alike,
-// against 0.035 px on the lake), i.e. the two views of the simulated wall agree only to ~0.1 px,
-// and the geometry (5 mm baseline, ~20 mm depth, narrow overlaps) turns that into tenths of a
+// against 0.035 px on the lake and 0.02 px on the analytic checker sphere), i.e. the two views of
+// the simulated wall agree only to ~0.1 px (not the wall's ray-march tolerance: 100x tighter gives
+// the same; the likely cause is the wall's curvature within a patch, folds ~2 mm wide, which no
+// homography follows), and the geometry (5 mm baseline, ~20 mm depth, narrow overlaps) turns that into tenths of a
 // degree (the model check in calibrate_test.cc: 0.2 px noise on 3800 observations gives 0.5 deg).
 // Tried without gain on the colon: larger patches (25, 31, 41 px: 0.6, 0.4, 0.66 deg: noise of one
 // realisation), a second refinement round, keeping SIFT positions where the alignment fails,
