@@ -88,9 +88,13 @@ TEST(Calibrate, FarFieldPhotoMeetsAccuracyTargets) {
   const Outcome o = run_simulated(photo("lake.jpg"));
   EXPECT_EQ(o.result.scene, SceneModel::kFar);
   EXPECT_TRUE(o.result.uncalibrated_ids.empty());
-  EXPECT_LT(o.after.orientation_error_deg.median, 0.1);
-  EXPECT_LT(o.after.focal_error_rel.median, 0.005);
-  EXPECT_LT(o.result.rms_px, 0.5);
+  // The issue's targets: median orientation < 0.1 deg, focal < 0.5 %, RMS < 0.5 px, PSNR within
+  // 0.5 dB of the true rig's. With the subpixel refinement (subpixel.h) measured: 0.016 deg (max
+  // 0.13), 0.04 %, centre 0.08 px, RMS 0.036 px; the thresholds keep a margin of ~3x.
+  EXPECT_LT(o.after.orientation_error_deg.median, 0.05);
+  EXPECT_LT(o.after.focal_error_rel.median, 0.0015);
+  EXPECT_LT(o.after.center_error_px.median, 0.25);
+  EXPECT_LT(o.result.rms_px, 0.1);
   EXPECT_GT(o.psnr_calibrated, o.psnr_true - 0.5);
   EXPECT_GT(o.psnr_true, o.psnr_nominal + 1.0);  // the perturbation matters
 }
@@ -112,18 +116,22 @@ TEST(Calibrate, FeaturelessSkyCamerasKeepNominalValuesWithWarning) {
 // The colon (near field, parallax). The panorama target is met (PSNR after calibration within 0.5 dB
 // of the true rig's) and the reprojection RMS too, but not the parameter targets of issue 6 point 3:
 // with a 5 mm baseline against a ~20 mm deep scene, focal length trades against depth (the mean
-// focal is held by a prior, calibrate.h) and the principal point against rotation. Measured:
-// orientation median 0.80 deg, focal 0.83 %, centre 2.6 px (nominal rig: 2.03 deg, 3.09 %, 5 px).
-// The thresholds below are what this solver truly meets, with a little margin.
+// focal is held by a prior, calibrate.h) and the principal point against rotation, and the two
+// views of the simulated wall agree only to ~0.1 px even after the subpixel refinement. Measured
+// (several runs; Ceres' threads make the last digits vary): orientation median 0.59-0.68 deg (max
+// 1.2-1.5), focal 0.92-1.08 %, centre 2.2-2.6 px, RMS 0.13-0.14 px (nominal rig: 2.03 deg, 3.09 %,
+// 5 px; without the refinement: 0.80 deg, 0.83 %, 2.6 px, 0.32 px). The thresholds below are what
+// this solver truly meets, with a little margin.
 TEST(Calibrate, ColonNearFieldCalibration) {
   const Outcome o = run_simulated("colon");
   EXPECT_EQ(o.result.scene, SceneModel::kNear);
   EXPECT_TRUE(o.result.uncalibrated_ids.empty());
-  EXPECT_LT(o.result.rms_px, 0.5);
+  EXPECT_LT(o.result.rms_px, 0.25);                              // target 0.5 px
   EXPECT_GT(o.psnr_calibrated, o.psnr_true - 0.5);               // the issue's target
   EXPECT_GT(o.psnr_calibrated, o.psnr_nominal + 0.5);
-  EXPECT_LT(o.after.orientation_error_deg.median, 1.0);          // target 0.1 deg: not met
-  EXPECT_LT(o.after.focal_error_rel.median, 0.01);               // target 0.5 %: not met
+  EXPECT_LT(o.after.orientation_error_deg.median, 0.85);         // target 0.1 deg: not met
+  EXPECT_LT(o.after.orientation_error_deg.max, 2.0);
+  EXPECT_LT(o.after.focal_error_rel.median, 0.015);              // target 0.5 %: not met
   EXPECT_LT(o.after.center_error_px.median, 0.6 * o.before.center_error_px.median);
 }
 
