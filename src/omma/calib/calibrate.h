@@ -121,7 +121,8 @@ struct CalibrationOptions {
   double refine_outlier_px = 1.0; // outlier_px of the solves on refined observations
   int max_iterations = 50;        // Ceres iterations per solve
   int min_observations = 30;      // a camera with fewer keeps its nominal values (warning)
-  int threads = 2;
+  int threads = 2;                // Ceres threads; near-field results vary with the summation order
+                                  // of a multi-threaded solve (colon: +-0.2 deg), 1 = reproducible
 };
 
 struct CameraReport {
