@@ -1,8 +1,7 @@
 #include "omma/engine/render.h"
 
+#include <algorithm>
 #include <array>
-#include <type_traits>
-#include <utility>
 #include <cmath>
 
 #include "omma/pano/stitch.h"
@@ -89,16 +88,17 @@ void render_row_sad(const CompiledMap& map, const uint8_t* store, size_t stride_
 // horizontal weights pre-multiplied by the blend weight, ((32 - fx) w, fx w) as two int16, into
 // per-thread arrays (12 bytes per tap, one row's worth: L1/L2 resident).
 //
-// Pass 2 (PixelKernel, no scalar arithmetic per tap: ~10 instructions per tap, ~20 per pixel).
-// Integer arithmetic without intermediate rounding, so the result is bit-identical to the scalar
-// kernel's. Measured on the 2-core AMD EPYC machine (mrf 1080x1080, 1 thread): ~10 % faster than
-// the previous one-pass kernel with scalar decoding, at 30 % fewer instructions; about a quarter of
-// the time is the gather from the 4.5 MB frame store.
+// Pass 2 (PixelKernel, no scalar arithmetic per tap): runs of pixels with the same tap count, each
+// through a loop specialised for that count. Integer arithmetic without intermediate rounding, so
+// the result is bit-identical to the scalar kernel's. Measured (callgrind, mrf 1080x1080): 53 M
+// instructions per frame, ~10 per tap, ~6 per pixel, ~3.5 per tap for the decode, against 97 M for
+// the previous one-pass kernel with scalar decoding; about a fifth of the time is the gather from
+// the 4.5 MB frame store.
 struct DecodedTaps {
   std::vector<uint32_t> off, vy, wx;
   void reserve(size_t n) {
     if (off.size() >= n) return;
-    off.resize(n + 8), vy.resize(n + 8), wx.resize(n + 8);
+    off.resize(n), vy.resize(n), wx.resize(n);
   }
 };
 
@@ -206,35 +206,20 @@ struct PixelKernel {
     i += C;
     return static_cast<uint32_t>(_mm_cvtsi128_si32(_mm_shuffle_epi8(_mm_srli_epi32(acc, 18), pack)));
   }
-  // Pixels col..end-1, all with C taps, into out (4-byte stores: the 4th byte is overwritten by the
-  // next pixel). Advances col, i and out.
+  // Pixels col..end-1 of a row `width` pixels wide, all with C taps, into out: 4-byte stores (the
+  // 4th byte is overwritten by the next pixel), 3 bytes for the row's last pixel. Advances col, i
+  // and out.
   template <int C>
-  OMMA_SIMD_INLINE void run(int& col, int end, size_t& i, uint8_t*& out) const {
-    for (; col < end; ++col, out += 3) {
+  OMMA_SIMD_INLINE void run(int& col, int end, int width, size_t& i, uint8_t*& out) const {
+    for (const int e4 = std::min(end, width - 1); col < e4; ++col, out += 3) {
       const uint32_t v32 = pixel_n<C>(i);
       std::memcpy(out, &v32, 4);
     }
-  }
-  // The pixel of taps i..i+c-1 (advances i), as 3 bytes B G R in the low bytes of the result. The
-  // taps are unrolled by a switch on c (counts come in long runs, so the jump is well predicted).
-  OMMA_SIMD_INLINE uint32_t pixel(size_t& i, int c) const {
-    const __m128i pack = _mm_setr_epi8(0, 4, 8, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1);
-    __m128i acc = _mm_set1_epi32(1 << 17);
-    const uint8_t *s0 = store, *s1 = store2;
-    const uint32_t *o = off + i, *vy = vyw + i, *wx = wxw + i;
-    switch (c) {
-      case 8: acc = tap(acc, s0, s1, o + 7, vy + 7, wx + 7); [[fallthrough]];
-      case 7: acc = tap(acc, s0, s1, o + 6, vy + 6, wx + 6); [[fallthrough]];
-      case 6: acc = tap(acc, s0, s1, o + 5, vy + 5, wx + 5); [[fallthrough]];
-      case 5: acc = tap(acc, s0, s1, o + 4, vy + 4, wx + 4); [[fallthrough]];
-      case 4: acc = tap(acc, s0, s1, o + 3, vy + 3, wx + 3); [[fallthrough]];
-      case 3: acc = tap(acc, s0, s1, o + 2, vy + 2, wx + 2); [[fallthrough]];
-      case 2: acc = tap(acc, s0, s1, o + 1, vy + 1, wx + 1); [[fallthrough]];
-      case 1: acc = tap(acc, s0, s1, o + 0, vy + 0, wx + 0); [[fallthrough]];
-      default: break;
+    if (col < end) {  // the row's last pixel
+      const uint32_t v32 = pixel_n<C>(i);
+      std::memcpy(out, &v32, 3);
+      ++col, out += 3;
     }
-    i += c;
-    return static_cast<uint32_t>(_mm_cvtsi128_si32(_mm_shuffle_epi8(_mm_srli_epi32(acc, 18), pack)));
   }
 };
 
@@ -270,23 +255,21 @@ OMMA_SIMD_INLINE void render_row_simd(const CompiledMap& map, const uint8_t* sto
   const int W = map.width;
   size_t i = 0;
   // Runs of pixels with the same tap count, each rendered by a loop specialised for that count.
-  for (int col = 0; col + 1 < W;) {
+  for (int col = 0; col < W;) {
     const int c = count[col];
-    const int end = run_end(count, col + 1, W - 1, c);
+    const int end = run_end(count, col + 1, W, c);
     switch (c) {
-      case 0: px.template run<0>(col, end, i, out); break;
-      case 1: px.template run<1>(col, end, i, out); break;
-      case 2: px.template run<2>(col, end, i, out); break;
-      case 3: px.template run<3>(col, end, i, out); break;
-      case 4: px.template run<4>(col, end, i, out); break;
-      case 5: px.template run<5>(col, end, i, out); break;
-      case 6: px.template run<6>(col, end, i, out); break;
-      case 7: px.template run<7>(col, end, i, out); break;
-      default: px.template run<8>(col, end, i, out); break;
+      case 0: px.template run<0>(col, end, W, i, out); break;
+      case 1: px.template run<1>(col, end, W, i, out); break;
+      case 2: px.template run<2>(col, end, W, i, out); break;
+      case 3: px.template run<3>(col, end, W, i, out); break;
+      case 4: px.template run<4>(col, end, W, i, out); break;
+      case 5: px.template run<5>(col, end, W, i, out); break;
+      case 6: px.template run<6>(col, end, W, i, out); break;
+      case 7: px.template run<7>(col, end, W, i, out); break;
+      default: px.template run<8>(col, end, W, i, out); break;
     }
   }
-  const uint32_t v32 = px.pixel(i, count[W - 1]);
-  std::memcpy(out, &v32, 3);
 }
 
 __attribute__((target("ssse3,sse4.1"))) void render_row_ssse3(const CompiledMap& map, const uint8_t* store,
