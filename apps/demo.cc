@@ -16,6 +16,7 @@
 #include "omma/core/progress.h"
 #include "omma/design/coverage.h"
 #include "omma/design/prototype.h"
+#include "omma/engine/bench.h"
 #include "omma/engine/compiled_map.h"
 #include "omma/engine/render.h"
 #include "omma/pano/maps.h"
@@ -65,7 +66,7 @@ cv::Mat frame_mosaic(const Rig& rig, const std::vector<cv::Mat>& frames) {
 // agreement with the reference stitch and its speed.
 struct EngineRow {
   double compile_s = 0;
-  double fps = 0;            // all threads, mean over the timed renders
+  double fps = 0;            // all threads (engine::measure_fps)
   double psnr_vs_reference = 0;
   double bytes_per_pixel = 0;
 };
@@ -76,18 +77,15 @@ EngineRow run_engine(const Rig& rig, const PanoGrid& grid, const std::vector<cv:
   engine::MapOptions mo;
   mo.grid = grid;
   mo.method = pano::Method::kMrf;
-  auto t0 = std::chrono::steady_clock::now();
+  const auto t0 = std::chrono::steady_clock::now();
   const engine::CompiledMap map = engine::compile_map(rig, mo);
   e.compile_s = ms_since(t0) / 1000;
   e.bytes_per_pixel = map.bytes_per_pixel();
   engine::FrameStore store(map.layout);
   for (size_t c = 0; c < frames.size(); ++c) store.set(int(c), frames[c]);
   cv::Mat out;
-  engine::render(map, store, out);  // warm-up
-  constexpr int kRenders = 40;
-  t0 = std::chrono::steady_clock::now();
-  for (int i = 0; i < kRenders; ++i) engine::render(map, store, out);
-  e.fps = kRenders / (ms_since(t0) / 1000);
+  const engine::Workload w{"omma-mrf", 0, [&] { engine::render(map, store, out); }, {}};
+  e.fps = engine::measure_fps(w, 0.2, 20);
   e.psnr_vs_reference = engine::psnr_u8(out, reference_mrf);
   return e;
 }
