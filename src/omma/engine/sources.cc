@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <mutex>
+#include <optional>
 #include <thread>
 
 #include <opencv2/imgcodecs.hpp>
@@ -297,6 +298,21 @@ std::unique_ptr<CameraSource> open_one(const std::string& spec, const RigCamera&
   throw SourceError("source '" + spec + "': not a folder, a video file (.mp4 .mkv .avi .mov .webm) or a device");
 }
 
+// "NAME@RATE" (sim:colon@2.5, pano:x.jpg@30): strips "@RATE" from `spec` and returns the rate,
+// nullopt without '@'; a rate that is not a number is a SourceError naming `source` and `form`.
+std::optional<double> split_rate(std::string& spec, const std::string& source, const char* form) {
+  const size_t at = spec.rfind('@');
+  if (at == std::string::npos) return std::nullopt;
+  double rate = 0;
+  try {
+    rate = std::stod(spec.substr(at + 1));
+  } catch (const std::exception&) {
+    throw SourceError("source '" + source + "': expected " + form);
+  }
+  spec.resize(at);
+  return rate;
+}
+
 }  // namespace
 
 std::unique_ptr<CameraSource> still_source(cv::Mat frame, double fps, int limit, bool fail) {
@@ -337,15 +353,7 @@ std::vector<std::unique_ptr<CameraSource>> open_sources(const Rig& rig, const st
     auto scene = std::make_shared<SimScene>();
     const bool colon = spec.rfind("colon", 0) == 0;
     scene->translate = colon;
-    scene->speed = colon ? 5.0 : 10.0;
-    if (const size_t at = spec.rfind('@'); at != std::string::npos) {
-      try {
-        scene->speed = std::stod(spec.substr(at + 1));
-      } catch (const std::exception&) {
-        throw SourceError("source '" + specs[0] + "': expected sim:SCENE@SPEED");
-      }
-      spec = spec.substr(0, at);
-    }
+    scene->speed = split_rate(spec, specs[0], "sim:SCENE@SPEED").value_or(colon ? 5.0 : 10.0);
     try {
       scene->scene = sim::make_scene(spec);
     } catch (const std::exception& e) {
@@ -357,14 +365,7 @@ std::vector<std::unique_ptr<CameraSource>> open_sources(const Rig& rig, const st
   if (specs.size() == 1 && specs[0].rfind("pano:", 0) == 0) {
     std::string path = specs[0].substr(5);
     auto scene = std::make_shared<PanoScene>();
-    if (const size_t at = path.rfind('@'); at != std::string::npos) {
-      try {
-        scene->deg_per_s = std::stod(path.substr(at + 1));
-      } catch (const std::exception&) {
-        throw SourceError("source '" + specs[0] + "': expected pano:IMAGE@DEG_PER_S");
-      }
-      path = path.substr(0, at);
-    }
+    if (const auto rate = split_rate(path, specs[0], "pano:IMAGE@DEG_PER_S")) scene->deg_per_s = *rate;
     try {
       scene->pano = read_image(path, cv::IMREAD_COLOR);
     } catch (const std::exception& e) {
