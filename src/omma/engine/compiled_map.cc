@@ -187,8 +187,7 @@ CompiledMap compile_map(const Rig& rig, const MapOptions& opt) {
     // Contributors (eq. 2.3) of the tile and a one-pixel border, found once and shared by the
     // 4-neighbourhoods of mrf, mrf-spherical and sad; then the weights exactly as static_taps
     // computes them (pano::method_weights).
-    const bool needs_nb = opt.method == pano::Method::kMrf || opt.method == pano::Method::kMrfSpherical ||
-                          opt.method == pano::Method::kSad;
+    const bool needs_nb = pano::uses_neighbours(opt.method);
     const int bx0 = std::max(0, c0 - 1), by0 = std::max(0, r0 - 1);
     const int bx1 = std::min(W, c1 + 1), by1 = std::min(H, r1 + 1), bw = bx1 - bx0;
     // Per node: its contributors and, for the mrf family, their potentials (eq. 4.8), each

@@ -20,5 +20,10 @@ std::string to_string(Method m);
 const std::vector<Method>& all_methods();
 // True for the methods whose weights depend only on the geometry (all but sad).
 inline bool is_static(Method m) { return m != Method::kSad; }
+// True for the MRF family (mrf, mrf-spherical, and sad on the mrf prior): their weights at a
+// direction depend on the contributors of its 4-connected neighbours (eq. 4.8).
+inline bool uses_neighbours(Method m) {
+  return m == Method::kMrf || m == Method::kMrfSpherical || m == Method::kSad;
+}
 
 }  // namespace omma::pano

@@ -96,8 +96,7 @@ cv::Mat stitch(const Rig& rig, const std::vector<cv::Mat>& frames_in, const Stit
   const PanoGrid& grid = opt.grid;
   if (grid.width <= 0 || grid.height <= 0) throw std::invalid_argument("panorama size must be positive");
   const std::vector<cv::Mat> frames = frames_to_float(frames_in);
-  const bool needs_neighbours =
-      opt.method == Method::kMrf || opt.method == Method::kMrfSpherical || opt.method == Method::kSad;
+  const bool needs_neighbours = uses_neighbours(opt.method);
 
   cv::Mat pano(grid.height, grid.width, CV_32FC3, cv::Scalar::all(0));
   Progress progress("stitch " + to_string(opt.method), grid.height, opt.progress);

@@ -109,7 +109,7 @@ std::vector<Tap> static_taps(const Rig& rig, const PanoGrid& grid, int col, int 
   if (cs.empty()) return {};
   std::array<std::vector<Contributor>, 4> nb_storage;
   std::array<const std::vector<Contributor>*, 4> nb{nullptr, nullptr, nullptr, nullptr};
-  if (method == Method::kMrf || method == Method::kMrfSpherical || method == Method::kSad) {
+  if (uses_neighbours(method)) {
     const auto nbs = grid_neighbours(grid, col, row);
     for (int k = 0; k < 4; ++k) {
       if (nbs[k][0] < 0) continue;
