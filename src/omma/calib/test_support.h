@@ -14,34 +14,21 @@
 
 #include "omma/core/grid.h"
 #include "omma/core/rig.h"
+#include "omma/design/dome.h"
 
 namespace omma::calib::testing {
 
 // 3 + 9 + 12 cameras on a 5 mm hemisphere (the layer counts of the thesis' max-volume dome, Fig.
 // 3.8), 250x250 pixels, 64 deg angle of view (f = 200 px).
 inline Rig test_dome(int size = 250) {
-  Rig rig;
-  rig.name = "calib-test-24";
-  rig.dome.radius_mm = 5;
-  rig.dome.method = "test";
   const int counts[3] = {3, 9, 12};
   const double thetas[3] = {22, 52, 80};
-  int id = 0;
+  std::vector<Vec3> axes;
   for (int layer = 0; layer < 3; ++layer)
-    for (int j = 0; j < counts[layer]; ++j) {
-      RigCamera c;
-      c.id = id++;
-      const double phi = 2 * kPi * (j + 0.5 * layer) / counts[layer];
-      const Vec3 t = direction_from_spherical(deg2rad(thetas[layer]), phi);
-      c.frame = frame_looking_at(t, Vec3(0, 0, -1));
-      c.position_mm = 5.0 * t;
-      c.in.width = c.in.height = size;
-      c.in.aov = deg2rad(64);
-      c.in.fu = c.in.fv = Intrinsics::focal_for_aov(size, c.in.aov);
-      c.in.cu = c.in.cv = size / 2.0;
-      rig.cameras.push_back(c);
-    }
-  return rig;
+    for (int j = 0; j < counts[layer]; ++j)
+      axes.push_back(direction_from_spherical(deg2rad(thetas[layer]), 2 * kPi * (j + 0.5 * layer) / counts[layer]));
+  return design::radial_rig(axes, 5.0, design::ideal_intrinsics(deg2rad(64), size, size), false, "test",
+                            "calib-test-24");
 }
 
 struct Perturbation {
