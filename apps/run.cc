@@ -31,7 +31,7 @@ void add_run_command(CLI::App& root) {
   struct Opts {
     std::string rig, method = "linear", projection = "vr180", size = "1080x1080", cache;
     std::vector<std::string> sources, sinks;
-    double duration = 0, fps = 30, source_fps = 30, first_timeout = 10;
+    double duration = 0, fps = 30, source_fps = 30, first_timeout = 10, min_weight = 1.0 / 32;
     long frames = 0;
     int threads = 0;
     bool loop = false, json = false, no_cache = false;
@@ -43,6 +43,10 @@ void add_run_command(CLI::App& root) {
   cmd->add_option("--method", o.method, "Blending: nn, linear, gaussian, mrf, mrf-spherical, sad (per-frame weights, own kernel); default linear");
   cmd->add_option("--projection", o.projection, "Panorama projection: vr180, equirect, equirect-full (default vr180)");
   cmd->add_option("--size", o.size, "Panorama size WxH, pixels (default 1080x1080)");
+  cmd->add_option("--min-weight", o.min_weight,
+                  "Drop taps lighter than this fraction of a pixel's weight, renormalising the others "
+                  "(faster, smaller map; 0 = keep all; default 1/32 = 0.03125)")
+      ->check(CLI::Range(0.0, 0.49));
   cmd->add_option("--duration", o.duration, "Stop after S seconds (default: when every source has ended)")
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--frames", o.frames, "Stop after N panoramas (default: no limit)")->check(CLI::NonNegativeNumber);
@@ -66,6 +70,7 @@ void add_run_command(CLI::App& root) {
     eo.map.method = pano::parse_method(o.method);
     const Size2 size = parse_size(o.size);
     eo.map.grid = PanoGrid{parse_projection(o.projection), size.width, size.height};
+    eo.map.min_weight = o.min_weight;
     eo.cache_dir = o.no_cache ? std::filesystem::path() : (o.cache.empty() ? engine::default_cache_dir() : std::filesystem::path(o.cache));
     eo.duration_s = o.duration;
     eo.max_frames = o.frames;
@@ -107,6 +112,7 @@ void add_run_command(CLI::App& root) {
     if (show && tty) std::fprintf(stderr, "\n");
     nlohmann::json j = st.to_json();
     j["method"] = o.method;
+    j["min_weight"] = o.min_weight;
     j["projection"] = o.projection;
     j["size"] = o.size;
     nlohmann::json sk_names = nlohmann::json::array();

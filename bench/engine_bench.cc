@@ -45,7 +45,10 @@ void BM_Compile(benchmark::State& state) {
 BENCHMARK(BM_Compile)->ArgsProduct({{0, 1, 2}, {0, 1}})->Unit(benchmark::kMillisecond)->Iterations(2);
 
 void BM_Render(benchmark::State& state) {
-  const auto w = omma_workload(rig(), grid(int(state.range(2))), kMethods[state.range(0)], int(state.range(1)), frames());
+  MapOptions opt;
+  opt.grid = grid(int(state.range(2)));
+  opt.method = kMethods[state.range(0)];
+  const auto w = omma_workload(rig(), opt, int(state.range(1)), frames());
   state.SetLabel(w.name + (state.range(1) == 1 ? " 1 thread" : " all threads"));
   run_workload(state, w);
 }

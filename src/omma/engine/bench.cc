@@ -55,11 +55,8 @@ std::vector<CameraWarp> camera_warps(const Rig& rig, const PanoGrid& g) {
 
 }  // namespace
 
-Workload omma_workload(const Rig& rig, const PanoGrid& grid, pano::Method method, int threads,
-                       const std::vector<cv::Mat>& frames, const std::string& suffix) {
-  MapOptions opt;
-  opt.grid = grid;
-  opt.method = method;
+Workload omma_workload(const Rig& rig, const MapOptions& opt, int threads, const std::vector<cv::Mat>& frames,
+                       const std::string& variant, const std::string& suffix) {
   const auto t0 = std::chrono::steady_clock::now();
   auto map = std::make_shared<CompiledMap>(compile_map(rig, opt));
   const double compile_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -67,12 +64,12 @@ Workload omma_workload(const Rig& rig, const PanoGrid& grid, pano::Method method
   for (size_t c = 0; c < frames.size(); ++c) store->set(int(c), frames[c]);
   auto out = std::make_shared<cv::Mat>();
   Workload w;
-  w.name = "omma-" + pano::to_string(method) + "-" + size_tag(grid) + suffix;
+  w.name = "omma-" + pano::to_string(opt.method) + variant + "-" + size_tag(opt.grid) + suffix;
   w.threads = threads;
   w.run = [map, store, out, threads] { render(*map, *store, *out, {.threads = threads}); };
   w.info = {{"bytes_per_pixel", map->bytes_per_pixel()},
             {"taps_per_pixel", double(map->taps()) / (double(map->width) * map->height)},
-            {"compile_s", compile_s}, {"threads", threads}};
+            {"compile_s", compile_s}, {"threads", threads}, {"min_weight", opt.min_weight}};
   return w;
 }
 
@@ -206,15 +203,18 @@ std::vector<BenchEntry> run_bench_suite(const Rig& rig_in, const BenchOptions& o
       const std::string base = "omma-" + pano::to_string(m) + "-" + size_tag(g);
       if (!wanted(base) && !wanted("memcpy-bound-" + size_tag(g))) continue;
       try {
-        Workload all = omma_workload(rig, g, m, 0, frames);
-        add(all);
-        add(omma_workload(rig, g, m, 1, frames, "-1thread"));
-        if (m != pano::Method::kNearest) {  // mrf if pano has it, else linear
-          MapOptions mo;
-          mo.grid = g;
-          mo.method = m;
-          bound_map = std::make_shared<CompiledMap>(compile_map(rig, mo));
+        MapOptions mo;
+        mo.grid = g;
+        mo.method = m;
+        add(omma_workload(rig, mo, 0, frames));
+        add(omma_workload(rig, mo, 1, frames, "", "-1thread"));
+        if (m == pano::Method::kMrf) {  // the price of MapOptions::min_weight: every tap kept
+          MapOptions all = mo;
+          all.min_weight = 0;
+          add(omma_workload(rig, all, 0, frames, "-alltaps"));
         }
+        if (m != pano::Method::kNearest)  // mrf if pano has it, else linear
+          bound_map = std::make_shared<CompiledMap>(compile_map(rig, mo));
       } catch (const std::logic_error& e) {
         if (skipped) skipped->push_back(base + ": " + e.what());
       }

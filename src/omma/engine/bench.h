@@ -26,10 +26,11 @@ struct Workload {
   nlohmann::json info;  // extra facts (bytes per pixel, compile time, ...)
 };
 
-// Our renderer for `method` on `grid` (threads: 0 = all, 1 = one). Throws std::logic_error if pano
-// does not implement the method yet. The frames are copied into a frame store once.
-Workload omma_workload(const Rig& rig, const PanoGrid& grid, pano::Method method, int threads,
-                       const std::vector<cv::Mat>& frames, const std::string& suffix = "");
+// Our renderer for the map of `opt` (threads: 0 = all, 1 = one), named "omma-<method><variant>-
+// <W>x<H><suffix>". Throws std::logic_error if pano does not implement the method yet. The frames
+// are copied into a frame store once.
+Workload omma_workload(const Rig& rig, const MapOptions& opt, int threads, const std::vector<cv::Mat>& frames,
+                       const std::string& variant = "", const std::string& suffix = "");
 
 // Peer A: per-camera cv::remap (fixed-point maps from cv::convertMaps, INTER_LINEAR) of every
 // camera's frame into its footprint on the panorama, no blending (each camera overwrites).

@@ -134,7 +134,18 @@ ActiveRig active_cameras(const Rig& rig, const std::vector<bool>& active) {
   return a;
 }
 
+bool MapOptions::IsValid(std::string* why) const {
+  auto fail = [&](const std::string& m) {
+    if (why) *why = m;
+    return false;
+  };
+  if (grid.width <= 0 || grid.height <= 0) return fail("panorama size must be positive");
+  if (!(min_weight >= 0 && min_weight < 0.5)) return fail("min_weight must be in [0, 0.5)");
+  return true;
+}
+
 CompiledMap compile_map(const Rig& rig, const MapOptions& opt) {
+  if (std::string why; !opt.IsValid(&why)) throw std::invalid_argument("compile_map: " + why);
   if (!opt.active.empty() && opt.active.size() != rig.cameras.size())
     throw std::invalid_argument("compile_map: active set has " + std::to_string(opt.active.size()) +
                                 " entries for " + std::to_string(rig.cameras.size()) + " cameras");
@@ -188,6 +199,7 @@ CompiledMap compile_map(const Rig& rig, const MapOptions& opt) {
     // 4-neighbourhoods of mrf, mrf-spherical and sad; then the weights exactly as static_taps
     // computes them (pano::method_weights).
     const bool needs_nb = pano::uses_neighbours(opt.method);
+    const bool prune = opt.min_weight > 0 && opt.method != pano::Method::kSad;
     const int bx0 = std::max(0, c0 - 1), by0 = std::max(0, r0 - 1);
     const int bx1 = std::min(W, c1 + 1), by1 = std::min(H, r1 + 1), bw = bx1 - bx0;
     // Per node: its contributors and, for the mrf family, their potentials (eq. 4.8), each
@@ -243,6 +255,15 @@ CompiledMap compile_map(const Rig& rig, const MapOptions& opt) {
           std::partial_sort(taps.begin(), taps.begin() + 8, taps.end(),
                             [](auto& a, auto& b) { return a.weight > b.weight; });
           taps.resize(8);
+        }
+        double total = 0;
+        for (const auto& t : taps) total += t.weight;
+        if (prune && total > 0) {  // drop the faint taps (MapOptions::min_weight), never the strongest
+          const double strongest =
+              std::max_element(taps.begin(), taps.end(), [](auto& a, auto& b) { return a.weight < b.weight; })->weight;
+          std::erase_if(taps, [&](const pano::Tap& t) {
+            return t.weight < opt.min_weight * total && t.weight < strongest;
+          });
         }
         const int n = static_cast<int>(taps.size());
         double sum = 0;
@@ -308,6 +329,7 @@ std::string map_key(const Rig& rig, const MapOptions& opt) {
   j["min_r"] = opt.params.search.min_r_mm;
   j["sigma"] = opt.params.gaussian_sigma_rel;
   j["sad_eps"] = opt.params.sad_epsilon;
+  if (opt.min_weight > 0) j["min_weight"] = opt.min_weight;
   std::string active;
   for (bool a : opt.active) active += a ? '1' : '0';
   j["active"] = active;

@@ -18,14 +18,14 @@ namespace {
 
 // Camera views of the Louvre photograph, downsampled to about the cameras' resolution first
 // (250 px / 64 deg ~ 3.9 px/deg) so that the frames are not aliased.
-const std::vector<cv::Mat>& louvre_frames(const Rig& rig) {
-  static std::vector<cv::Mat> frames = [&] {
-    cv::Mat pano = cv::imread(std::string(OMMA_DATA_DIR) + "/louvre.jpg", cv::IMREAD_COLOR);
-    EXPECT_FALSE(pano.empty());
-    cv::resize(pano, pano, cv::Size(1440, 720), 0, 0, cv::INTER_AREA);
-    return views_of_panorama(rig, pano, 0.3);
+std::vector<cv::Mat> louvre_frames(const Rig& rig) {
+  static const cv::Mat pano = [] {
+    cv::Mat p = cv::imread(std::string(OMMA_DATA_DIR) + "/louvre.jpg", cv::IMREAD_COLOR);
+    EXPECT_FALSE(p.empty());
+    cv::resize(p, p, cv::Size(1440, 720), 0, 0, cv::INTER_AREA);
+    return p;
   }();
-  return frames;
+  return views_of_panorama(rig, pano, 0.3);
 }
 
 FrameStore store_of(const CompiledMap& map, const std::vector<cv::Mat>& frames) {
@@ -46,7 +46,7 @@ bool implemented(const Rig& rig, pano::Method m) {
 
 TEST(EngineRender, MatchesReferenceForEveryStaticMethodAtLeast50dB) {
   const Rig rig = ring_rig_24();
-  const auto& frames = louvre_frames(rig);
+  const auto frames = louvre_frames(rig);
   int tested = 0;
   for (pano::Method m : pano::all_methods()) {
     if (!implemented(rig, m)) continue;
@@ -142,6 +142,44 @@ TEST(EngineMap, WeightsSumTo256AndBytesPerPixelIsCompact) {
   }
 }
 
+// MapOptions::min_weight: the faint mrf taps go, the rest still sum to 256, the map is at most 12
+// bytes per pixel (issue 5 point 1's aim) and the output stays within 50 dB of the all-taps
+// reference, on the thesis prototype rig.
+TEST(EngineMap, MinWeightDropsFaintTapsWithinTheReferencePsnr) {
+  const Rig rig = design::thesis_prototype_rig();
+  MapOptions all;
+  all.grid = PanoGrid{Projection::kVr180, 270, 270};
+  all.method = pano::Method::kMrf;
+  all.min_weight = 0;
+  MapOptions pruned = all;
+  pruned.min_weight = 1.0 / 32;
+  const CompiledMap a = compile_map(rig, all), p = compile_map(rig, pruned);
+  const double px = double(p.width) * p.height;
+  std::printf("  mrf taps per pixel: all %.3f, min_weight 1/32 %.3f; bytes per pixel %.2f -> %.2f\n",
+              a.taps() / px, p.taps() / px, a.bytes_per_pixel(), p.bytes_per_pixel());
+  EXPECT_LT(double(p.taps()), 0.8 * double(a.taps()));
+  EXPECT_LE(p.bytes_per_pixel(), 12.0);
+  size_t k = 0;
+  int faint = 0;
+  for (size_t i = 0; i < p.count.size(); ++i) {
+    int sum = 0;
+    for (int t = 0; t < p.count[i]; ++t, ++k) {
+      sum += p.weight[k] + 1;
+      faint += p.weight[k] + 1 < 8;  // 8/256 = 1/32: renormalising only raises the kept weights
+    }
+    ASSERT_TRUE(p.count[i] == 0 || sum == 256) << "pixel " << i;
+  }
+  EXPECT_EQ(faint, 0);
+  EXPECT_NE(map_key(rig, all), map_key(rig, pruned));
+  for (const auto& frames : {random_frames(rig, 3), louvre_frames(rig)}) {
+    cv::Mat fast;
+    render(p, store_of(p, frames), fast);
+    const double db = psnr_u8(fast, reference_render(rig, all, frames));
+    std::printf("  min_weight 1/32 vs the all-taps reference: %.2f dB\n", db);
+    EXPECT_GE(db, 50.0);
+  }
+}
+
 TEST(EngineMap, CacheRoundTripIsExactAndKeyedByOptions) {
   const Rig rig = ring_rig_24();
   MapOptions opt;
@@ -170,7 +208,7 @@ TEST(EngineMap, CacheRoundTripIsExactAndKeyedByOptions) {
 
 TEST(EngineMap, DroppedCameraIsFilledFromNeighbours) {
   const Rig rig = ring_rig_24();
-  const auto& frames = louvre_frames(rig);
+  const auto frames = louvre_frames(rig);
   MapOptions opt;
   opt.grid = PanoGrid{Projection::kVr180, 240, 240};
   opt.method = pano::Method::kNearest;
