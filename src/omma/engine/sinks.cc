@@ -7,6 +7,7 @@
 #include <mutex>
 #include <thread>
 
+#include <fmt/format.h>
 #include <httplib.h>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
@@ -32,7 +33,7 @@ class VideoSink : public Sink {
     const fs::path dir = path.has_parent_path() ? path.parent_path() : fs::path(".");
     std::error_code ec;
     if (!fs::is_directory(dir, ec)) throw SinkError("cannot write video " + path.string() + ": folder " + dir.string() + " does not exist");
-    tmp_ = dir / ("." + path.stem().string() + ".partial" + ext);
+    tmp_ = dir / fmt::format(".{}.partial{}", path.stem().string(), ext);  // (fmt: GCC 12 -Wrestrict false positive on "." + string)
     if (!writer_.open(tmp_.string(), cv::CAP_FFMPEG, fourcc, fps, size, true) || !writer_.isOpened()) {
       fs::remove(tmp_, ec);
       throw SinkError("cannot write video " + path.string() + " (VideoWriter did not open; folder writable?)");
