@@ -54,23 +54,44 @@ void BM_Render(benchmark::State& state) {
 }
 BENCHMARK(BM_Render)->ArgsProduct({{0, 1, 2}, {1, 0}, {0, 1}})->Unit(benchmark::kMillisecond)->MinTime(0.5);
 
-// Diagnostic: the mrf map with every tap moved into the first 64 store rows (a cache-resident
-// ~48 KB of frames), same tap count and arithmetic: separates the kernel's compute cost from the
-// cost of gathering camera pixels from the 4.5 MB frame store.
-void BM_RenderCacheResidentStore(benchmark::State& state) {
+// Diagnostic: the mrf map at 1080x1080 on one thread with each kernel this CPU runs, with and
+// without the prefetch of the next tile's camera pixels: separates the kernels' arithmetic from the
+// cost of gathering camera pixels from the frame store.
+void BM_RenderKernel(benchmark::State& state) {
+  const Kernel k = static_cast<Kernel>(state.range(0));
+  if (!kernel_available(k)) {
+    state.SkipWithError("kernel not available on this CPU");
+    return;
+  }
   MapOptions opt;
   opt.grid = grid(0);
   opt.method = pano::Method::kMrf;
-  CompiledMap map = compile_map(rig(), opt);
-  const uint32_t limit = uint32_t(map.layout.stride_px) * 64;
-  for (uint32_t& w : map.word) w = (w & ~((1u << kIndexBits) - 1)) | ((w & ((1u << kIndexBits) - 1)) % limit);
+  const CompiledMap map = compile_map(rig(), opt);
   FrameStore store(map.layout);
   for (size_t c = 0; c < frames().size(); ++c) store.set(int(c), frames()[c]);
   cv::Mat out;
-  for (auto _ : state) render(map, store, out, {.threads = 1});
+  const RenderOptions ro{.threads = 1, .kernel = k, .prefetch = state.range(1) != 0};
+  for (auto _ : state) render(map, store, out, ro);
+  state.SetLabel(to_string(k) + (ro.prefetch ? " prefetch" : " no prefetch"));
   state.counters["fps"] = benchmark::Counter(double(state.iterations()), benchmark::Counter::kIsRate);
 }
-BENCHMARK(BM_RenderCacheResidentStore)->Unit(benchmark::kMillisecond)->MinTime(0.5);
+BENCHMARK(BM_RenderKernel)
+    ->ArgsProduct({{int(Kernel::kScalar), int(Kernel::kAvx2), int(Kernel::kAvx512Vnni)}, {1, 0}})
+    ->Unit(benchmark::kMillisecond)
+    ->MinTime(0.5);
+
+// Storing a frame into the row-pair store (per camera frame; the live engine does it for every
+// new frame of every camera).
+void BM_FrameStoreSet(benchmark::State& state) {
+  FrameStore store(StoreLayout::for_rig(rig()));
+  int c = 0;
+  for (auto _ : state) {
+    store.set(c, frames()[c]);
+    c = (c + 1) % int(frames().size());
+  }
+  state.counters["frames_per_s"] = benchmark::Counter(double(state.iterations()), benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_FrameStoreSet)->Unit(benchmark::kMicrosecond);
 
 void BM_OpenCvRemap(benchmark::State& state) {
   const auto w = opencv_remap_workload(rig(), grid(int(state.range(0))), frames());

@@ -69,7 +69,8 @@ Workload omma_workload(const Rig& rig, const MapOptions& opt, int threads, const
   w.run = [map, store, out, threads] { render(*map, *store, *out, {.threads = threads}); };
   w.info = {{"bytes_per_pixel", map->bytes_per_pixel()},
             {"taps_per_pixel", double(map->taps()) / (double(map->width) * map->height)},
-            {"compile_s", compile_s}, {"threads", threads}, {"min_weight", opt.min_weight}};
+            {"compile_s", compile_s}, {"threads", threads}, {"min_weight", opt.min_weight},
+            {"kernel", to_string(best_kernel())}};
   return w;
 }
 

@@ -20,7 +20,7 @@ namespace omma::engine {
 namespace {
 
 constexpr uint32_t kMagic = 0x4d4d4f31;  // "1OMM"
-constexpr uint32_t kFormatVersion = 2;
+constexpr uint32_t kFormatVersion = 3;      // 3: tiles, runs, delta offsets, row-pair store
 
 uint64_t fnv1a(const std::string& s) {
   uint64_t h = 1469598103934665603ull;
@@ -31,32 +31,83 @@ uint64_t fnv1a(const std::string& s) {
   return h;
 }
 
-// Quantises n <= 8 weights (sum 1) to integers in 1/256 that sum to exactly 256 (largest
-// remainder first); taps that get 0 are dropped by the caller.
-void quantise_weights(const double* w, int n, int* q) {
-  double rem[8];
+// Rounds n non-negative reals that sum to `total` to integers of at most `cap` that sum to exactly
+// `total` (largest remainder first).
+void quantise(const double* x, int n, int total, int cap, int* q) {
+  double rem[4 * kMaxTaps];
   int sum = 0;
   for (int i = 0; i < n; ++i) {
-    const double x = w[i] * 256.0;
-    q[i] = static_cast<int>(std::floor(x));
-    rem[i] = x - q[i];
+    q[i] = std::min(cap, static_cast<int>(std::floor(x[i])));
+    rem[i] = x[i] - q[i];
     sum += q[i];
   }
-  while (sum < 256) {
-    int best = 0;
-    for (int i = 1; i < n; ++i)
-      if (rem[i] > rem[best]) best = i;
+  while (sum < total) {
+    int best = -1;
+    for (int i = 0; i < n; ++i)
+      if (q[i] < cap && (best < 0 || rem[i] > rem[best])) best = i;
+    if (best < 0) break;  // n * cap < total: cannot happen for the callers
     q[best] += 1;
-    rem[best] = -1;
+    rem[best] -= 1;
     ++sum;
   }
 }
 
+// Bilinear neighbourhood along one axis with replicated edges (centres at integer + 0.5): the
+// first pixel i0 and the weight f of pixel i0 + 1.
+void bilinear_axis(double p, int n, int& i0, double& f) {
+  const double s = p - 0.5;
+  const double fl = std::floor(s);
+  i0 = static_cast<int>(fl);
+  f = s - fl;
+  if (i0 < 0) i0 = 0, f = 0;
+  if (i0 >= n - 1) i0 = n - 1, f = 0;
+}
+
+// The taps of one output pixel, sorted by camera.
 struct PixelTaps {
   uint8_t n = 0;
-  uint32_t word[8];
-  uint8_t weight[8];
+  uint32_t off2[kMaxTaps];    // store offset / 2 of the neighbourhood
+  uint32_t weight[kMaxTaps];  // 4 weight bytes
+  uint8_t prior[kMaxTaps];    // sad: prior in 1/256 minus one
 };
+
+// One tile's share of the map arrays, assembled independently, then concatenated.
+struct TileData {
+  std::vector<uint8_t> runs;
+  std::vector<uint32_t> base, weight, lines;
+  std::vector<int16_t> delta;
+  std::vector<uint8_t> prior;
+};
+
+// Runs of one tile row (see compiled_map.h): a run continues while the tap count stays the same,
+// it is shorter than 255 pixels and every tap's offset stays within int16 of the run's start.
+void encode_tile_row(const PixelTaps* px, int w, bool sad, TileData& d) {
+  for (int i = 0; i < w;) {
+    const int n = px[i].n;
+    int j = i + 1;
+    auto fits = [&](int p) {
+      if (px[p].n != n) return false;
+      for (int t = 0; t < n; ++t) {
+        const int64_t dd = int64_t(px[p].off2[t]) - int64_t(px[i].off2[t]);
+        if (dd < INT16_MIN || dd > INT16_MAX) return false;
+      }
+      return true;
+    };
+    while (j < w && j - i < 255 && fits(j)) ++j;
+    d.runs.push_back(static_cast<uint8_t>(n));
+    d.runs.push_back(static_cast<uint8_t>(j - i));
+    for (int t = 0; t < n; ++t) d.base.push_back(px[i].off2[t]);
+    for (int p = i; p < j; ++p)
+      for (int t = 0; t < n; ++t) {
+        d.delta.push_back(static_cast<int16_t>(int64_t(px[p].off2[t]) - int64_t(px[i].off2[t])));
+        d.weight.push_back(px[p].weight[t]);
+        if (sad) d.prior.push_back(px[p].prior[t]);
+      }
+    i = j;
+  }
+  d.runs.push_back(0);
+  d.runs.push_back(0);
+}
 
 }  // namespace
 
@@ -69,23 +120,38 @@ StoreLayout StoreLayout::for_rig(const Rig& rig) {
     l.size.emplace_back(c.in.width, c.in.height);
     rows += c.in.height;
   }
-  l.rows = rows + 1;  // padding row: the y+1 neighbour of a tap with fy = 0 in the last row
-  if (double(l.stride_px) * l.rows >= double(1u << kIndexBits))
-    throw std::invalid_argument("rig too large for the compiled map format: " +
-                                std::to_string(l.stride_px) + " x " + std::to_string(l.rows) +
-                                " store pixels (limit 4194304)");
+  l.rows = rows;
+  // Offsets are stored in units of 2 bytes in 32 bits.
+  if (double(l.stride_bytes()) * l.rows + kStorePadding >= 8.0 * (1ull << 30))
+    throw std::invalid_argument("rig too large for the compiled map format: " + std::to_string(l.stride_px) +
+                                " x " + std::to_string(l.rows) + " store pixels (limit 8 GB of frame store)");
   return l;
 }
 
-FrameStore::FrameStore(StoreLayout layout) : layout_(std::move(layout)) {
-  buffer_.assign(layout_.bytes(), 0);
+int StoreLayout::camera_at(size_t offset) const {
+  const int row = static_cast<int>(offset / stride_bytes());
+  const auto it = std::upper_bound(row0.begin(), row0.end(), row);
+  return int(it - row0.begin()) - 1;
 }
 
-cv::Mat FrameStore::camera(int c) {
-  return cv::Mat(layout_.size[c], CV_8UC3, buffer_.data() + size_t(layout_.row0[c]) * layout_.stride_px * 3,
-                 size_t(layout_.stride_px) * 3);
+FrameStore::FrameStore(StoreLayout layout) : layout_(std::move(layout)) {
+  // Zero frames stored as value - 128.
+  buffer_.assign(layout_.bytes(), 0x80);
 }
-cv::Mat FrameStore::camera(int c) const { return const_cast<FrameStore*>(this)->camera(c); }
+
+cv::Mat FrameStore::camera(int c) const {
+  if (c < 0 || c >= static_cast<int>(layout_.size.size()))
+    throw std::invalid_argument("frame store: no camera index " + std::to_string(c));
+  const cv::Size s = layout_.size[c];
+  cv::Mat out(s, CV_8UC3);
+  for (int y = 0; y < s.height; ++y) {
+    const uint8_t* src = buffer_.data() + layout_.offset(c, 0, y);
+    uint8_t* dst = out.ptr<uint8_t>(y);
+    for (int x = 0; x < s.width; ++x)
+      for (int ch = 0; ch < 3; ++ch) dst[3 * x + ch] = src[6 * x + ch] ^ 0x80;
+  }
+  return out;
+}
 
 void FrameStore::set(int c, const cv::Mat& frame) {
   if (c < 0 || c >= static_cast<int>(layout_.size.size()))
@@ -95,16 +161,43 @@ void FrameStore::set(int c, const cv::Mat& frame) {
                                 std::to_string(frame.cols) + "x" + std::to_string(frame.rows) +
                                 ", the rig says " + std::to_string(layout_.size[c].width) + "x" +
                                 std::to_string(layout_.size[c].height));
-  cv::Mat dst = camera(c);
   cv::Mat src = frame;
   if (src.depth() == CV_16U) src.convertTo(src, CV_8U, 1.0 / 257.0);
   else if (src.depth() == CV_32F) src.convertTo(src, CV_8U, 255.0);
   else if (src.depth() != CV_8U)
     throw std::invalid_argument("camera index " + std::to_string(c) + ": unsupported frame depth");
-  if (src.channels() == 1) cv::cvtColor(src, dst, cv::COLOR_GRAY2BGR);
-  else if (src.channels() == 4) cv::cvtColor(src, dst, cv::COLOR_BGRA2BGR);
-  else if (src.channels() == 3) src.copyTo(dst);
-  else throw std::invalid_argument("camera index " + std::to_string(c) + ": unsupported channel count");
+  if (src.channels() == 1) cv::cvtColor(src, src, cv::COLOR_GRAY2BGR);
+  else if (src.channels() == 4) cv::cvtColor(src, src, cv::COLOR_BGRA2BGR);
+  else if (src.channels() != 3)
+    throw std::invalid_argument("camera index " + std::to_string(c) + ": unsupported channel count");
+  // Row pairs: 3 bytes of row y then 3 bytes of row y + 1 per pixel, minus 128. Each pixel is one
+  // 8-byte store of which the next pixel overwrites the last two bytes; the row's last pixel is
+  // written byte by byte so that nothing outside the row is touched.
+  const int W = src.cols, H = src.rows;
+  constexpr uint64_t kFlip = 0x808080808080ull;
+  for (int y = 0; y < H; ++y) {
+    const uint8_t* r0 = src.ptr<uint8_t>(y);
+    const uint8_t* r1 = src.ptr<uint8_t>(std::min(y + 1, H - 1));
+    uint8_t* d = buffer_.data() + layout_.offset(c, 0, y);
+    int x = 0;
+    for (; x + 2 <= W; ++x) {  // 4-byte loads stay inside the row while a next pixel follows
+      uint32_t a, b;
+      std::memcpy(&a, r0 + 3 * x, 4);
+      std::memcpy(&b, r1 + 3 * x, 4);
+      const uint64_t v = ((uint64_t(a) & 0xFFFFFF) | ((uint64_t(b) & 0xFFFFFF) << 24)) ^ kFlip;
+      std::memcpy(d + 6 * x, &v, 8);
+    }
+    for (; x < W; ++x)
+      for (int ch = 0; ch < 3; ++ch) {
+        d[6 * x + ch] = r0[3 * x + ch] ^ 0x80;
+        d[6 * x + 3 + ch] = r1[3 * x + ch] ^ 0x80;
+      }
+  }
+}
+
+size_t CompiledMap::bytes() const {
+  return (tile_run.size() + tile_tap.size() + tile_base.size() + tile_line.size()) * 4 + runs.size() +
+         base.size() * 4 + delta.size() * 2 + weight.size() * 4 + prior.size() + lines.size() * 4;
 }
 
 double CompiledMap::bytes_per_pixel() const {
@@ -112,14 +205,48 @@ double CompiledMap::bytes_per_pixel() const {
   return px > 0 ? double(bytes()) / px : 0;
 }
 
-size_t CompiledMap::bytes() const {
-  return count.size() + word.size() * 4 + weight.size() + row_start.size() * 4;
-}
-
-int CompiledMap::camera_of(uint32_t w) const {
-  const int row = int((w & ((1u << kIndexBits) - 1)) / uint32_t(layout.stride_px));
-  const auto it = std::upper_bound(layout.row0.begin(), layout.row0.end(), row);
-  return int(it - layout.row0.begin()) - 1;
+bool CompiledMap::IsValid(std::string* why) const {
+  auto fail = [&](const std::string& m) {
+    if (why) *why = m;
+    return false;
+  };
+  if (width <= 0 || height <= 0) return fail("empty map");
+  const size_t nt = size_t(tiles());
+  for (const auto* v : {&tile_run, &tile_tap, &tile_base, &tile_line})
+    if (v->size() != nt + 1 || !std::is_sorted(v->begin(), v->end())) return fail("bad tile index");
+  if (tile_run.back() != runs.size() || tile_tap.back() != weight.size() || tile_base.back() != base.size() ||
+      tile_line.back() != lines.size() || delta.size() != weight.size())
+    return fail("tile index does not match the arrays");
+  if (method == pano::Method::kSad ? prior.size() != weight.size() : !prior.empty()) return fail("bad prior array");
+  const size_t store = layout.bytes();
+  for (uint32_t l : lines)
+    if (l >= store) return fail("prefetch line outside the frame store");
+  for (int t = 0; t < int(nt); ++t) {
+    const int w = std::min(width, (t % tiles_x() + 1) * kTileW) - (t % tiles_x()) * kTileW;
+    const int h = std::min(height, (t / tiles_x() + 1) * kTileH) - (t / tiles_x()) * kTileH;
+    size_t r = tile_run[t], k = tile_tap[t], b = tile_base[t];
+    for (int row = 0; row < h; ++row) {
+      int cols = 0;
+      for (;; r += 2) {
+        if (r + 1 >= tile_run[t + 1]) return fail("runs overflow their tile");
+        const int n = runs[r], len = runs[r + 1];
+        if (len == 0) break;
+        if (n > kMaxTaps || b + n > tile_base[t + 1] || k + size_t(n) * len > tile_tap[t + 1])
+          return fail("run overflows its tile");
+        for (int p = 0; p < len; ++p)
+          for (int i = 0; i < n; ++i) {
+            const int64_t off = int64_t(base[b + i]) + delta[k++];
+            if (off < 0 || size_t(off) * 2 + 16 > store) return fail("tap outside the frame store");
+          }
+        b += n;
+        cols += len;
+      }
+      r += 2;
+      if (cols != w) return fail("tile row of the wrong width");
+    }
+    if (r != tile_run[t + 1] || k != tile_tap[t + 1] || b != tile_base[t + 1]) return fail("tile of the wrong size");
+  }
+  return true;
 }
 
 ActiveRig active_cameras(const Rig& rig, const std::vector<bool>& active) {
@@ -158,18 +285,15 @@ CompiledMap compile_map(const Rig& rig, const MapOptions& opt) {
   // The rig of the active cameras, and its camera index -> rig camera index.
   const auto [sub, to_full] = active_cameras(rig, opt.active);
   const int W = map.width, H = map.height;
-  std::vector<PixelTaps> px(size_t(W) * H);
   const StoreLayout& L = map.layout;
-  // Tiles of kTile x kTile output pixels; each tile calls static_taps with the rig of the cameras
-  // whose cone of view (eq. 2.3) can reach the tile (with a margin for the 4-neighbourhood of mrf):
-  // the taps are the same as with the full rig, at a fraction of the cost.
-  constexpr int kTile = 16;
-  const int tiles_x = (W + kTile - 1) / kTile, tiles_y = (H + kTile - 1) / kTile;
+  // The taps of the output pixels [c0, c1) x [r0, r1) (at most 16 x 16) into `px` (kTileW pixels per
+  // row, starting at pixel (pc, pr)). Each call uses the rig of the cameras whose cone of view
+  // (eq. 2.3) can reach these pixels (with a margin for the 4-neighbourhood of mrf): the taps are the
+  // same as with the full rig, at a fraction of the cost.
   std::vector<double> cam_half(sub.cameras.size());
   for (size_t c = 0; c < sub.cameras.size(); ++c) cam_half[c] = sub.cameras[c].in.aov / 2;
-  tbb::parallel_for(0, tiles_x * tiles_y, [&](int tile) {
-    const int tx = tile % tiles_x, ty = tile / tiles_x;
-    const int c0 = tx * kTile, r0 = ty * kTile, c1 = std::min(W, c0 + kTile), r1 = std::min(H, r0 + kTile);
+  const bool sad = opt.method == pano::Method::kSad;
+  auto compute_taps = [&](int c0, int r0, int c1, int r1, PixelTaps* px, int pc, int pr) {
     Rig tile_rig;
     std::vector<int> tile_to_full;
     if (opt.cull) {
@@ -193,8 +317,8 @@ CompiledMap compile_map(const Rig& rig, const MapOptions& opt) {
       tile_rig = sub;
       tile_to_full = to_full;
     }
-    double w[8];
-    int q[8];
+    double w[kMaxTaps], e[4 * kMaxTaps];
+    int q[kMaxTaps], qe[4 * kMaxTaps];
     // Contributors (eq. 2.3) of the tile and a one-pixel border, found once and shared by the
     // 4-neighbourhoods of mrf, mrf-spherical and sad; then the weights exactly as static_taps
     // computes them (pano::method_weights).
@@ -230,7 +354,7 @@ CompiledMap compile_map(const Rig& rig, const MapOptions& opt) {
     };
     for (int row = r0; row < r1; ++row)
       for (int col = c0; col < c1; ++col) {
-        PixelTaps& out = px[size_t(row) * W + col];
+        PixelTaps& out = px[size_t(row - pr) * kTileW + (col - pc)];
         if (tile_rig.cameras.empty()) continue;
         const Node& u = node(col, row, 0);
         const std::vector<pano::Contributor>& cs = u.cs;
@@ -251,10 +375,10 @@ CompiledMap compile_map(const Rig& rig, const MapOptions& opt) {
         std::vector<pano::Tap> taps;
         for (size_t i = 0; i < cs.size(); ++i)
           if (mw[i] > 0) taps.push_back({cs[i].camera, cs[i].px, mw[i]});
-        if (taps.size() > 8) {  // keep the 8 strongest (never happens with real rigs)
-          std::partial_sort(taps.begin(), taps.begin() + 8, taps.end(),
+        if (taps.size() > size_t(kMaxTaps)) {  // keep the strongest (never happens with real rigs)
+          std::partial_sort(taps.begin(), taps.begin() + kMaxTaps, taps.end(),
                             [](auto& a, auto& b) { return a.weight > b.weight; });
-          taps.resize(8);
+          taps.resize(kMaxTaps);
         }
         double total = 0;
         for (const auto& t : taps) total += t.weight;
@@ -265,56 +389,93 @@ CompiledMap compile_map(const Rig& rig, const MapOptions& opt) {
             return t.weight < opt.min_weight * total && t.weight < strongest;
           });
         }
+        // Sorted by camera, so that tap t of neighbouring pixels usually comes from the same camera
+        // (the runs of the map, compiled_map.h).
+        std::sort(taps.begin(), taps.end(), [&](auto& a, auto& b) { return a.camera < b.camera; });
         const int n = static_cast<int>(taps.size());
         double sum = 0;
         for (int k = 0; k < n; ++k) sum += (w[k] = taps[k].weight);
         if (sum <= 0) continue;
         for (int k = 0; k < n; ++k) w[k] /= sum;
-        quantise_weights(w, n, q);
+        // The tap weights in 1/256 (summing to 256), then per tap the 2x2 neighbourhood and its four
+        // bilinear weights times the tap's weight, rounded to integers that sum to it (each at most
+        // 255: a lone tap exactly on a pixel centre gives 255 + 1 to its neighbour below). sad keeps
+        // the bilinear weights alone (256 per tap) and the tap weights as its prior.
+        double pw[kMaxTaps];
+        for (int k = 0; k < n; ++k) pw[k] = w[k] * 256.0;
+        quantise(pw, n, 256, 256, q);
+        int cam[kMaxTaps];
+        uint32_t off2[kMaxTaps];
         for (int k = 0; k < n; ++k) {
+          cam[k] = tile_to_full[taps[k].camera];
+          int x0, y0;
+          double fx, fy;
+          bilinear_axis(taps[k].px.x(), L.size[cam[k]].width, x0, fx);
+          bilinear_axis(taps[k].px.y(), L.size[cam[k]].height, y0, fy);
+          off2[k] = static_cast<uint32_t>(L.offset(cam[k], x0, y0) / 2);
+          const int total = sad ? 256 : q[k];
+          const double bw[4] = {(1 - fx) * (1 - fy), (1 - fx) * fy, fx * (1 - fy), fx * fy};
+          for (int j = 0; j < 4; ++j) e[4 * k + j] = bw[j] * total;
+          quantise(e + 4 * k, 4, total, 255, qe + 4 * k);
+        }
+        for (int k = 0; k < n; ++k) {
+          const int* qk = qe + 4 * k;
           if (q[k] == 0) continue;
-          const int cam = tile_to_full[taps[k].camera];
-          const int cw = L.size[cam].width, ch = L.size[cam].height;
-          // Bilinear neighbourhood with replicated edges (centres at integer + 0.5).
-          auto axis = [](double p, int n, int& i0, int& f) {
-            const double s = p - 0.5;
-            double fl = std::floor(s);
-            i0 = static_cast<int>(fl);
-            f = static_cast<int>((s - fl) * 32 + 0.5);
-            if (f == 32) { ++i0; f = 0; }
-            if (i0 < 0) { i0 = 0; f = 0; }
-            if (i0 >= n - 1) { i0 = n - 1; f = 0; }
-          };
-          int x0, fx, y0, fy;
-          axis(taps[k].px.x(), cw, x0, fx);
-          axis(taps[k].px.y(), ch, y0, fy);
-          const uint32_t index = uint32_t(L.row0[cam] + y0) * uint32_t(L.stride_px) + uint32_t(x0);
-          out.word[out.n] = index | (uint32_t(fx) << 22) | (uint32_t(fy) << 27);
-          out.weight[out.n] = static_cast<uint8_t>(q[k] - 1);
+          out.off2[out.n] = off2[k];
+          out.weight[out.n] = uint32_t(qk[0]) | uint32_t(qk[1]) << 8 | uint32_t(qk[2]) << 16 | uint32_t(qk[3]) << 24;
+          out.prior[out.n] = sad ? static_cast<uint8_t>(q[k] - 1) : 0;
           ++out.n;
         }
       }
-  });
-  map.count.resize(px.size());
-  map.row_start.resize(H + 1);
-  size_t total = 0;
-  for (int row = 0; row < H; ++row) {
-    map.row_start[row] = static_cast<uint32_t>(total);
-    for (int col = 0; col < W; ++col) total += px[size_t(row) * W + col].n;
-  }
-  map.row_start[H] = static_cast<uint32_t>(total);
-  map.word.resize(total);
-  map.weight.resize(total);
-  tbb::parallel_for(0, H, [&](int row) {
-    size_t k = map.row_start[row];
-    for (int col = 0; col < W; ++col) {
-      const PixelTaps& p = px[size_t(row) * W + col];
-      map.count[size_t(row) * W + col] = p.n;
-      for (int t = 0; t < p.n; ++t, ++k) {
-        map.word[k] = p.word[t];
-        map.weight[k] = p.weight[t];
+  };
+  // The renderer's tiles (kTileW x kTileH), each computed in blocks of 16 x 16 pixels and encoded
+  // independently, then concatenated.
+  const int ntiles = map.tiles();
+  std::vector<TileData> td(ntiles);
+  tbb::parallel_for(0, ntiles, [&](int t) {
+    const int c0 = (t % map.tiles_x()) * kTileW, r0 = (t / map.tiles_x()) * kTileH;
+    const int c1 = std::min(W, c0 + kTileW), r1 = std::min(H, r0 + kTileH);
+    std::vector<PixelTaps> px(size_t(kTileW) * kTileH);
+    constexpr int kBlock = 16;
+    for (int br = r0; br < r1; br += kBlock)
+      for (int bc = c0; bc < c1; bc += kBlock)
+        compute_taps(bc, br, std::min(c1, bc + kBlock), std::min(r1, br + kBlock), px.data(), c0, r0);
+    TileData& d = td[t];
+    for (int row = r0; row < r1; ++row) encode_tile_row(&px[size_t(row - r0) * kTileW], c1 - c0, sad, d);
+    // The store's cache lines the tile reads (16 bytes per tap), for the renderer's prefetch.
+    for (int row = r0; row < r1; ++row)
+      for (int col = c0; col < c1; ++col) {
+        const PixelTaps& p = px[size_t(row - r0) * kTileW + (col - c0)];
+        for (int k = 0; k < p.n; ++k)
+          for (size_t b : {size_t(p.off2[k]) * 2, size_t(p.off2[k]) * 2 + 15}) d.lines.push_back(uint32_t(b / 64 * 64));
       }
-    }
+    std::sort(d.lines.begin(), d.lines.end());
+    d.lines.erase(std::unique(d.lines.begin(), d.lines.end()), d.lines.end());
+  });
+  map.tile_run.assign(ntiles + 1, 0);
+  map.tile_tap.assign(ntiles + 1, 0);
+  map.tile_base.assign(ntiles + 1, 0);
+  map.tile_line.assign(ntiles + 1, 0);
+  for (int t = 0; t < ntiles; ++t) {
+    map.tile_run[t + 1] = map.tile_run[t] + uint32_t(td[t].runs.size());
+    map.tile_tap[t + 1] = map.tile_tap[t] + uint32_t(td[t].weight.size());
+    map.tile_base[t + 1] = map.tile_base[t] + uint32_t(td[t].base.size());
+    map.tile_line[t + 1] = map.tile_line[t] + uint32_t(td[t].lines.size());
+  }
+  map.runs.resize(map.tile_run.back());
+  map.weight.resize(map.tile_tap.back());
+  map.delta.resize(map.tile_tap.back());
+  if (sad) map.prior.resize(map.tile_tap.back());
+  map.base.resize(map.tile_base.back());
+  map.lines.resize(map.tile_line.back());
+  tbb::parallel_for(0, ntiles, [&](int t) {
+    const TileData& d = td[t];
+    std::copy(d.runs.begin(), d.runs.end(), map.runs.begin() + map.tile_run[t]);
+    std::copy(d.weight.begin(), d.weight.end(), map.weight.begin() + map.tile_tap[t]);
+    std::copy(d.delta.begin(), d.delta.end(), map.delta.begin() + map.tile_tap[t]);
+    if (sad) std::copy(d.prior.begin(), d.prior.end(), map.prior.begin() + map.tile_tap[t]);
+    std::copy(d.base.begin(), d.base.end(), map.base.begin() + map.tile_base[t]);
+    std::copy(d.lines.begin(), d.lines.end(), map.lines.begin() + map.tile_line[t]);
   });
   return map;
 }
@@ -376,10 +537,16 @@ void save_map(const CompiledMap& map, const std::filesystem::path& path) {
       put<int32_t>(o, map.layout.size[c].width);
       put<int32_t>(o, map.layout.size[c].height);
     }
-    put_vec(o, map.count);
-    put_vec(o, map.row_start);
-    put_vec(o, map.word);
+    put_vec(o, map.tile_run);
+    put_vec(o, map.tile_tap);
+    put_vec(o, map.tile_base);
+    put_vec(o, map.tile_line);
+    put_vec(o, map.runs);
+    put_vec(o, map.base);
+    put_vec(o, map.delta);
     put_vec(o, map.weight);
+    put_vec(o, map.prior);
+    put_vec(o, map.lines);
     put(o, kMagic);
     o.flush();
     if (!o) throw IoError("cannot write map file " + tmp.string());
@@ -393,8 +560,9 @@ std::optional<CompiledMap> load_map(const std::filesystem::path& path) {
   if (!get(i, magic) || magic != kMagic || !get(i, version) || version != kFormatVersion) return std::nullopt;
   CompiledMap m;
   int32_t n = 0, method = 0;
-  if (!get(i, m.width) || !get(i, m.height) || !get(i, method) || !get(i, m.sad_epsilon) || !get(i, m.layout.stride_px) || !get(i, m.layout.rows) ||
-      !get(i, n) || n < 0 || n > 4096 || m.width <= 0 || m.height <= 0)
+  if (!get(i, m.width) || !get(i, m.height) || !get(i, method) || !get(i, m.sad_epsilon) ||
+      !get(i, m.layout.stride_px) || !get(i, m.layout.rows) || !get(i, n) || n < 0 || n > 4096 || m.width <= 0 ||
+      m.height <= 0 || m.width > 65536 || m.height > 65536 || method < 0 || method > 16)
     return std::nullopt;
   m.method = static_cast<pano::Method>(method);
   for (int c = 0; c < n; ++c) {
@@ -403,13 +571,13 @@ std::optional<CompiledMap> load_map(const std::filesystem::path& path) {
     m.layout.row0.push_back(r0);
     m.layout.size.emplace_back(w, h);
   }
-  const uint64_t px = uint64_t(m.width) * m.height;
-  if (!get_vec(i, m.count, px) || m.count.size() != px) return std::nullopt;
-  if (!get_vec(i, m.row_start, uint64_t(m.height) + 1) || m.row_start.size() != size_t(m.height) + 1)
+  const uint64_t px = uint64_t(m.width) * m.height, taps = px * kMaxTaps, tiles = uint64_t(m.tiles()) + 1;
+  if (!get_vec(i, m.tile_run, tiles) || !get_vec(i, m.tile_tap, tiles) || !get_vec(i, m.tile_base, tiles) ||
+      !get_vec(i, m.tile_line, tiles) || !get_vec(i, m.runs, 4 * px + 2 * tiles * kTileH) ||
+      !get_vec(i, m.base, taps) || !get_vec(i, m.delta, taps) || !get_vec(i, m.weight, taps) ||
+      !get_vec(i, m.prior, taps) || !get_vec(i, m.lines, 2 * taps))
     return std::nullopt;
-  if (!get_vec(i, m.word, px * 8) || !get_vec(i, m.weight, px * 8)) return std::nullopt;
-  if (m.word.size() != m.weight.size() || m.row_start.back() != m.word.size()) return std::nullopt;
-  if (!get(i, magic) || magic != kMagic) return std::nullopt;
+  if (!get(i, magic) || magic != kMagic || !m.IsValid()) return std::nullopt;
   return m;
 }
 

@@ -1,26 +1,38 @@
 // Compiled panorama maps (thesis §5.3-5.4): for every output pixel of a grid, the taps that make it,
-// with the bilinear sampling inside each camera folded into a compact fixed-point record, so that
-// the renderer (render.h) only streams through the map and gathers camera pixels.
+// with the bilinear sampling inside each camera folded into the blend weights, so that the renderer
+// (render.h) only streams through the map and gathers camera pixels.
 //
-// Frame store. All camera frames of a rig live in ONE 8-bit BGR buffer (FrameStore): camera c
-// occupies rows [row0[c], row0[c] + H_c) of an image `stride_px` pixels wide (the widest camera),
-// plus one padding row and 16 padding bytes at the end, so that the 2x2 bilinear neighbourhood of
-// any tap can be read without bounds checks.
+// Frame store. All camera frames of a rig live in ONE buffer (FrameStore) of "row pairs": camera c's
+// frame row y is store row R = row0[c] + y, which holds, for every column x, the 6 bytes
+//     B G R of pixel (x, y),  B G R of pixel (x, min(y + 1, H - 1))
+// each stored minus 128 (as a signed byte: value XOR 0x80). So the whole 2x2 bilinear neighbourhood
+// of (x, y) is the 12 contiguous bytes at byte R * stride_bytes + 6 x (x+1 follows x), one 16-byte
+// load; the bottom edge is replicated by the pair itself. stride_bytes = 6 * stride_px (the widest
+// camera); 64 bytes of padding at the end keep every 16-byte load inside the buffer.
 //
-// Map layout (structure of arrays, 5 bytes per tap + 1 byte per output pixel):
-//   count[p]  uint8   number of taps of output pixel p (row-major), 0 = no camera sees it (black)
-//   word[k]   uint32  bits 0..21  pixel index i = row * stride_px + col into the frame store of the
-//                                 top-left pixel of the 2x2 bilinear neighbourhood
-//                     bits 22..26 fx: horizontal bilinear fraction, in 1/32 pixel (0..31)
-//                     bits 27..31 fy: vertical bilinear fraction, in 1/32 pixel (0..31)
-//   weight[k] uint8   blend weight in 1/256 minus one (1..256 stored as 0..255); the weights of one
-//                     output pixel sum to exactly 256
-//   row_start[r]      index of the first tap of output row r (rows.size() = height + 1)
-// The sample of a tap is ((32-fx)(32-fy) a + fx(32-fy) b + (32-fx)fy c + fx fy d) / 1024 for the
-// neighbourhood a b / c d; the output is sum(weight * sample) / 256, rounded.
+// Map layout. The output is cut into tiles of kTileW x kTileH pixels, rendered tile by tile (the
+// camera pixels a tile needs stay in the L1 cache), tiles in row-major order. Each tile row is a list
+// of RUNS: consecutive pixels with the same number C of taps whose tap t comes from the same camera
+// region as in the previous pixel. Per tap the map holds
+//   delta[k]  int16   its neighbourhood's store offset minus the run's start offset for tap t
+//                     (base[]), in units of 2 bytes (offsets are even). Relative to the run, not to
+//                     the previous pixel: no chain of additions between pixels (measured 15-30 %
+//                     faster than chained deltas)
+//   weight[k] uint32  the four bilinear x blend weights of its neighbourhood, in 1/256, as bytes
+//                     (w(x,y), w(x,y+1), w(x+1,y), w(x+1,y+1)) from the low byte up; the 4C weights
+//                     of one output pixel sum to exactly 256, each is at most 255
+// and per run: runs[] the byte pair (C, number of pixels), each tile row ended by the pair (0, 0),
+// and base[] the offsets of the run's first pixel's C taps (units of 2 bytes).
+// The output is (sum over taps and the 4 neighbours of w * value + 128) >> 8, exact integers.
+// Per tile: lines[] the store's 64-byte cache lines its taps read (byte offsets), which the renderer
+// prefetches while it renders the tile before (measured: the gather from the store, not arithmetic,
+// dominated the previous row-by-row kernel).
+// sad keeps per tap the bilinear weights only (summing to 256 per tap) and, in prior[k], its
+// geometric prior (the mrf weight, eq. 4.18) in 1/256 minus one, summing to 256 per pixel.
 // Bilinear sampling clamps to the image edge (BORDER_REPLICATE), pixel centres at integer + 0.5.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <filesystem>
 #include <optional>
@@ -36,30 +48,37 @@
 
 namespace omma::engine {
 
+inline constexpr int kTileW = 64, kTileH = 32;  // output tile (pixels)
+inline constexpr size_t kStorePadding = 64;     // bytes after the last store row
+inline constexpr int kMaxTaps = 8;              // taps per output pixel (the strongest are kept)
+
 // Geometry of the shared frame store of a rig (see the file comment).
 struct StoreLayout {
   int stride_px = 0;             // pixels per store row (widest camera)
-  int rows = 0;                  // total rows including the padding row
+  int rows = 0;                  // total rows (sum of the camera heights)
   std::vector<int> row0;         // first store row of each camera
   std::vector<cv::Size> size;    // each camera's frame size
   static StoreLayout for_rig(const Rig& rig);
-  size_t bytes() const { return size_t(stride_px) * rows * 3 + 16; }
+  size_t stride_bytes() const { return size_t(stride_px) * 6; }
+  size_t bytes() const { return stride_bytes() * rows + kStorePadding; }
+  // Byte offset of the 2x2 neighbourhood of pixel (x, y) of camera c.
+  size_t offset(int c, int x, int y) const { return size_t(row0[c] + y) * stride_bytes() + size_t(x) * 6; }
+  // Camera whose rows hold store byte `offset`.
+  int camera_at(size_t offset) const;
 };
 
-// One buffer holding the latest 8-bit BGR frame of every camera.
+// One buffer holding the latest frame of every camera, in the row-pair layout.
 class FrameStore {
  public:
   FrameStore() = default;
   explicit FrameStore(StoreLayout layout);
   const StoreLayout& layout() const { return layout_; }
-  // A view of camera c's frame (CV_8UC3, H x W); writing into it updates the store.
-  cv::Mat camera(int c);
+  // A copy of camera c's frame (CV_8UC3, H x W) as it was last set.
   cv::Mat camera(int c) const;
-  // Copies `frame` (CV_8UC3 of the camera's size; 16-bit is scaled down) into camera c's place.
-  // Throws std::invalid_argument naming the camera if the size or type is wrong.
+  // Stores `frame` (CV_8UC3 of the camera's size; gray, BGRA, 16-bit and float are converted) as
+  // camera c's. Throws std::invalid_argument naming the camera if the size or type is wrong.
   void set(int c, const cv::Mat& frame);
   const uint8_t* data() const { return buffer_.data(); }
-  uint8_t* data() { return buffer_.data(); }
 
  private:
   StoreLayout layout_;
@@ -76,14 +95,14 @@ struct MapOptions {
   // Pass static_taps only the cameras whose cone can reach each 16x16 tile (same taps, faster).
   bool cull = true;
   // Taps whose normalised weight is below this fraction are dropped and the others renormalised
-  // (never the strongest tap; 0 = keep every tap whose 1/256-quantised weight is not 0; not applied
-  // to sad, whose weights are per frame). The mrf family gives many faint taps: on the prototype
-  // rig at 1080x1080, 20 % of its taps weigh 4/256 or less, and they cost as much to render as
-  // strong ones. A dropped tap of weight w changes the output by at most w times the difference
-  // between the cameras: with 1/32, less than half an 8-bit level where the cameras agree to 16
-  // levels. Measured (mrf, prototype rig, vr180): taps per pixel 2.57 -> 1.83, bytes per pixel
-  // 13.8 -> 10.2, PSNR against reference_render (which keeps every tap) 59.4 -> 59.2 dB on the
-  // Louvre's views and 57.4 -> 53.6 dB on random-texture frames (cameras that disagree entirely).
+  // (never the strongest tap; 0 = keep every tap whose 1/256-quantised weights are not all 0; not
+  // applied to sad, whose weights are per frame). The mrf family gives many faint taps: on the
+  // prototype rig at 1080x1080, 20 % of its taps weigh 4/256 or less, and they cost as much to
+  // render as strong ones. A dropped tap of weight w changes the output by at most w times the
+  // difference between the cameras: with 1/32, less than half an 8-bit level where the cameras agree
+  // to 16 levels. Measured (mrf, prototype rig, vr180): taps per pixel 2.57 -> 1.83, PSNR against
+  // reference_render (which keeps every tap) 59.4 -> 59.2 dB on the Louvre's views and 57.4 -> 53.6 dB
+  // on random-texture frames (cameras that disagree entirely).
   double min_weight = 1.0 / 32;
   bool IsValid(std::string* why = nullptr) const;
 };
@@ -96,32 +115,46 @@ struct ActiveRig {
 };
 ActiveRig active_cameras(const Rig& rig, const std::vector<bool>& active);
 
+// One tap of an output pixel, decoded (CompiledMap::visit).
+struct MapTap {
+  size_t offset;      // store byte offset of the 2x2 neighbourhood
+  uint8_t w[4];       // weights of (x,y), (x,y+1), (x+1,y), (x+1,y+1), 1/256
+  int prior;          // sad: the prior weight in 1/256 (1..256); other methods: 0
+  int weight() const { return w[0] + w[1] + w[2] + w[3]; }
+};
 
 struct CompiledMap {
   int width = 0, height = 0;
-  // kSad: the taps hold the geometric prior of eq. 4.18 (the mrf weights) and render() computes
-  // the per-frame SAD weights (eq. 4.17-4.18) with its own kernel; any other method: final weights.
+  // kSad: the taps hold the bilinear weights and `prior` the geometric prior of eq. 4.18 (the mrf
+  // weights); render() computes the per-frame SAD weights (eq. 4.17-4.18) with its own kernel.
   pano::Method method = pano::Method::kLinear;
   float sad_epsilon = 1.0f / 255;
   StoreLayout layout;
-  std::vector<uint8_t> count;
-  std::vector<uint32_t> row_start;
-  std::vector<uint32_t> word;
-  std::vector<uint8_t> weight;
+  std::vector<uint32_t> tile_run, tile_tap, tile_base, tile_line;  // per tile + 1: first entry of it
+  std::vector<uint8_t> runs;
+  std::vector<uint32_t> base;
+  std::vector<int16_t> delta;
+  std::vector<uint32_t> weight;
+  std::vector<uint8_t> prior;   // sad only
+  std::vector<uint32_t> lines;
 
-  size_t taps() const { return word.size(); }
-  // Bytes of the map per output pixel (count + word + weight + row starts).
+  int tiles_x() const { return (width + kTileW - 1) / kTileW; }
+  int tiles_y() const { return (height + kTileH - 1) / kTileH; }
+  int tiles() const { return tiles_x() * tiles_y(); }
+  size_t taps() const { return weight.size(); }
+  // Bytes of the map per output pixel (everything the renderer reads except the frames).
   double bytes_per_pixel() const;
   size_t bytes() const;
-  // Camera index of the tap whose word is `w` (looked up from the store layout).
-  int camera_of(uint32_t w) const;
+  // Calls f(col, row, n, taps) for every output pixel (tile by tile), taps[0..n) decoded.
+  template <class F>
+  void visit(F&& f) const;
+  // Consistency of the arrays (a loaded file): sizes, run lengths, offsets inside the store.
+  bool IsValid(std::string* why = nullptr) const;
 };
 
-inline constexpr int kFracBits = 5;
-inline constexpr int kIndexBits = 22;
-
-// Compiles the map with pano::static_taps for every output pixel (oneTBB parallel). For sad the
-// map holds the mrf prior; the per-frame weights are computed by render().
+// Compiles the map with the per-direction weights of pano (pano::find_contributors, method_weights,
+// mrf_posterior) for every output pixel (oneTBB parallel). For sad the map holds the mrf prior; the
+// per-frame weights are computed by render().
 CompiledMap compile_map(const Rig& rig, const MapOptions& opt);
 
 // Hash (hex) of everything the map depends on: rig (as JSON), grid, method, params, active set
@@ -129,7 +162,7 @@ CompiledMap compile_map(const Rig& rig, const MapOptions& opt);
 std::string map_key(const Rig& rig, const MapOptions& opt);
 
 void save_map(const CompiledMap& map, const std::filesystem::path& path);  // atomic
-// nullopt if the file is missing, truncated or of another format version.
+// nullopt if the file is missing, truncated, inconsistent or of another format version.
 std::optional<CompiledMap> load_map(const std::filesystem::path& path);
 
 // Default cache folder: $OMMA_CACHE_DIR, else $XDG_CACHE_HOME/omma, else ~/.cache/omma, else
@@ -146,5 +179,32 @@ struct MapLoad {
 // An empty cache_dir disables the cache. A cache write failure is logged, not fatal.
 MapLoad compile_map_cached(const Rig& rig, const MapOptions& opt,
                            const std::filesystem::path& cache_dir);
+
+// ---------------------------------------------------------------------------------------------
+template <class F>
+void CompiledMap::visit(F&& f) const {
+  MapTap taps[kMaxTaps];
+  for (int t = 0; t < tiles(); ++t) {
+    const int c0 = (t % tiles_x()) * kTileW, r0 = (t / tiles_x()) * kTileH;
+    const int r1 = std::min(height, r0 + kTileH);
+    const uint8_t* run = runs.data() + tile_run[t];
+    size_t k = tile_tap[t], b = tile_base[t];
+    for (int row = r0; row < r1; ++row, run += 2) {
+      for (int col = c0; run[1] != 0; run += 2) {
+        const int n = run[0];
+        for (int p = 0; p < run[1]; ++p, ++col) {
+          for (int i = 0; i < n; ++i, ++k) {
+            const uint32_t w = weight[k];
+            taps[i] = {size_t(int64_t(base[b + i]) + delta[k]) * 2,
+                       {uint8_t(w), uint8_t(w >> 8), uint8_t(w >> 16), uint8_t(w >> 24)},
+                       prior.empty() ? 0 : prior[k] + 1};
+          }
+          f(col, row, n, static_cast<const MapTap*>(taps));
+        }
+        b += n;
+      }
+    }
+  }
+}
 
 }  // namespace omma::engine

@@ -78,10 +78,10 @@ TEST(EngineRun, KilledCameraIsDroppedAndItsRegionFilledFromNeighbours) {
   MapOptions all = opt.map;
   const CompiledMap full = compile_map(rig, all);
   cv::Mat owned(full.height, full.width, CV_8U, cv::Scalar(0));
-  size_t k = 0;
-  for (size_t p = 0; p < full.count.size(); ++p)
-    for (int t = 0; t < full.count[p]; ++t, ++k)
-      if (full.camera_of(full.word[k]) == victim) owned.data[p] = 255;
+  full.visit([&](int col, int row, int n, const MapTap* taps) {
+    for (int t = 0; t < n; ++t)
+      if (full.layout.camera_at(taps[t].offset) == victim) owned.at<uint8_t>(row, col) = 255;
+  });
   ASSERT_GT(cv::countNonZero(owned), 500);
   cv::Mat gray;
   cv::cvtColor(cap->last, gray, cv::COLOR_BGR2GRAY);

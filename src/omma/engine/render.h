@@ -1,9 +1,10 @@
 // The fast CPU renderer of compiled maps (thesis §5.4: the FPGA's per-pixel tap pipeline, here as
-// SIMD kernels over rows split among oneTBB threads; sad has its own kernel with per-frame
-// weights), and the plain reference it must match. Kernels, chosen at run time: AVX2, SSSE3,
-// portable scalar; all three give bit-identical results (integer arithmetic, one final rounding).
+// SIMD kernels over output tiles split among oneTBB threads; sad has its own kernel with per-frame
+// weights), and the plain reference it must match. Kernels, chosen at run time: AVX-512 VNNI,
+// AVX2, portable scalar; all give bit-identical results (integer arithmetic, one final rounding).
 #pragma once
 
+#include <string>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -12,18 +13,25 @@
 
 namespace omma::engine {
 
+enum class Kernel {
+  kAuto,        // the fastest this CPU runs
+  kScalar,      // portable C++
+  kAvx2,        // AVX2: per tap one 16-byte load, pshufb, pmaddwd
+  kAvx512Vnni,  // AVX-512 VNNI (+VL, BW): per tap one 16-byte load, pshufb, vpdpbusd
+};
+std::string to_string(Kernel k);
+bool kernel_available(Kernel k);
+Kernel best_kernel();  // what kAuto runs here
+
 struct RenderOptions {
-  int threads = 0;       // 0 = all hardware threads (oneTBB default), 1 = the calling thread only
-  bool simd = true;      // false: the portable scalar kernel (bit-identical to the SIMD ones)
-  bool avx2 = true;      // false: the SSSE3 kernel even where the CPU has AVX2 (bit-identical)
+  int threads = 0;  // 0 = all hardware threads (oneTBB default), 1 = the calling thread only
+  Kernel kernel = Kernel::kAuto;  // one that the CPU lacks falls back to the best available
+  bool prefetch = true;           // false: no prefetch of the next tile's camera pixels (diagnostic)
 };
 
 // Renders `map` from the frames in `store` into `out` (resized to CV_8UC3 height x width).
 // The store's layout must be the map's layout.
 void render(const CompiledMap& map, const FrameStore& store, cv::Mat& out, const RenderOptions& opt = {});
-
-// True if the SIMD kernel runs on this CPU.
-bool simd_available();
 
 // Reference: for every output pixel, pano::static_taps evaluated in double precision with
 // bilinear sampling (edges replicated, centres at integer + 0.5) of the 8-bit frames; no
