@@ -89,14 +89,11 @@ template <class K>
 inline void render_tiles(const K& kernel, const CompiledMap& map, const uint8_t* store, int t0, int t1, uint8_t* out,
                          size_t step, bool pf) {
   const uint32_t* lines = map.lines.data();
-  auto prefetch = [&](uint32_t a, uint32_t b) {
-    if (pf)
-      for (; a < b; ++a) __builtin_prefetch(store + lines[a], 0, 3);
-  };
-  prefetch(map.tile_line[t0], map.tile_line[t0 + 1]);
+  if (pf)
+    for (uint32_t a = map.tile_line[t0]; a < map.tile_line[t0 + 1]; ++a) __builtin_prefetch(store + lines[a], 0, 3);
   const int tiles_x = map.tiles_x();
   for (int t = t0; t < t1; ++t) {
-    const uint32_t pa = t + 1 < t1 ? map.tile_line[t + 1] : 0, pb = t + 1 < t1 ? map.tile_line[t + 2] : 0;
+    const uint32_t pa = pf && t + 1 < t1 ? map.tile_line[t + 1] : 0, pb = pf && t + 1 < t1 ? map.tile_line[t + 2] : 0;
     const int c0 = (t % tiles_x) * kTileW, r0 = (t / tiles_x) * kTileH;
     const int w = std::min(map.width, c0 + kTileW) - c0, h = std::min(map.height, r0 + kTileH) - r0;
     const uint8_t* run = map.runs.data() + map.tile_run[t];
@@ -105,7 +102,8 @@ inline void render_tiles(const K& kernel, const CompiledMap& map, const uint8_t*
               map.prior.empty() ? nullptr : map.prior.data() + map.tile_tap[t]};
     alignas(64) uint8_t buf[3 * kTileW + 16];
     for (int r = 0; r < h; ++r, run += 2) {
-      prefetch(pa + (pb - pa) * r / h, pa + (pb - pa) * (r + 1) / h);
+      for (uint32_t a = pa + (pb - pa) * r / h; a < pa + (pb - pa) * (r + 1) / h; ++a)
+        __builtin_prefetch(store + lines[a], 0, 3);
       uint8_t* o = buf;
       for (; run[1] != 0; run += 2) {
         const int n = run[1], c = run[0];
