@@ -124,7 +124,8 @@ Workload opencv_multiband_workload(const Rig& rig, const PanoGrid& grid, const s
 }
 
 Workload memcpy_workload(const CompiledMap& map, const std::string& tag) {
-  const size_t bytes = map.bytes() + map.layout.bytes() + size_t(map.width) * map.height * 3;
+  const size_t store = map.store_bytes_read();
+  const size_t bytes = map.bytes() + store + size_t(map.width) * map.height * 3;
   auto src = std::make_shared<std::vector<uint8_t>>(bytes, 1);
   auto dst = std::make_shared<std::vector<uint8_t>>(bytes, 0);
   Workload w;
@@ -136,7 +137,8 @@ Workload memcpy_workload(const CompiledMap& map, const std::string& tag) {
       std::memcpy(dst->data() + a, src->data() + a, b - a);
     });
   };
-  w.info = {{"bytes", bytes}};
+  w.info = {{"bytes", bytes}, {"map_bytes", map.bytes()}, {"store_bytes_read", store},
+            {"store_bytes", map.layout.bytes()}};
   return w;
 }
 

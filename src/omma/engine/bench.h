@@ -39,8 +39,8 @@ Workload opencv_remap_workload(const Rig& rig, const PanoGrid& grid, const std::
 // Peer B: cv::detail::MultiBandBlender (5 bands) fed the warped images and masks of peer A.
 Workload opencv_multiband_workload(const Rig& rig, const PanoGrid& grid, const std::vector<cv::Mat>& frames);
 
-// The bandwidth bound: memcpy of the bytes a render of `map` must touch (map + frames + output),
-// split among all threads.
+// The bandwidth bound: memcpy of the bytes a render of `map` must touch (the whole map, the cache
+// lines of the frame store its taps read, the output), split among all threads.
 Workload memcpy_workload(const CompiledMap& map, const std::string& size_tag);
 
 // Runs w repeatedly for at least min_seconds (and at least min_iterations); returns frames per

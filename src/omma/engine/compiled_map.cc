@@ -20,7 +20,7 @@ namespace omma::engine {
 namespace {
 
 constexpr uint32_t kMagic = 0x4d4d4f31;  // "1OMM"
-constexpr uint32_t kFormatVersion = 3;      // 3: tiles, runs, delta offsets, row-pair store
+constexpr uint32_t kFormatVersion = 4;      // 3: tiles, runs, delta offsets, row-pair store; 4: 1/128
 
 uint64_t fnv1a(const std::string& s) {
   uint64_t h = 1469598103934665603ull;
@@ -135,8 +135,7 @@ int StoreLayout::camera_at(size_t offset) const {
 }
 
 FrameStore::FrameStore(StoreLayout layout) : layout_(std::move(layout)) {
-  // Zero frames stored as value - 128.
-  buffer_.assign(layout_.bytes(), 0x80);
+  buffer_.assign(layout_.bytes(), 0);
 }
 
 cv::Mat FrameStore::camera(int c) const {
@@ -148,7 +147,7 @@ cv::Mat FrameStore::camera(int c) const {
     const uint8_t* src = buffer_.data() + layout_.offset(c, 0, y);
     uint8_t* dst = out.ptr<uint8_t>(y);
     for (int x = 0; x < s.width; ++x)
-      for (int ch = 0; ch < 3; ++ch) dst[3 * x + ch] = src[6 * x + ch] ^ 0x80;
+      for (int ch = 0; ch < 3; ++ch) dst[3 * x + ch] = src[6 * x + ch];
   }
   return out;
 }
@@ -170,11 +169,10 @@ void FrameStore::set(int c, const cv::Mat& frame) {
   else if (src.channels() == 4) cv::cvtColor(src, src, cv::COLOR_BGRA2BGR);
   else if (src.channels() != 3)
     throw std::invalid_argument("camera index " + std::to_string(c) + ": unsupported channel count");
-  // Row pairs: 3 bytes of row y then 3 bytes of row y + 1 per pixel, minus 128. Each pixel is one
+  // Row pairs: 3 bytes of row y then 3 bytes of row y + 1 per pixel. Each pixel is one
   // 8-byte store of which the next pixel overwrites the last two bytes; the row's last pixel is
   // written byte by byte so that nothing outside the row is touched.
   const int W = src.cols, H = src.rows;
-  constexpr uint64_t kFlip = 0x808080808080ull;
   for (int y = 0; y < H; ++y) {
     const uint8_t* r0 = src.ptr<uint8_t>(y);
     const uint8_t* r1 = src.ptr<uint8_t>(std::min(y + 1, H - 1));
@@ -184,13 +182,13 @@ void FrameStore::set(int c, const cv::Mat& frame) {
       uint32_t a, b;
       std::memcpy(&a, r0 + 3 * x, 4);
       std::memcpy(&b, r1 + 3 * x, 4);
-      const uint64_t v = ((uint64_t(a) & 0xFFFFFF) | ((uint64_t(b) & 0xFFFFFF) << 24)) ^ kFlip;
+      const uint64_t v = (uint64_t(a) & 0xFFFFFF) | ((uint64_t(b) & 0xFFFFFF) << 24);
       std::memcpy(d + 6 * x, &v, 8);
     }
     for (; x < W; ++x)
       for (int ch = 0; ch < 3; ++ch) {
-        d[6 * x + ch] = r0[3 * x + ch] ^ 0x80;
-        d[6 * x + 3 + ch] = r1[3 * x + ch] ^ 0x80;
+        d[6 * x + ch] = r0[3 * x + ch];
+        d[6 * x + 3 + ch] = r1[3 * x + ch];
       }
   }
 }
@@ -198,6 +196,12 @@ void FrameStore::set(int c, const cv::Mat& frame) {
 size_t CompiledMap::bytes() const {
   return (tile_run.size() + tile_tap.size() + tile_base.size() + tile_line.size()) * 4 + runs.size() +
          base.size() * 4 + delta.size() * 2 + weight.size() * 4 + prior.size() + lines.size() * 4;
+}
+
+size_t CompiledMap::store_bytes_read() const {
+  std::vector<uint32_t> all = lines;
+  std::sort(all.begin(), all.end());
+  return size_t(std::unique(all.begin(), all.end()) - all.begin()) * 64;
 }
 
 double CompiledMap::bytes_per_pixel() const {
@@ -397,13 +401,14 @@ CompiledMap compile_map(const Rig& rig, const MapOptions& opt) {
         for (int k = 0; k < n; ++k) sum += (w[k] = taps[k].weight);
         if (sum <= 0) continue;
         for (int k = 0; k < n; ++k) w[k] /= sum;
-        // The tap weights in 1/256 (summing to 256), then per tap the 2x2 neighbourhood and its four
+        // The tap weights in 1/128 (summing to 128), then per tap the 2x2 neighbourhood and its four
         // bilinear weights times the tap's weight, rounded to integers that sum to it (each at most
-        // 255: a lone tap exactly on a pixel centre gives 255 + 1 to its neighbour below). sad keeps
-        // the bilinear weights alone (256 per tap) and the tap weights as its prior.
+        // 127, the kernels' signed bytes: a lone tap exactly on a pixel centre gives 127 + 1 to its
+        // neighbour below). sad keeps the bilinear weights alone (128 per tap) and its prior, the
+        // tap weights, in 1/256.
         double pw[kMaxTaps];
-        for (int k = 0; k < n; ++k) pw[k] = w[k] * 256.0;
-        quantise(pw, n, 256, 256, q);
+        for (int k = 0; k < n; ++k) pw[k] = w[k] * (sad ? 256.0 : 128.0);
+        quantise(pw, n, sad ? 256 : 128, 256, q);
         int cam[kMaxTaps];
         uint32_t off2[kMaxTaps];
         for (int k = 0; k < n; ++k) {
@@ -413,10 +418,10 @@ CompiledMap compile_map(const Rig& rig, const MapOptions& opt) {
           bilinear_axis(taps[k].px.x(), L.size[cam[k]].width, x0, fx);
           bilinear_axis(taps[k].px.y(), L.size[cam[k]].height, y0, fy);
           off2[k] = static_cast<uint32_t>(L.offset(cam[k], x0, y0) / 2);
-          const int total = sad ? 256 : q[k];
+          const int total = sad ? 128 : q[k];
           const double bw[4] = {(1 - fx) * (1 - fy), (1 - fx) * fy, fx * (1 - fy), fx * fy};
           for (int j = 0; j < 4; ++j) e[4 * k + j] = bw[j] * total;
-          quantise(e + 4 * k, 4, total, 255, qe + 4 * k);
+          quantise(e + 4 * k, 4, total, 127, qe + 4 * k);
         }
         for (int k = 0; k < n; ++k) {
           const int* qk = qe + 4 * k;

@@ -4,8 +4,8 @@
 //
 // Frame store. All camera frames of a rig live in ONE buffer (FrameStore) of "row pairs": camera c's
 // frame row y is store row R = row0[c] + y, which holds, for every column x, the 6 bytes
-//     B G R of pixel (x, y),  B G R of pixel (x, min(y + 1, H - 1))
-// each stored minus 128 (as a signed byte: value XOR 0x80). So the whole 2x2 bilinear neighbourhood
+//     B G R of pixel (x, y),  B G R of pixel (x, min(y + 1, H - 1)).
+// So the whole 2x2 bilinear neighbourhood
 // of (x, y) is the 12 contiguous bytes at byte R * stride_bytes + 6 x (x+1 follows x), one 16-byte
 // load; the bottom edge is replicated by the pair itself. stride_bytes = 6 * stride_px (the widest
 // camera); 64 bytes of padding at the end keep every 16-byte load inside the buffer.
@@ -18,16 +18,17 @@
 //                     (base[]), in units of 2 bytes (offsets are even). Relative to the run, not to
 //                     the previous pixel: no chain of additions between pixels (measured 15-30 %
 //                     faster than chained deltas)
-//   weight[k] uint32  the four bilinear x blend weights of its neighbourhood, in 1/256, as bytes
+//   weight[k] uint32  the four bilinear x blend weights of its neighbourhood, in 1/128, as bytes
 //                     (w(x,y), w(x,y+1), w(x+1,y), w(x+1,y+1)) from the low byte up; the 4C weights
-//                     of one output pixel sum to exactly 256, each is at most 255
+//                     of one output pixel sum to exactly 128, each is at most 127 (signed bytes:
+//                     the VNNI kernel broadcasts them from memory into vpdpbusd)
 // and per run: runs[] the byte pair (C, number of pixels), each tile row ended by the pair (0, 0),
 // and base[] the offsets of the run's first pixel's C taps (units of 2 bytes).
-// The output is (sum over taps and the 4 neighbours of w * value + 128) >> 8, exact integers.
+// The output is (sum over taps and the 4 neighbours of w * value + 64) >> 7, exact integers.
 // Per tile: lines[] the store's 64-byte cache lines its taps read (byte offsets), which the renderer
 // prefetches while it renders the tile before (measured: the gather from the store, not arithmetic,
 // dominated the previous row-by-row kernel).
-// sad keeps per tap the bilinear weights only (summing to 256 per tap) and, in prior[k], its
+// sad keeps per tap the bilinear weights only (summing to 128 per tap) and, in prior[k], its
 // geometric prior (the mrf weight, eq. 4.18) in 1/256 minus one, summing to 256 per pixel.
 // Bilinear sampling clamps to the image edge (BORDER_REPLICATE), pixel centres at integer + 0.5.
 #pragma once
@@ -95,7 +96,7 @@ struct MapOptions {
   // Pass static_taps only the cameras whose cone can reach each 16x16 tile (same taps, faster).
   bool cull = true;
   // Taps whose normalised weight is below this fraction are dropped and the others renormalised
-  // (never the strongest tap; 0 = keep every tap whose 1/256-quantised weights are not all 0; not
+  // (never the strongest tap; 0 = keep every tap whose 1/128-quantised weight is not 0; not
   // applied to sad, whose weights are per frame). The mrf family gives many faint taps: on the
   // prototype rig at 1080x1080, 20 % of its taps weigh 4/256 or less, and they cost as much to
   // render as strong ones. A dropped tap of weight w changes the output by at most w times the
@@ -118,7 +119,7 @@ ActiveRig active_cameras(const Rig& rig, const std::vector<bool>& active);
 // One tap of an output pixel, decoded (CompiledMap::visit).
 struct MapTap {
   size_t offset;      // store byte offset of the 2x2 neighbourhood
-  uint8_t w[4];       // weights of (x,y), (x,y+1), (x+1,y), (x+1,y+1), 1/256
+  uint8_t w[4];       // weights of (x,y), (x,y+1), (x+1,y), (x+1,y+1), 1/128
   int prior;          // sad: the prior weight in 1/256 (1..256); other methods: 0
   int weight() const { return w[0] + w[1] + w[2] + w[3]; }
 };
@@ -142,6 +143,8 @@ struct CompiledMap {
   int tiles_y() const { return (height + kTileH - 1) / kTileH; }
   int tiles() const { return tiles_x() * tiles_y(); }
   size_t taps() const { return weight.size(); }
+  // Bytes of the frame store that a render reads: its distinct 64-byte lines.
+  size_t store_bytes_read() const;
   // Bytes of the map per output pixel (everything the renderer reads except the frames).
   double bytes_per_pixel() const;
   size_t bytes() const;

@@ -28,42 +28,44 @@ struct Cursor {
   const uint8_t* prior;  // sad only
 };
 
-// Each kernel renders, with run<C>(store, base, cursor, n, out), a run of n pixels of C taps (see
-// compiled_map.h) into out (3 bytes per pixel; it may write up to 4 bytes past the run).
+// Each kernel renders, with run<C>(store, base, cursor, n, out, room), a run of n pixels of C taps
+// (see compiled_map.h) into out, 3 bytes per pixel, writing nothing beyond out + room bytes (the
+// end of the tile's row in the output: the next tile may belong to another thread) and, before
+// that, possibly up to 4 bytes past the run (the next run overwrites them).
 
-// Portable kernel: the definition the SIMD kernels reproduce bit for bit. The store holds value -
-// 128, so with weights summing to 256, (sum w (v - 128) + 32896) >> 8 = (sum w v + 128) >> 8.
+// Portable kernel: the definition the SIMD kernels reproduce bit for bit: with weights summing to
+// 128 over a pixel's taps, the output is (sum w v + 64) >> 7.
 struct ScalarKernel {
   template <int C>
-  void run(const uint8_t* store, const uint32_t* base, Cursor& cu, int n, uint8_t* o) const {
+  void run(const uint8_t* store, const uint32_t* base, Cursor& cu, int n, uint8_t* o, int room) const {
     for (int p = 0; p < n; ++p, o += 3) {
-      int32_t acc[3] = {32896, 32896, 32896};
+      int32_t acc[3] = {64, 64, 64};
       for (int t = 0; t < C; ++t) {
-        const auto* s = reinterpret_cast<const int8_t*>(store + 2 * (int64_t(base[t]) + *cu.delta++));
+        const uint8_t* s = store + 2 * (int64_t(base[t]) + *cu.delta++);
         const uint32_t w = *cu.weight++;
         const int32_t w0 = w & 255, w1 = (w >> 8) & 255, w2 = (w >> 16) & 255, w3 = w >> 24;
         for (int ch = 0; ch < 3; ++ch) acc[ch] += w0 * s[ch] + w1 * s[3 + ch] + w2 * s[6 + ch] + w3 * s[9 + ch];
       }
-      for (int ch = 0; ch < 3; ++ch) o[ch] = static_cast<uint8_t>(acc[ch] >> 8);
+      for (int ch = 0; ch < 3; ++ch) o[ch] = static_cast<uint8_t>(acc[ch] >> 7);
     }
   }
 };
 
-// sad (eq. 4.17-4.18): per pixel, sample every tap (bilinear weights summing to 256 per tap), gray
+// sad (eq. 4.17-4.18): per pixel, sample every tap (bilinear weights summing to 128 per tap), gray
 // level Y of each sample, SAD_i = sum_j |Y_i - Y_j|, weights prior_i / (SAD_i + eps) normalised.
 struct SadKernel {
   float eps;
   template <int C>
-  void run(const uint8_t* store, const uint32_t* base, Cursor& cu, int n, uint8_t* o) const {
+  void run(const uint8_t* store, const uint32_t* base, Cursor& cu, int n, uint8_t* o, int room) const {
     for (int p = 0; p < n; ++p, o += 3) {
       float s[C][3], y[C], pw[C];
       for (int t = 0; t < C; ++t) {
-        const auto* v = reinterpret_cast<const int8_t*>(store + 2 * (int64_t(base[t]) + *cu.delta++));
+        const uint8_t* v = store + 2 * (int64_t(base[t]) + *cu.delta++);
         const uint32_t w = *cu.weight++;
         const int32_t w0 = w & 255, w1 = (w >> 8) & 255, w2 = (w >> 16) & 255, w3 = w >> 24;
-        for (int ch = 0; ch < 3; ++ch)  // the sample times 256
-          s[t][ch] = float(w0 * v[ch] + w1 * v[3 + ch] + w2 * v[6 + ch] + w3 * v[9 + ch] + 32768);
-        y[t] = (0.114f * s[t][0] + 0.587f * s[t][1] + 0.299f * s[t][2]) * (1.0f / (256.0f * 255.0f));
+        for (int ch = 0; ch < 3; ++ch)  // the sample times 128
+          s[t][ch] = float(w0 * v[ch] + w1 * v[3 + ch] + w2 * v[6 + ch] + w3 * v[9 + ch]);
+        y[t] = (0.114f * s[t][0] + 0.587f * s[t][1] + 0.299f * s[t][2]) * (1.0f / (128.0f * 255.0f));
         pw[t] = float(*cu.prior++ + 1);
       }
       float acc[3] = {0, 0, 0}, sum = 0;
@@ -74,13 +76,13 @@ struct SadKernel {
         sum += wi;
         for (int ch = 0; ch < 3; ++ch) acc[ch] += wi * s[i][ch];
       }
-      for (int ch = 0; ch < 3; ++ch) o[ch] = static_cast<uint8_t>(std::min(255.0f, acc[ch] / (sum * 256.0f) + 0.5f));
+      for (int ch = 0; ch < 3; ++ch) o[ch] = static_cast<uint8_t>(std::min(255.0f, acc[ch] / (sum * 128.0f) + 0.5f));
     }
   }
 };
 
-// Renders tiles t0..t1-1 (in this order) with kernel K into out (row step `step` bytes). Each tile
-// row is rendered into a small buffer, then copied to the output. While a tile renders, the store
+// Renders tiles t0..t1-1 (in this order) with kernel K into out (row step `step` bytes). While a
+// tile renders, the store
 // lines of the next one are prefetched, a slice per row. Measured with a prototype of this kernel
 // (prototype rig, mrf 1080x1080, one thread, best of 15): 4.5 ms rendering row by row without
 // prefetch, 3.0 ms by tiles prefetching each tile's lines at its start, 2.0 ms with the prefetch
@@ -100,28 +102,28 @@ inline void render_tiles(const K& kernel, const CompiledMap& map, const uint8_t*
     const uint32_t* base = map.base.data() + map.tile_base[t];
     Cursor cu{map.delta.data() + map.tile_tap[t], map.weight.data() + map.tile_tap[t],
               map.prior.empty() ? nullptr : map.prior.data() + map.tile_tap[t]};
-    alignas(64) uint8_t buf[3 * kTileW + 16];
     for (int r = 0; r < h; ++r, run += 2) {
       for (uint32_t a = pa + (pb - pa) * r / h; a < pa + (pb - pa) * (r + 1) / h; ++a)
         __builtin_prefetch(store + lines[a], 0, 3);
-      uint8_t* o = buf;
+      uint8_t* o = out + size_t(r0 + r) * step + 3 * size_t(c0);
+      int room = 3 * w;
       for (; run[1] != 0; run += 2) {
         const int n = run[1], c = run[0];
         switch (c) {
           case 0: std::memset(o, 0, 3 * size_t(n)); break;
-          case 1: kernel.template run<1>(store, base, cu, n, o); break;
-          case 2: kernel.template run<2>(store, base, cu, n, o); break;
-          case 3: kernel.template run<3>(store, base, cu, n, o); break;
-          case 4: kernel.template run<4>(store, base, cu, n, o); break;
-          case 5: kernel.template run<5>(store, base, cu, n, o); break;
-          case 6: kernel.template run<6>(store, base, cu, n, o); break;
-          case 7: kernel.template run<7>(store, base, cu, n, o); break;
-          default: kernel.template run<8>(store, base, cu, n, o); break;
+          case 1: kernel.template run<1>(store, base, cu, n, o, room); break;
+          case 2: kernel.template run<2>(store, base, cu, n, o, room); break;
+          case 3: kernel.template run<3>(store, base, cu, n, o, room); break;
+          case 4: kernel.template run<4>(store, base, cu, n, o, room); break;
+          case 5: kernel.template run<5>(store, base, cu, n, o, room); break;
+          case 6: kernel.template run<6>(store, base, cu, n, o, room); break;
+          case 7: kernel.template run<7>(store, base, cu, n, o, room); break;
+          default: kernel.template run<8>(store, base, cu, n, o, room); break;
         }
         base += c;
         o += 3 * n;
+        room -= 3 * n;
       }
-      std::memcpy(out + size_t(r0 + r) * step + 3 * size_t(c0), buf, 3 * size_t(w));
     }
   }
 }
@@ -135,35 +137,36 @@ void render_tiles_sad(const CompiledMap& map, const uint8_t* store, int t0, int 
 
 #ifdef OMMA_X86
 // The 16 bytes at a tap's offset: B G R of (x,y), (x,y+1), (x+1,y), (x+1,y+1), then 4 bytes of the
-// next pixel. Regrouped per channel: dword lanes B, G, R of the four neighbours (signed bytes) and
-// zero, matching the weight bytes (w(x,y), w(x,y+1), w(x+1,y), w(x+1,y+1)).
+// next pixel. Regrouped per channel: dword lanes B, G, R of the four neighbours and zero, matching
+// the weight bytes (w(x,y), w(x,y+1), w(x+1,y), w(x+1,y+1)).
 #define OMMA_REGROUP _mm_setr_epi8(0, 3, 6, 9, 1, 4, 7, 10, 2, 5, 8, 11, -1, -1, -1, -1)
 
 #pragma GCC push_options
 #pragma GCC target("avx2,fma,bmi,bmi2")
-// AVX2: pmaddubsw multiplies the weight bytes (unsigned) with the neighbours (signed) in pairs,
-// (w00 v00 + w01 v01, w10 v10 + w11 v11) per channel as 16-bit sums, added up in 16 bits: exact,
-// since the weights of a pixel sum to 256 and |v| <= 128, so every partial sum lies in
-// [-32768, 32512]. pmaddwd adds the pairs at the end of the pixel.
+// AVX2: pmaddubsw multiplies the neighbours (unsigned) with the weight bytes (signed, 0..127) in
+// pairs, (w00 v00 + w01 v01, w10 v10 + w11 v11) per channel as 16-bit sums, added up in 16 bits:
+// exact, since the weights of a pixel sum to 128, so every partial sum is at most 128 * 255.
+// pmaddwd adds the pairs at the end of the pixel.
 struct Avx2Kernel {
   template <int C>
-  static __m128i pixel(const uint8_t* store, const uint32_t* base, const int16_t*& d, const uint32_t*& w) {
+  static __m128i pixel(const uint8_t* const* p, const int16_t*& d, const uint32_t*& w) {
     const __m128i regroup = OMMA_REGROUP;
     __m128i acc = _mm_setzero_si128();
 #pragma GCC unroll 8
     for (int t = 0; t < C; ++t) {
-      const uint8_t* a = store + 2 * (int64_t(base[t]) + *d++);
-      const __m128i v = _mm_shuffle_epi8(_mm_loadu_si128(reinterpret_cast<const __m128i*>(a)), regroup);
-      acc = _mm_add_epi16(acc, _mm_maddubs_epi16(_mm_set1_epi32(int(*w++)), v));
+      const __m128i v = _mm_shuffle_epi8(_mm_loadu_si128(reinterpret_cast<const __m128i*>(p[t] + 2 * ptrdiff_t(*d++))), regroup);
+      acc = _mm_add_epi16(acc, _mm_maddubs_epi16(v, _mm_set1_epi32(int(*w++))));
     }
-    return _mm_add_epi32(_mm_madd_epi16(acc, _mm_set1_epi16(1)), _mm_setr_epi32(32896, 32896, 32896, 0));
+    return _mm_srli_epi32(_mm_add_epi32(_mm_madd_epi16(acc, _mm_set1_epi16(1)), _mm_set1_epi32(64)), 7);
   }
   template <int C>
-  void run(const uint8_t* store, const uint32_t* base, Cursor& cu, int n, uint8_t* o) const {
-    const __m128i pick = _mm_setr_epi8(1, 5, 9, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1);
-    for (int p = 0; p < n; ++p, o += 3) {
-      const uint32_t v = uint32_t(_mm_cvtsi128_si32(_mm_shuffle_epi8(pixel<C>(store, base, cu.delta, cu.weight), pick)));
-      std::memcpy(o, &v, 4);
+  void run(const uint8_t* store, const uint32_t* base, Cursor& cu, int n, uint8_t* o, int room) const {
+    const __m128i pick = _mm_setr_epi8(0, 4, 8, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1);
+    const uint8_t* p[C];  // the run's start neighbourhoods
+    for (int t = 0; t < C; ++t) p[t] = store + 2 * size_t(base[t]);
+    for (int i = 0; i < n; ++i, o += 3, room -= 3) {
+      const uint32_t v = uint32_t(_mm_cvtsi128_si32(_mm_shuffle_epi8(pixel<C>(p, cu.delta, cu.weight), pick)));
+      std::memcpy(o, &v, room >= 4 ? 4 : 3);
     }
   }
 };
@@ -175,40 +178,44 @@ __attribute__((flatten)) void render_tiles_avx2(const CompiledMap& map, const ui
 
 #pragma GCC push_options
 #pragma GCC target("avx512f,avx512vl,avx512bw,avx512vnni,avx2,fma,bmi,bmi2")
-// AVX-512 VNNI: vpdpbusd multiplies the four weight bytes (unsigned) with the four neighbours of
-// one channel (signed) and adds them to that channel's 32-bit sum in one instruction; four pixels
-// are packed into one 16-byte store. Six instructions per tap in the compiled loop (offset delta
-// load and add, 16-byte load, pshufb, weight broadcast, vpdpbusd).
+// AVX-512 VNNI: vpdpbusd multiplies the four neighbours of one channel (unsigned) with the four
+// weight bytes (signed, 0..127, broadcast from memory) and adds them to that channel's 32-bit sum:
+// four instructions per tap in the compiled loop (offset delta load, 16-byte load, pshufb,
+// vpdpbusd); four pixels are packed into one 16-byte store.
 struct VnniKernel {
   template <int C>
-  static __m128i pixel(const uint8_t* store, const uint32_t* base, const int16_t*& d, const uint32_t*& w) {
+  static __m128i pixel(const uint8_t* const* p, const int16_t*& d, const uint32_t*& w) {
     const __m128i regroup = OMMA_REGROUP;
-    __m128i acc = _mm_setr_epi32(32896, 32896, 32896, 0);
+    __m128i acc = _mm_setr_epi32(64, 64, 64, 0);
 #pragma GCC unroll 8
     for (int t = 0; t < C; ++t) {
-      const uint8_t* a = store + 2 * (int64_t(base[t]) + *d++);
-      const __m128i v = _mm_shuffle_epi8(_mm_loadu_si128(reinterpret_cast<const __m128i*>(a)), regroup);
-      acc = _mm_dpbusd_epi32(acc, _mm_set1_epi32(int(*w++)), v);
+      const __m128i v = _mm_shuffle_epi8(_mm_loadu_si128(reinterpret_cast<const __m128i*>(p[t] + 2 * ptrdiff_t(*d++))), regroup);
+      // acc += the four products per channel, the weights broadcast from memory ({1to4}; GCC 12
+      // does not fold _mm_set1_epi32 into the instruction by itself)
+      asm("vpdpbusd %2%{1to4%}, %1, %0" : "+v"(acc) : "v"(v), "m"(*w));
+      ++w;
     }
-    return acc;  // the output bytes are byte 1 of lanes 0, 1, 2
+    return acc;  // B, G, R (times 128, rounding added), 0
   }
   template <int C>
-  void run(const uint8_t* store, const uint32_t* base, Cursor& cu, int n, uint8_t* o) const {
-    const __m128i p0 = _mm_setr_epi8(1, 5, 9, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1);
-    const __m128i p1 = _mm_setr_epi8(-1, -1, -1, 1, 5, 9, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1);
-    const __m128i p2 = _mm_setr_epi8(-1, -1, -1, -1, -1, -1, 1, 5, 9, -1, -1, -1, -1, -1, -1, -1);
-    const __m128i p3 = _mm_setr_epi8(-1, -1, -1, -1, -1, -1, -1, -1, -1, 1, 5, 9, -1, -1, -1, -1);
-    int p = 0;
-    for (; p + 4 <= n; p += 4, o += 12) {
-      const __m128i a0 = pixel<C>(store, base, cu.delta, cu.weight), a1 = pixel<C>(store, base, cu.delta, cu.weight);
-      const __m128i a2 = pixel<C>(store, base, cu.delta, cu.weight), a3 = pixel<C>(store, base, cu.delta, cu.weight);
-      const __m128i r = _mm_or_si128(_mm_or_si128(_mm_shuffle_epi8(a0, p0), _mm_shuffle_epi8(a1, p1)),
-                                     _mm_or_si128(_mm_shuffle_epi8(a2, p2), _mm_shuffle_epi8(a3, p3)));
-      _mm_storeu_si128(reinterpret_cast<__m128i*>(o), r);
+  void run(const uint8_t* store, const uint32_t* base, Cursor& cu, int n, uint8_t* o, int room) const {
+    // 4 pixels: dwords to words (saturation never applies: at most 128 * 255 + 64), shift, to bytes
+    // B G R 0 per pixel, then the zero bytes squeezed out.
+    const __m128i squeeze = _mm_setr_epi8(0, 1, 2, 4, 5, 6, 8, 9, 10, 12, 13, 14, -1, -1, -1, -1);
+    const __m128i pick = _mm_setr_epi8(0, 4, 8, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1);
+    const uint8_t* p[C];  // the run's start neighbourhoods
+    for (int t = 0; t < C; ++t) p[t] = store + 2 * size_t(base[t]);
+    int i = 0;
+    for (; i + 4 <= n && room >= 16; i += 4, o += 12, room -= 12) {
+      const __m128i a0 = pixel<C>(p, cu.delta, cu.weight), a1 = pixel<C>(p, cu.delta, cu.weight);
+      const __m128i a2 = pixel<C>(p, cu.delta, cu.weight), a3 = pixel<C>(p, cu.delta, cu.weight);
+      const __m128i lo = _mm_srli_epi16(_mm_packus_epi32(a0, a1), 7), hi = _mm_srli_epi16(_mm_packus_epi32(a2, a3), 7);
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(o), _mm_shuffle_epi8(_mm_packus_epi16(lo, hi), squeeze));
     }
-    for (; p < n; ++p, o += 3) {
-      const uint32_t v = uint32_t(_mm_cvtsi128_si32(_mm_shuffle_epi8(pixel<C>(store, base, cu.delta, cu.weight), p0)));
-      std::memcpy(o, &v, 4);
+    for (; i < n; ++i, o += 3, room -= 3) {
+      const __m128i a = _mm_srli_epi32(pixel<C>(p, cu.delta, cu.weight), 7);
+      const uint32_t v = uint32_t(_mm_cvtsi128_si32(_mm_shuffle_epi8(a, pick)));
+      std::memcpy(o, &v, room >= 4 ? 4 : 3);
     }
   }
 };

@@ -123,7 +123,7 @@ TEST(EngineRender, SimdKernelsAreBitIdenticalToScalarKernelAndThreadCountDoesNot
   }
 }
 
-// The scalar kernel is the definition of the map's arithmetic: (sum of w * v + 128) >> 8 over the
+// The scalar kernel is the definition of the map's arithmetic: (sum of w * v + 64) >> 7 over the
 // four neighbours of every tap, checked here against that formula written out from visit().
 TEST(EngineRender, ScalarKernelComputesTheMapsFormula) {
   const Rig rig = ring_rig_24();
@@ -138,7 +138,7 @@ TEST(EngineRender, ScalarKernelComputesTheMapsFormula) {
   cv::Mat expect(map.height, map.width, CV_8UC3, cv::Scalar::all(0));
   const StoreLayout& L = map.layout;
   map.visit([&](int col, int row, int n, const MapTap* taps) {
-    int acc[3] = {128, 128, 128};
+    int acc[3] = {64, 64, 64};
     for (int t = 0; t < n; ++t) {
       const int c = L.camera_at(taps[t].offset);
       const size_t rel = taps[t].offset - L.offset(c, 0, 0);
@@ -151,12 +151,12 @@ TEST(EngineRender, ScalarKernelComputesTheMapsFormula) {
         acc[ch] += taps[t].w[0] * at(x, y, ch) + taps[t].w[1] * at(x, y + 1, ch) +
                    (taps[t].w[2] ? taps[t].w[2] * at(x + 1, y, ch) : 0) + (taps[t].w[3] ? taps[t].w[3] * at(x + 1, y + 1, ch) : 0);
     }
-    for (int ch = 0; ch < 3; ++ch) expect.at<cv::Vec3b>(row, col)[ch] = n ? uint8_t(acc[ch] >> 8) : 0;
+    for (int ch = 0; ch < 3; ++ch) expect.at<cv::Vec3b>(row, col)[ch] = n ? uint8_t(acc[ch] >> 7) : 0;
   });
   EXPECT_EQ(cv::norm(fast, expect, cv::NORM_INF), 0.0);
 }
 
-TEST(EngineMap, WeightsSumTo256AndBytesPerPixelIsCompact) {
+TEST(EngineMap, WeightsSumTo128AndBytesPerPixelIsCompact) {
   const Rig rig = ring_rig_24();
   for (pano::Method m : {pano::Method::kNearest, pano::Method::kLinear}) {
     MapOptions opt;
@@ -172,13 +172,15 @@ TEST(EngineMap, WeightsSumTo256AndBytesPerPixelIsCompact) {
         ASSERT_GT(taps[t].weight(), 0);
         ASSERT_LE(taps[t].offset + 16, map.layout.bytes());
       }
-      ASSERT_TRUE(n == 0 || sum == 256) << "pixel " << pixels;
+      ASSERT_TRUE(n == 0 || sum == 128) << "pixel " << pixels;
       k += n;
       ++pixels;
     });
     EXPECT_EQ(pixels, size_t(map.width) * map.height);
     EXPECT_EQ(k, map.taps());
-    if (m == pano::Method::kNearest) EXPECT_EQ(map.taps(), pixels);  // one tap per pixel
+    if (m == pano::Method::kNearest) {
+      EXPECT_EQ(map.taps(), pixels);  // one tap per pixel
+    }
     // 6 bytes per tap (int16 offset delta + 4 weight bytes), 2 per run, 4 per run and tap for the
     // run's start offsets, 4 per prefetched line, 16 per tile.
     EXPECT_EQ(map.bytes(), 6 * map.taps() + map.runs.size() + 4 * map.base.size() + 4 * map.lines.size() +
@@ -203,7 +205,7 @@ TEST(EngineMap, BytesPerPixelAt1080x1080) {
   }
 }
 
-// MapOptions::min_weight: the faint mrf taps go, the rest still sum to 256, the map shrinks by a
+// MapOptions::min_weight: the faint mrf taps go, the rest still sum to 128, the map shrinks by a
 // fifth or more (12 bytes per pixel at 1080x1080: EngineMap.BytesPerPixelAt1080x1080) and the
 // output stays within 50 dB of the all-taps reference, on the thesis prototype rig.
 TEST(EngineMap, MinWeightDropsFaintTapsWithinTheReferencePsnr) {
@@ -225,9 +227,9 @@ TEST(EngineMap, MinWeightDropsFaintTapsWithinTheReferencePsnr) {
     int sum = 0;
     for (int t = 0; t < n; ++t) {
       sum += taps[t].weight();
-      faint += taps[t].weight() < 8;  // 8/256 = 1/32: renormalising only raises the kept weights
+      faint += taps[t].weight() < 4;  // 4/128 = 1/32: renormalising only raises the kept weights
     }
-    ASSERT_TRUE(n == 0 || sum == 256) << "pixel " << col << "," << row;
+    ASSERT_TRUE(n == 0 || sum == 128) << "pixel " << col << "," << row;
   });
   EXPECT_EQ(faint, 0);
   EXPECT_NE(map_key(rig, all), map_key(rig, pruned));
