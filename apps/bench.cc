@@ -22,13 +22,18 @@ void add_bench_command(CLI::App& root) {
     std::string rig, save_rig;
     bool json = false, quick = false;
     double seconds = 0.5;
+    int rounds = 5;
     std::vector<std::string> only;
   };
   static Opts o;
   cmd->add_option("--rig", o.rig, "Rig file (JSON); default: the thesis prototype, 24 cameras 250x250, 64 deg");
   cmd->add_option("--save-rig", o.save_rig, "Also write the rig used to this file (JSON)");
-  cmd->add_option("--seconds", o.seconds, "Minimum measuring time per workload, seconds (default 0.5)")
+  cmd->add_option("--seconds", o.seconds, "Minimum measuring time per workload in all, seconds (default 0.5)")
       ->check(CLI::Range(0.01, 60.0));
+  cmd->add_option("--rounds", o.rounds,
+                  "Measure the workloads in turn, this many slices each, so that a drifting machine "
+                  "speed affects ours and the peers alike (default 5)")
+      ->check(CLI::Range(1, 100));
   cmd->add_option("--only", o.only, "Run only workloads whose name contains one of these strings");
   cmd->add_flag("--quick", o.quick, "Small panoramas (216x216, 384x102) for smoke tests");
   cmd->add_flag("--json", o.json,
@@ -40,6 +45,7 @@ void add_bench_command(CLI::App& root) {
     if (!o.save_rig.empty()) save_rig(rig, o.save_rig);
     engine::BenchOptions bo;
     bo.min_seconds = o.seconds;
+    bo.rounds = o.rounds;
     bo.quick = o.quick;
     bo.only = o.only;
     std::vector<std::string> skipped;

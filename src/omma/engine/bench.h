@@ -54,11 +54,15 @@ struct BenchEntry {
   nlohmann::json info;
 };
 struct BenchOptions {
-  double min_seconds = 0.5;       // per workload
+  double min_seconds = 0.5;       // per workload, in all
+  int rounds = 5;                 // the workloads are measured in turn, this many slices each
   bool quick = false;             // small sizes (tests)
   std::vector<std::string> only;  // substrings of names to run; empty = all
 };
-// The whole suite of point 4 on the thesis prototype rig (or `rig` if it has cameras).
+// The whole suite of point 4 on the thesis prototype rig (or `rig` if it has cameras). All
+// workloads are set up first, then measured in `rounds` interleaved slices of min_seconds / rounds
+// each (after one untimed frame per slice), so that a machine whose speed drifts (shared cores,
+// other tenants) slows ours and the peers alike and the ratios stay comparable.
 std::vector<BenchEntry> run_bench_suite(const Rig& rig, const BenchOptions& opt,
                                         std::vector<std::string>* skipped = nullptr);
 
