@@ -142,6 +142,33 @@ void render_tiles_sad(const CompiledMap& map, const uint8_t* store, int t0, int 
 #define OMMA_REGROUP _mm_setr_epi8(0, 3, 6, 9, 1, 4, 7, 10, 2, 5, 8, 11, -1, -1, -1, -1)
 
 #pragma GCC push_options
+#pragma GCC target("ssse3,sse4.1")
+// The SIMD kernels' run loop, around K::pixel<C>(start pointers, deltas, weights): one output
+// pixel as the dwords B, G, R, 0 (each 0..255). Four pixels are packed into one 16-byte store.
+template <class K>
+struct SimdRun {
+  template <int C>
+  void run(const uint8_t* store, const uint32_t* base, Cursor& cu, int n, uint8_t* o, int room) const {
+    const __m128i squeeze = _mm_setr_epi8(0, 1, 2, 4, 5, 6, 8, 9, 10, 12, 13, 14, -1, -1, -1, -1);
+    const __m128i pick = _mm_setr_epi8(0, 4, 8, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1);
+    const uint8_t* p[C];  // the run's start neighbourhoods
+    for (int t = 0; t < C; ++t) p[t] = store + 2 * size_t(base[t]);
+    int i = 0;
+    for (; i + 4 <= n && room >= 16; i += 4, o += 12, room -= 12) {
+      const __m128i a0 = K::template pixel<C>(p, cu.delta, cu.weight), a1 = K::template pixel<C>(p, cu.delta, cu.weight);
+      const __m128i a2 = K::template pixel<C>(p, cu.delta, cu.weight), a3 = K::template pixel<C>(p, cu.delta, cu.weight);
+      const __m128i bytes = _mm_packus_epi16(_mm_packus_epi32(a0, a1), _mm_packus_epi32(a2, a3));  // B G R 0 x 4
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(o), _mm_shuffle_epi8(bytes, squeeze));
+    }
+    for (; i < n; ++i, o += 3, room -= 3) {
+      const uint32_t v = uint32_t(_mm_cvtsi128_si32(_mm_shuffle_epi8(K::template pixel<C>(p, cu.delta, cu.weight), pick)));
+      std::memcpy(o, &v, room >= 4 ? 4 : 3);
+    }
+  }
+};
+#pragma GCC pop_options
+
+#pragma GCC push_options
 #pragma GCC target("avx2,fma,bmi,bmi2")
 // AVX2: pmaddubsw multiplies the neighbours (unsigned) with the weight bytes (signed, 0..127) in
 // pairs, (w00 v00 + w01 v01, w10 v10 + w11 v11) per channel as 16-bit sums, added up in 16 bits:
@@ -159,20 +186,10 @@ struct Avx2Kernel {
     }
     return _mm_srli_epi32(_mm_add_epi32(_mm_madd_epi16(acc, _mm_set1_epi16(1)), _mm_set1_epi32(64)), 7);
   }
-  template <int C>
-  void run(const uint8_t* store, const uint32_t* base, Cursor& cu, int n, uint8_t* o, int room) const {
-    const __m128i pick = _mm_setr_epi8(0, 4, 8, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1);
-    const uint8_t* p[C];  // the run's start neighbourhoods
-    for (int t = 0; t < C; ++t) p[t] = store + 2 * size_t(base[t]);
-    for (int i = 0; i < n; ++i, o += 3, room -= 3) {
-      const uint32_t v = uint32_t(_mm_cvtsi128_si32(_mm_shuffle_epi8(pixel<C>(p, cu.delta, cu.weight), pick)));
-      std::memcpy(o, &v, room >= 4 ? 4 : 3);
-    }
-  }
 };
 __attribute__((flatten)) void render_tiles_avx2(const CompiledMap& map, const uint8_t* store, int t0, int t1,
                                                 uint8_t* out, size_t step, bool pf) {
-  render_tiles(Avx2Kernel{}, map, store, t0, t1, out, step, pf);
+  render_tiles(SimdRun<Avx2Kernel>{}, map, store, t0, t1, out, step, pf);
 }
 #pragma GCC pop_options
 
@@ -180,8 +197,8 @@ __attribute__((flatten)) void render_tiles_avx2(const CompiledMap& map, const ui
 #pragma GCC target("avx512f,avx512vl,avx512bw,avx512vnni,avx2,fma,bmi,bmi2")
 // AVX-512 VNNI: vpdpbusd multiplies the four neighbours of one channel (unsigned) with the four
 // weight bytes (signed, 0..127, broadcast from memory) and adds them to that channel's 32-bit sum:
-// four instructions per tap in the compiled loop (offset delta load, 16-byte load, pshufb,
-// vpdpbusd); four pixels are packed into one 16-byte store.
+// four instructions per tap in the compiled loop (offset delta load, 16-byte load addressed from
+// the run's start pointer, pshufb, vpdpbusd).
 struct VnniKernel {
   template <int C>
   static __m128i pixel(const uint8_t* const* p, const int16_t*& d, const uint32_t*& w) {
@@ -195,33 +212,12 @@ struct VnniKernel {
       asm("vpdpbusd %2%{1to4%}, %1, %0" : "+v"(acc) : "v"(v), "m"(*w));
       ++w;
     }
-    return acc;  // B, G, R (times 128, rounding added), 0
-  }
-  template <int C>
-  void run(const uint8_t* store, const uint32_t* base, Cursor& cu, int n, uint8_t* o, int room) const {
-    // 4 pixels: dwords to words (saturation never applies: at most 128 * 255 + 64), shift, to bytes
-    // B G R 0 per pixel, then the zero bytes squeezed out.
-    const __m128i squeeze = _mm_setr_epi8(0, 1, 2, 4, 5, 6, 8, 9, 10, 12, 13, 14, -1, -1, -1, -1);
-    const __m128i pick = _mm_setr_epi8(0, 4, 8, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1);
-    const uint8_t* p[C];  // the run's start neighbourhoods
-    for (int t = 0; t < C; ++t) p[t] = store + 2 * size_t(base[t]);
-    int i = 0;
-    for (; i + 4 <= n && room >= 16; i += 4, o += 12, room -= 12) {
-      const __m128i a0 = pixel<C>(p, cu.delta, cu.weight), a1 = pixel<C>(p, cu.delta, cu.weight);
-      const __m128i a2 = pixel<C>(p, cu.delta, cu.weight), a3 = pixel<C>(p, cu.delta, cu.weight);
-      const __m128i lo = _mm_srli_epi16(_mm_packus_epi32(a0, a1), 7), hi = _mm_srli_epi16(_mm_packus_epi32(a2, a3), 7);
-      _mm_storeu_si128(reinterpret_cast<__m128i*>(o), _mm_shuffle_epi8(_mm_packus_epi16(lo, hi), squeeze));
-    }
-    for (; i < n; ++i, o += 3, room -= 3) {
-      const __m128i a = _mm_srli_epi32(pixel<C>(p, cu.delta, cu.weight), 7);
-      const uint32_t v = uint32_t(_mm_cvtsi128_si32(_mm_shuffle_epi8(a, pick)));
-      std::memcpy(o, &v, room >= 4 ? 4 : 3);
-    }
+    return _mm_srli_epi32(acc, 7);
   }
 };
 __attribute__((flatten)) void render_tiles_vnni(const CompiledMap& map, const uint8_t* store, int t0, int t1,
                                                 uint8_t* out, size_t step, bool pf) {
-  render_tiles(VnniKernel{}, map, store, t0, t1, out, step, pf);
+  render_tiles(SimdRun<VnniKernel>{}, map, store, t0, t1, out, step, pf);
 }
 #pragma GCC pop_options
 #undef OMMA_REGROUP
