@@ -7,6 +7,7 @@
 #include <numeric>
 #include <stdexcept>
 
+#include <Eigen/Eigenvalues>
 #include <ceres/ceres.h>
 #include <ceres/rotation.h>
 #include <fmt/format.h>
@@ -35,6 +36,7 @@ void project_camera_point(const T* fcc, const T* k, const T* p, T* px) {
 // Far field: the scene point is a unit direction s (dome frame).
 struct FarCost {
   Vec2 obs;
+  Eigen::Matrix2d wt;  // residual whitening (TrackObservation::weight)
   Mat3 r_nom;
   template <typename T>
   bool operator()(const T* delta, const T* fcc, const T* k, const T* s, T* res) const {
@@ -43,8 +45,9 @@ struct FarCost {
     ceres::AngleAxisRotatePoint(delta, p0, p);
     if (p[0] < T(1e-3)) p[0] = T(1e-3);  // behind the camera: clamp (see NearCost)
     project_camera_point(fcc, k, p, px);
-    res[0] = px[0] - T(obs.x());
-    res[1] = px[1] - T(obs.y());
+    const T e0 = px[0] - T(obs.x()), e1 = px[1] - T(obs.y());
+    res[0] = T(wt(0, 0)) * e0 + T(wt(0, 1)) * e1;
+    res[1] = T(wt(1, 0)) * e0 + T(wt(1, 1)) * e1;
     return true;
   }
 };
@@ -52,6 +55,7 @@ struct FarCost {
 // Near field: homogeneous scene point X = (P, h), camera centre c fixed: w = P - h c.
 struct NearCost {
   Vec2 obs;
+  Eigen::Matrix2d wt;  // residual whitening (TrackObservation::weight)
   Mat3 r_nom;
   Vec3 c;
   template <typename T>
@@ -65,8 +69,9 @@ struct NearCost {
     const T n = ceres::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]) + T(1e-12);
     if (p[0] < T(1e-3) * n) p[0] = T(1e-3) * n;
     project_camera_point(fcc, k, p, px);
-    res[0] = px[0] - T(obs.x());
-    res[1] = px[1] - T(obs.y());
+    const T e0 = px[0] - T(obs.x()), e1 = px[1] - T(obs.y());
+    res[0] = T(wt(0, 0)) * e0 + T(wt(0, 1)) * e1;
+    res[1] = T(wt(1, 0)) * e0 + T(wt(1, 1)) * e1;
     return true;
   }
 };
@@ -222,16 +227,19 @@ CalibrationResult solve_tracks(const Rig& nominal, const Rig& start, std::vector
     }
   }
 
-  auto evaluate = [&](std::vector<double>* err2) {
+  // Squared reprojection errors, in pixels (weighted = false) or whitened (the solver's units).
+  auto evaluate = [&](std::vector<double>* err2, bool weighted = false) {
     err2->clear();
+    const Eigen::Matrix2d id = Eigen::Matrix2d::Identity();
     for (size_t ti = 0; ti < tracks.size(); ++ti)
       for (const auto& o : tracks[ti]) {
         double r[2] = {1e3, 1e3};
         const int i = o.cam;
         const Vec2 obs = o.px;
+        const Eigen::Matrix2d& w = weighted ? o.weight : id;
         bool ok;
-        if (near) ok = NearCost{obs, r_nom[i], nominal.cameras[i].position_mm}(delta[i].data(), fcc_block(i), k_block(i), points[ti].data(), r);
-        else ok = FarCost{obs, r_nom[i]}(delta[i].data(), fcc_block(i), k_block(i), points[ti].data(), r);
+        if (near) ok = NearCost{obs, w, r_nom[i], nominal.cameras[i].position_mm}(delta[i].data(), fcc_block(i), k_block(i), points[ti].data(), r);
+        else ok = FarCost{obs, w, r_nom[i]}(delta[i].data(), fcc_block(i), k_block(i), points[ti].data(), r);
         err2->push_back(ok ? r[0] * r[0] + r[1] * r[1] : 1e6);
       }
   };
@@ -283,10 +291,10 @@ CalibrationResult solve_tracks(const Rig& nominal, const Rig& start, std::vector
         const int i = o.cam;
         if (near) {
           auto* cost = new ceres::AutoDiffCostFunction<NearCost, 2, 3, 4, 5, 4>(
-              new NearCost{o.px, r_nom[i], nominal.cameras[i].position_mm});
+              new NearCost{o.px, o.weight, r_nom[i], nominal.cameras[i].position_mm});
           problem.AddResidualBlock(cost, make_loss(), delta[i].data(), fcc_block(i), k_block(i), points[ti].data());
         } else {
-          auto* cost = new ceres::AutoDiffCostFunction<FarCost, 2, 3, 4, 5, 3>(new FarCost{o.px, r_nom[i]});
+          auto* cost = new ceres::AutoDiffCostFunction<FarCost, 2, 3, 4, 5, 3>(new FarCost{o.px, o.weight, r_nom[i]});
           problem.AddResidualBlock(cost, make_loss(), delta[i].data(), fcc_block(i), k_block(i), points[ti].data());
         }
       }
@@ -355,7 +363,7 @@ CalibrationResult solve_tracks(const Rig& nominal, const Rig& start, std::vector
       // doubled the errors (model check: 0.21 instead of 0.07 deg at 0.05 px noise; colon: focal
       // error 0.92 % instead of 0.50 %); the robust loss keeps real outliers in check until here.
       std::vector<double> e2;
-      evaluate(&e2);
+      evaluate(&e2, true);
       const double thr2 = opt.outlier_px * opt.outlier_px;
       size_t idx = 0;
       for (size_t ti = 0; ti < tracks.size(); ++ti)
@@ -529,6 +537,147 @@ std::vector<std::vector<TrackObservation>> refine_tracks(const Rig& rig, const s
   return out;
 }
 
+
+// A whitening matrix W = scale * Sigma^-1/2 (eigenvalues of Sigma floored at floor_px^2).
+Eigen::Matrix2d whitening(const Eigen::Matrix2d& cov, double scale, double floor_px) {
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> es(cov);
+  const Eigen::Vector2d ev = es.eigenvalues().cwiseMax(floor_px * floor_px);
+  return scale * (es.eigenvectors() * ev.cwiseSqrt().cwiseInverse().asDiagonal() * es.eigenvectors().transpose());
+}
+
+// Dense guided correspondences (near field, after the first solve). Every keypoint of every camera
+// is a candidate reference pixel, not only the matched ones: its depth is the median depth of the
+// current solution's scene points observed nearest to it in the same camera, its plane normal comes
+// from their 3D neighbours, and the current model predicts where it lies in every other camera.
+// A candidate is used in the one camera (of those that see it) where it lies nearest the principal
+// point, so that one region of the wall is one reference patch; every other camera that sees it
+// is a target of the ECC alignment (subpixel.h), started from the plane homography. Each aligned
+// observation gets the whitening of its covariance (AlignInfo), scaled so that the median
+// observation weighs 1, floored at weight_floor times the median sigma.
+std::vector<std::vector<TrackObservation>> dense_tracks(const Rig& rig, const std::vector<cv::Mat>& gray,
+                                                        const std::vector<CameraFeatures>& feats, const SolveState& st,
+                                                        const CalibrationOptions& opt, int* attempted, int* refined) {
+  const int n = static_cast<int>(rig.cameras.size());
+  const SubpixelOptions& so = opt.dense_subpixel;
+  std::vector<CameraModel> model(n);
+  for (int i = 0; i < n; ++i) model[i] = rig.cameras[i].model();
+  // Scene points of the solution (finite ones) and, per camera, where it observed them.
+  std::vector<Vec3> pts;
+  struct Seen {
+    Vec2 px;
+    int point;
+  };
+  std::vector<std::vector<Seen>> seen(n);
+  for (size_t ti = 0; ti < st.tracks.size(); ++ti) {
+    const auto& p = st.points[ti];
+    if (std::abs(p[3]) < 1e-9) continue;
+    const Vec3 x = Vec3(p[0], p[1], p[2]) / p[3];
+    const int id = static_cast<int>(pts.size());
+    pts.push_back(x);
+    for (const auto& o : st.tracks[ti]) seen[o.cam].push_back({o.px, id});
+  }
+  const int half = so.patch_px / 2;
+  const double margin = half + 2;
+  struct Job {
+    TrackObservation ref;
+    Vec3 x, normal;
+    std::vector<int> targets;
+  };
+  std::vector<Job> jobs;
+  for (int a = 0; a < n; ++a) {
+    const RigCamera& ca = rig.cameras[a];
+    if (seen[a].size() < 3) continue;
+    for (const Vec2& q : feats[a].px) {
+      if (q.x() < margin || q.y() < margin || q.x() > ca.in.width - margin || q.y() > ca.in.height - margin) continue;
+      // The nearest observed scene points in this camera.
+      std::vector<std::pair<double, int>> d;
+      d.reserve(seen[a].size());
+      for (const Seen& sp : seen[a]) d.emplace_back((sp.px - q).squaredNorm(), sp.point);
+      const int k = std::min<int>(opt.dense_neighbours, static_cast<int>(d.size()));
+      std::partial_sort(d.begin(), d.begin() + k, d.end());
+      if (d[0].first > opt.dense_max_gap_px * opt.dense_max_gap_px) continue;
+      std::vector<double> depth;
+      for (int j = 0; j < k; ++j)
+        if (d[j].first <= 4 * d[0].first + 100) depth.push_back((pts[d[j].second] - ca.position_mm).norm());
+      std::nth_element(depth.begin(), depth.begin() + depth.size() / 2, depth.end());
+      const Vec3 ray = model[a].unproject(q);
+      const Vec3 x = ca.position_mm + depth[depth.size() / 2] * ray;
+      // Plane normal: smallest principal axis of the neighbours (the ray when degenerate).
+      Vec3 normal = -ray;
+      if (k >= 4) {
+        Vec3 mean = Vec3::Zero();
+        for (int j = 0; j < k; ++j) mean += pts[d[j].second];
+        mean /= k;
+        Mat3 cov = Mat3::Zero();
+        for (int j = 0; j < k; ++j) cov += (pts[d[j].second] - mean) * (pts[d[j].second] - mean).transpose();
+        Eigen::SelfAdjointEigenSolver<Mat3> es(cov);
+        if (es.eigenvalues()(0) < 0.2 * es.eigenvalues()(1)) normal = es.eigenvectors().col(0);
+      }
+      // Reference camera: where the point lies nearest the principal point.
+      const double ra = (q - Vec2(ca.in.cu, ca.in.cv)).norm() / ca.in.fu;
+      Job job{{a, q}, x, normal, {}};
+      bool is_ref = true;
+      for (int b = 0; b < n && is_ref; ++b) {
+        if (b == a) continue;
+        const RigCamera& cb = rig.cameras[b];
+        const Vec3 w = x - cb.position_mm;
+        if (!model[b].sees(w)) continue;
+        const auto pb = model[b].project(w);
+        if (!pb || pb->x() < margin || pb->y() < margin || pb->x() > cb.in.width - margin ||
+            pb->y() > cb.in.height - margin)
+          continue;
+        if ((*pb - Vec2(cb.in.cu, cb.in.cv)).norm() / cb.in.fu < ra) is_ref = false;
+        job.targets.push_back(b);
+      }
+      if (is_ref && !job.targets.empty()) jobs.push_back(std::move(job));
+    }
+  }
+  struct Aligned {
+    TrackObservation obs;
+    Eigen::Matrix2d cov;
+  };
+  std::vector<std::vector<Aligned>> done(jobs.size());
+  cv::parallel_for_(cv::Range(0, static_cast<int>(jobs.size())), [&](const cv::Range& r) {
+    for (int k = r.start; k < r.end; ++k) {
+      const Job& job = jobs[k];
+      for (int b : job.targets) {
+        Eigen::Matrix3d h;
+        if (!plane_homography(rig.cameras[job.ref.cam], rig.cameras[b], job.ref.px, job.x, job.normal, half, &h))
+          continue;
+        AlignInfo info;
+        const auto p = align_patch(gray[job.ref.cam], job.ref.px, gray[b], h, so, &info);
+        if (p) done[k].push_back({{b, *p}, info.covariance});
+      }
+    }
+  });
+  std::vector<double> sig;
+  for (size_t k = 0; k < jobs.size(); ++k) {
+    *attempted += static_cast<int>(jobs[k].targets.size());
+    *refined += static_cast<int>(done[k].size());
+    for (const Aligned& al : done[k]) sig.push_back(std::sqrt(0.5 * al.cov.trace()));
+  }
+  std::vector<std::vector<TrackObservation>> out;
+  if (sig.empty()) return out;
+  std::nth_element(sig.begin(), sig.begin() + sig.size() / 2, sig.end());
+  const double msig = sig[sig.size() / 2];
+  for (size_t k = 0; k < jobs.size(); ++k) {
+    if (done[k].empty()) continue;
+    std::vector<TrackObservation> t;
+    TrackObservation ref = jobs[k].ref;
+    ref.weight = opt.dense_reference_weight * Eigen::Matrix2d::Identity();
+    t.push_back(ref);
+    for (Aligned& al : done[k]) {
+      al.obs.weight = opt.dense_weighting ? whitening(al.cov, msig, opt.dense_weight_floor * msig)
+                                          : Eigen::Matrix2d::Identity();
+      t.push_back(al.obs);
+    }
+    out.push_back(std::move(t));
+  }
+  spdlog::info("calibrate: dense refinement: {} reference patches, {} of {} alignments, median sigma {:.3f} px",
+               out.size(), *refined, *attempted, msig);
+  return out;
+}
+
 }  // namespace
 
 CalibrationResult calibrate_rig(const Rig& nominal, const std::vector<cv::Mat>& frames,
@@ -586,7 +735,7 @@ CalibrationResult calibrate_rig(const Rig& nominal, const std::vector<cv::Mat>& 
     res.warnings.push_back(
         "near-field scene (parallax): scene points with camera positions fixed at nominal; the mean focal length "
         "is held at the nominal one (prior, the focal/depth ambiguity) and principal point trades against "
-        "rotation (on the simulated colon: ~0.6 deg, ~0.5-1.4 % focal, ~2.6 px centre errors, panorama as good as "
+        "rotation (on the simulated colon: ~0.5 deg, ~0.7-1.1 % focal, ~2 px centre errors, panorama as good as "
         "with the true rig); prefer a far-field calibration scene for accurate intrinsics");
     spdlog::warn("calibrate: {}", res.warnings.back());
   }
@@ -633,13 +782,17 @@ CalibrationResult calibrate_rig(const Rig& nominal, const std::vector<cv::Mat>& 
   res = solve_tracks(nominal, nominal, std::move(tracks), scene, opt, std::move(res), &st);
   if (opt.refine_rounds > 0) {
     std::vector<cv::Mat> gray(n);
-    for (int i = 0; i < n; ++i) gray[i] = to_alignment_image(frames[i]);
+    const bool dense = scene == SceneModel::kNear && opt.dense_refine;
+    const SubpixelOptions& so = dense ? opt.dense_subpixel : opt.subpixel;
+    for (int i = 0; i < n; ++i) gray[i] = to_alignment_image(frames[i], so.flatfield_sigma_px);
     CalibrationOptions ropt = opt;
     ropt.outlier_px = opt.refine_outlier_px;
     const double initial_rms = res.initial_rms_px;
-    for (int round = 0; round < opt.refine_rounds; ++round) {
+    const int rounds = dense ? opt.dense_rounds : opt.refine_rounds;
+    for (int round = 0; round < rounds; ++round) {
       int attempted = 0, refined = 0;
-      auto rtracks = refine_tracks(res.rig, gray, st, scene == SceneModel::kNear, opt.subpixel, &attempted, &refined);
+      auto rtracks = dense ? dense_tracks(res.rig, gray, feats, st, opt, &attempted, &refined)
+                           : refine_tracks(res.rig, gray, st, scene == SceneModel::kNear, opt.subpixel, &attempted, &refined);
       spdlog::info("calibrate: subpixel refinement round {}: {} of {} observations aligned, {} tracks", round + 1,
                    refined, attempted, rtracks.size());
       if (refined < opt.refine_min_fraction * attempted) {

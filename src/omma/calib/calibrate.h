@@ -62,17 +62,50 @@
 //                 (1.2-1.4 % with no rejection after the warm start), centre 2.6 -> 2.3 px, RMS
 //                 0.32 -> 0.13 px; ray error (rig_diff.h) 1.85 -> 0.41-0.46 deg; nn PSNR at the
 //                 true rig's.
-// The colon stays far from the 0.1 deg / 0.5 %: the refined observations fit the TRUE rig
-// only to 0.14 px RMS there (0.09 px without sensor noise, with 2x2 or 4x4 supersampling alike,
-// against 0.035 px on the lake and 0.02 px on the analytic checker sphere), i.e. the two views of
-// the simulated wall agree only to ~0.1 px (not the wall's ray-march tolerance: 100x tighter gives
-// the same; the likely cause is the wall's curvature within a patch, folds ~2 mm wide, which no
-// homography follows), and the geometry (5 mm baseline, ~20 mm depth, narrow overlaps) turns that into tenths of a
-// degree (the model check in calibrate_test.cc: 0.2 px noise on 3800 observations gives 0.5 deg).
-// Tried without gain on the colon: larger patches (25, 31, 41 px: 0.6, 0.4, 0.66 deg: noise of one
-// realisation), a second refinement round, keeping SIFT positions where the alignment fails,
-// weighting by the alignment's estimated precision, dense grid points aligned by the model's
-// prediction (their observations fit the true rig worse, 0.19 px, and the result degraded).
+// Near field: dense, flat-fielded, weighted refinement (dense_refine, dense_tracks in calibrate.cc).
+// A study with TRUE correspondences of the simulated colon (the wall's depth found exactly from the
+// simulator's scene, 17221 SIFT keypoints seen by a second camera, ECC started from the true local
+// homography) found three causes of the ~0.1-0.25 px alignment errors there:
+//   * vignetting (50 % strength): ECC is invariant to one gain and offset per patch, not to the
+//     brightness ramp across a patch near the image edge, which points opposite ways in the two
+//     cameras of an overlap: a bias per camera pair. Median error 0.19 -> 0.13 px without it;
+//     to_alignment_image's flat field (subpixel.h) removes most of it (0.13 px);
+//   * sensor noise: the colon's walls are dark (linear signal ~0.05, ~200 electrons, SNR ~15 per
+//     pixel): 0.12 px -> 0.05 px without noise; larger patches average it (31 px: 0.09 px on flat
+//     wall), more observations average it further;
+//   * the wall's folds: only ~40 % of 21 px patches are flat to 0.1 px (homography fit of the true
+//     map); on the others the error is ~0.4 px, so 41 px patches are worse again.
+// Hence, in the near field, after the first solve: every SIFT keypoint (not only the matched
+// ones) becomes a reference patch in the camera where it lies nearest the principal point, placed
+// by the solution's neighbouring scene points and aligned into every other camera that sees it
+// (31 px patches on flat-fielded images, two rounds), each observation whitened by the
+// alignment's covariance (AlignInfo, eq. Cramer-Rao of the least-squares fit). Measured on the
+// test's colon and two more simulation seeds (--perturb orient=2,focal=0.03,center=5,k1=0.05,
+// one Ceres thread; before -> after): orientation median 0.63 / 0.92 / 0.99 -> 0.53 / 0.54 / 0.58
+// deg, focal 1.23 / 1.94 / 1.19 -> 1.09 / 1.10 / 0.67 %, ray error 0.41 / 0.80 / 0.41 -> 0.34 /
+// 0.40 / 0.23 deg, 2132 -> ~8000 tracks, ~3900 -> ~19500 observations.
+// Why still not 0.1 deg (model checks in the same study, bundle adjustment from the nominal rig):
+//   * exact correspondences of these ~17000 keypoint pairs give the true rig back exactly with no
+//     priors, but the default priors alone leave 0.24 deg (the rotation prior) and 0.37 deg with the
+//     mean-focal prior: the problem has near-null directions (principal point against rotation,
+//     focal length against depth) in which even weak priors move the solution;
+//   * the same pairs with iid Gaussian noise of 0.1 px give 0.09 deg without priors (0.2 px:
+//     0.19 deg), but without priors the real observations let the focal/depth direction run away
+//     (5-10 % focal);
+//   * the real ECC observations, even with those above 0.25 px left out using the truth, give
+//     0.48 deg (0.30 deg on frames without vignetting, 0.17 without noise, 0.10 deg with neither),
+//     and 0.17 deg with each error's sign randomised: the errors are correlated with the geometry
+//     (larger at the image edges, where the parameters that trade against each other differ).
+// So from one shot of this dark, folded scene the observations are not good enough, by a factor of
+// ~3-5, for 0.1 deg; a far-field scene meets every target.
+// Tried without gain: pre-smoothing both images (sigma 0.5-1 px: worse, the blur differs between
+// the views), single colour channels (worse than grey), a high-pass of the log image (like the
+// flat field), thinning the candidates to 6 px apart (0.53 -> 0.60-0.80 deg: overlapping patches
+// still add information), the rotation prior off (1.4 deg: principal point and rotation drift),
+// priors of 15 deg or a mean-focal sigma of 0.005 (0.32-0.84 deg over the three seeds, no
+// better on average), the flat field in the far field (lake slightly better, 0.016 deg; the
+// night-time louvre worse: 0.083 -> 0.117 deg, its dark sky amplifies noise; so far field keeps the
+// plain grey image).
 // An affine warp instead of the homography leaves a bias of ~0.1 px: between cameras 30-60 deg
 // apart the perspective terms across the patch reach ~0.5 px at its edges.
 #pragma once
@@ -87,6 +120,19 @@
 #include "omma/core/rig.h"
 
 namespace omma::calib {
+
+// The near field's alignment options (measured on the simulated colon, see calibrate.h above):
+// 31 px patches (the wall's folds limit them: 41 px is worse), no coarse Gaussian stage (the start
+// is within a few tenths of a pixel), correlation >= 0.5 (the flat-fielded patches correlate less;
+// the covariance weights the weak ones down).
+inline SubpixelOptions dense_subpixel_defaults() {
+  SubpixelOptions so;
+  so.patch_px = 31;
+  so.gauss_px = 0;
+  so.min_correlation = 0.5;
+  so.flatfield_sigma_px = 5;
+  return so;
+}
 
 struct CalibrationOptions {
   FeatureOptions features;
@@ -119,6 +165,16 @@ struct CalibrationOptions {
   double refine_min_fraction = 0.5;  // fewer observations aligned: keep the unrefined solution
                                   // (warning); measured: lake 99 %, louvre 99 %, colon 68 %
   double refine_outlier_px = 1.0; // outlier_px of the solves on refined observations
+  bool dense_refine = true;       // near field: dense guided correspondences from every keypoint
+                                  // (see dense_tracks in calibrate.cc) instead of the matched tracks
+  int dense_rounds = 2;           // near field with dense_refine: refinement rounds (instead of
+                                  // refine_rounds); the second aligns ~50 % more, from a better rig
+  SubpixelOptions dense_subpixel = dense_subpixel_defaults();  // alignment options of dense_refine
+  int dense_neighbours = 8;       // scene points whose median depth places a candidate keypoint
+  double dense_max_gap_px = 40;   // candidates farther from any observed scene point are skipped
+  bool dense_weighting = true;    // whiten by the alignment covariance (AlignInfo)
+  double dense_weight_floor = 0.5;  // sigma floor, relative to the median sigma
+  double dense_reference_weight = 1;  // weight of the reference observation (the patch centre)
   int max_iterations = 50;        // Ceres iterations per solve
   int min_observations = 30;      // a camera with fewer keeps its nominal values (warning)
   int threads = 2;                // Ceres threads; near-field results vary with the summation order
@@ -158,6 +214,10 @@ CalibrationResult calibrate_rig(const Rig& nominal, const std::vector<cv::Mat>& 
 struct TrackObservation {
   int cam = 0;
   Vec2 px;
+  // Whitening of the residual (a square root of the observation's information matrix, scaled so
+  // that an average observation has ~identity): the residual is weight * (projection - px). The
+  // subpixel refinement sets it from the alignment's covariance; identity = plain pixels.
+  Eigen::Matrix2d weight = Eigen::Matrix2d::Identity();
 };
 
 // The bundle adjustment of calibrate_rig alone, on given feature tracks (one scene point per track,

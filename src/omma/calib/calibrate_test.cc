@@ -121,29 +121,28 @@ TEST(Calibrate, FeaturelessSkyCamerasKeepNominalValuesWithWarning) {
 // The colon (near field, parallax). The panorama target is met (PSNR after calibration within 0.5 dB
 // of the true rig's) and the reprojection RMS too, but not the parameter targets of issue 6 point 3:
 // with a 5 mm baseline against a ~20 mm deep scene, focal length trades against depth (the mean
-// focal is held by a prior, calibrate.h) and the principal point against rotation, and the two
-// views of the simulated wall agree only to ~0.1 px even after the subpixel refinement. Measured
-// (several runs; Ceres' threads make the last digits vary): orientation median 0.59-0.68 deg (max
-// 1.2-1.5), focal 0.92-1.08 %, centre 2.2-2.6 px, RMS 0.13-0.14 px (nominal rig: 2.03 deg, 3.09 %,
-// 5 px; without the refinement: 0.80 deg, 0.83 %, 2.6 px, 0.32 px). The thresholds below are what
-// this solver truly meets, with a little margin.
+// focal is held by a prior, calibrate.h) and the principal point against rotation, and the
+// observations of the dark, folded wall are not precise enough even after the dense, flat-fielded
+// refinement (calibrate.h, "Near field"). Measured with one Ceres thread (deterministic): 0.525 deg
+// (max 0.87), 1.09 %, centre 2.26 px, ray 0.34 deg, RMS 0.115 px, 7971 tracks (before the dense
+// refinement: 0.63 deg, max 1.35, 1.23 %, 2.69 px, ray 0.41 deg, RMS 0.14 px; two more simulation
+// seeds: 0.54 / 0.58 deg, 1.10 / 0.67 %, ray 0.40 / 0.23 deg; nominal rig: 2.03 deg, 3.1 %, 5 px,
+// ray 1.85 deg). The thresholds below are what this solver truly meets, with a margin.
 TEST(Calibrate, ColonNearFieldCalibration) {
   const Outcome o = run_simulated("colon");
-  // Bounds: with one Ceres thread this run is deterministic (0.61 deg, 1.31 %, 2.96 px, ray 0.45 deg);
-  // with two threads the summation order alone moved it over 0.55-0.94 deg, 1.2-1.7 %, 2.6-4.2 px,
-  // ray 0.41-0.65 deg in 6 runs (nominal: 2.03 deg, 3.1 %, 5 px, ray 1.85 deg).
   EXPECT_EQ(o.result.scene, SceneModel::kNear);
   EXPECT_TRUE(o.result.uncalibrated_ids.empty());
-  EXPECT_LT(o.result.rms_px, 0.25);                              // target 0.5 px
+  EXPECT_GT(o.result.tracks, 4000);                              // the dense refinement's tracks
+  EXPECT_LT(o.result.rms_px, 0.2);                               // target 0.5 px
   EXPECT_GT(o.psnr_calibrated, o.psnr_true - 0.5);               // the issue's target
   EXPECT_GT(o.psnr_calibrated, o.psnr_nominal + 0.5);
-  EXPECT_LT(o.after.orientation_error_deg.median, 1.0);          // target 0.1 deg: not met
-  EXPECT_LT(o.after.orientation_error_deg.max, 2.0);
-  EXPECT_LT(o.after.focal_error_rel.median, 0.02);               // target 0.5 %: not met
-  EXPECT_LT(o.after.center_error_px.median, 0.9 * o.before.center_error_px.median);
-  // What the stitch sees: the rays of the calibrated cameras (rig_diff.h), a third of the nominal
+  EXPECT_LT(o.after.orientation_error_deg.median, 0.75);         // target 0.1 deg: not met
+  EXPECT_LT(o.after.orientation_error_deg.max, 1.3);
+  EXPECT_LT(o.after.focal_error_rel.median, 0.016);              // target 0.5 %: not met
+  EXPECT_LT(o.after.center_error_px.median, 0.7 * o.before.center_error_px.median);
+  // What the stitch sees: the rays of the calibrated cameras (rig_diff.h), a quarter of the nominal
   // rig's ray error or better.
-  EXPECT_LT(o.after.ray_error_deg.median, 0.4 * o.before.ray_error_deg.median);
+  EXPECT_LT(o.after.ray_error_deg.median, 0.25 * o.before.ray_error_deg.median);
 }
 
 // Model check without images: points on a 21 mm tube (the colon's mean radius) projected through

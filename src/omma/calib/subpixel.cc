@@ -3,23 +3,51 @@
 #include <algorithm>
 #include <cmath>
 
+#include <Eigen/Eigenvalues>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
 
 namespace omma::calib {
 
-cv::Mat to_alignment_image(const cv::Mat& image) {
-  cv::Mat gray = image;
+namespace {
+// IEC 61966-2-1 sRGB decoding.
+float srgb_to_linear(float v) { return v <= 0.04045f ? v / 12.92f : std::pow((v + 0.055f) / 1.055f, 2.4f); }
+}  // namespace
+
+cv::Mat to_alignment_image(const cv::Mat& image, double flatfield_sigma_px) {
+  const double scale = image.depth() == CV_8U ? 1.0 / 255 : image.depth() == CV_16U ? 1.0 / 65535 : 1.0;
+  if (flatfield_sigma_px <= 0) {
+    cv::Mat gray = image;
+    if (gray.channels() == 3) cv::cvtColor(gray, gray, cv::COLOR_BGR2GRAY);
+    if (gray.channels() == 4) cv::cvtColor(gray, gray, cv::COLOR_BGRA2GRAY);
+    cv::Mat out;
+    gray.convertTo(out, CV_32F, scale);
+    return out;
+  }
+  cv::Mat lin;
+  image.convertTo(lin, CV_MAKETYPE(CV_32F, image.channels()), scale);
+  if (image.depth() == CV_8U) {
+    // 256-entry table for 8-bit frames.
+    cv::Mat lut(1, 256, CV_32F);
+    for (int i = 0; i < 256; ++i) lut.at<float>(i) = srgb_to_linear(i / 255.0f);
+    cv::Mat idx;
+    image.convertTo(idx, CV_MAKETYPE(CV_8U, image.channels()));
+    cv::LUT(idx, lut, lin);
+  } else {
+    cv::Mat flat = lin.reshape(1);
+    flat.forEach<float>([](float& v, const int*) { v = srgb_to_linear(std::clamp(v, 0.0f, 1.0f)); });
+  }
+  cv::Mat gray = lin;
   if (gray.channels() == 3) cv::cvtColor(gray, gray, cv::COLOR_BGR2GRAY);
   if (gray.channels() == 4) cv::cvtColor(gray, gray, cv::COLOR_BGRA2GRAY);
-  cv::Mat out;
-  const double scale = gray.depth() == CV_8U ? 1.0 / 255 : gray.depth() == CV_16U ? 1.0 / 65535 : 1.0;
-  gray.convertTo(out, CV_32F, scale);
-  return out;
+  cv::Mat mean;
+  cv::GaussianBlur(gray, mean, cv::Size(), flatfield_sigma_px, flatfield_sigma_px, cv::BORDER_REFLECT);
+  // The floor keeps black regions (the colon's lumen, the night sky) from amplifying noise.
+  return gray / (mean + 1e-3f);
 }
 
 std::optional<Vec2> align_patch(const cv::Mat& a, const Vec2& pa, const cv::Mat& b, const Eigen::Matrix3d& h,
-                                const SubpixelOptions& opt, double* correlation) {
+                                const SubpixelOptions& opt, AlignInfo* info) {
   const int half = opt.patch_px / 2;
   const int side = 2 * half + 1;
   // Template: the integer-aligned square of A whose centre pixel contains pa (no resampling of A).
@@ -64,7 +92,7 @@ std::optional<Vec2> align_patch(const cv::Mat& a, const Vec2& pa, const cv::Mat&
   } catch (const cv::Exception&) {
     return std::nullopt;
   }
-  if (correlation) *correlation = rho;
+  if (info) info->correlation = rho;
   if (!(rho >= opt.min_correlation)) return std::nullopt;
   Eigen::Matrix3d wr;
   for (int r = 0; r < 3; ++r)
@@ -72,6 +100,67 @@ std::optional<Vec2> align_patch(const cv::Mat& a, const Vec2& pa, const cv::Mat&
   const Vec2 pt(pa.x() - 0.5 - ta.x, pa.y() - 0.5 - ta.y);
   const Vec2 out = apply_homography(wr, pt) + Vec2(crop.x + 0.5, crop.y + 0.5);
   if (!out.allFinite() || (out - apply_homography(h, pa)).norm() > opt.max_shift_px) return std::nullopt;
+  if (info) {
+    const Eigen::Matrix3d hf = shift(crop.x + 0.5, crop.y + 0.5) * wr * shift(-ta.x - 0.5, -ta.y - 0.5);
+    info->homography = hf / hf(2, 2);
+    // b warped back onto the template grid, then the photometric fit t = g * bw + o.
+    cv::Mat bw;
+    cv::warpPerspective(b(crop), bw, warp, cv::Size(side, side), cv::INTER_LINEAR | cv::WARP_INVERSE_MAP,
+                        cv::BORDER_REPLICATE);
+    const cv::Mat t = a(ta);
+    double sb = 0, st = 0, sbb = 0, sbt = 0;
+    const int m = side * side;
+    for (int r = 0; r < side; ++r)
+      for (int c = 0; c < side; ++c) {
+        const double x = bw.at<float>(r, c), y = t.at<float>(r, c);
+        sb += x, st += y, sbb += x * x, sbt += x * y;
+      }
+    const double vb = sbb - sb * sb / m, cbt = sbt - sb * st / m;
+    const double g = vb > 0 ? cbt / vb : 0, o = (st - g * sb) / m;
+    // Fisher matrix of the affine warp about pa, gradients averaged over both images.
+    Eigen::Matrix<double, 6, 6> f = Eigen::Matrix<double, 6, 6>::Zero();
+    double ss = 0;
+    for (int r = 1; r < side - 1; ++r)
+      for (int c = 1; c < side - 1; ++c) {
+        const double e = t.at<float>(r, c) - g * bw.at<float>(r, c) - o;
+        ss += e * e;
+        const double gx = 0.25 * (t.at<float>(r, c + 1) - t.at<float>(r, c - 1) +
+                                  g * (bw.at<float>(r, c + 1) - bw.at<float>(r, c - 1)));
+        const double gy = 0.25 * (t.at<float>(r + 1, c) - t.at<float>(r - 1, c) +
+                                  g * (bw.at<float>(r + 1, c) - bw.at<float>(r - 1, c)));
+        const double u = c + 0.5 - pt.x(), v = r + 0.5 - pt.y();
+        Eigen::Matrix<double, 6, 1> j;
+        j << gx, gy, gx * u, gx * v, gy * u, gy * v;
+        f += j * j.transpose();
+      }
+    const int used = (side - 2) * (side - 2);
+    info->residual_sigma = std::sqrt(ss / std::max(1, used - 8));
+    if (opt.noise_corrected_covariance) {
+      // The noise of both images adds to the gradients' energy: E[g g^T] gains 0.125 sigma_r^2 per
+      // axis for the averaged central differences above (sigma_r^2 = sigma_t^2 + gain^2 sigma_b^2),
+      // which would make dark, noisy patches look precise. Subtract it.
+      Eigen::Matrix3d m = Eigen::Matrix3d::Zero();
+      for (int r = 1; r < side - 1; ++r)
+        for (int c = 1; c < side - 1; ++c) {
+          const Eigen::Vector3d b3(1, c + 0.5 - pt.x(), r + 0.5 - pt.y());
+          m += b3 * b3.transpose();
+        }
+      m *= 0.125 * info->residual_sigma * info->residual_sigma;
+      const int ix[3] = {0, 2, 3}, iy[3] = {1, 4, 5};
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) f(ix[i], ix[j]) -= m(i, j), f(iy[i], iy[j]) -= m(i, j);
+      if (Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>>(f).eigenvalues()(0) <= 0) return std::nullopt;
+    }
+    const Eigen::Matrix<double, 6, 6> fi = f.inverse();
+    Eigen::Matrix2d cov_a = info->residual_sigma * info->residual_sigma * fi.topLeftCorner<2, 2>();
+    // Jacobian of the final homography at pa (b pixels per a pixel).
+    const Eigen::Vector3d q = info->homography * pa.homogeneous();
+    Eigen::Matrix<double, 2, 3> dq;
+    dq << 1 / q.z(), 0, -q.x() / (q.z() * q.z()), 0, 1 / q.z(), -q.y() / (q.z() * q.z());
+    const Eigen::Matrix2d jac = dq * info->homography.topLeftCorner<3, 2>();
+    info->covariance = jac * cov_a * jac.transpose();
+    if (!info->covariance.allFinite()) return std::nullopt;
+  }
   return out;
 }
 
