@@ -136,13 +136,17 @@ void render_tiles_sad(const CompiledMap& map, const uint8_t* store, int t0, int 
 }
 
 #ifdef OMMA_X86
-// The 16 bytes at a tap's offset: B G R of (x,y), (x,y+1), (x+1,y), (x+1,y+1), then 4 bytes of the
-// next pixel. Regrouped per channel: dword lanes B, G, R of the four neighbours and zero, matching
-// the weight bytes (w(x,y), w(x,y+1), w(x+1,y), w(x+1,y+1)).
-#define OMMA_REGROUP _mm_setr_epi8(0, 3, 6, 9, 1, 4, 7, 10, 2, 5, 8, 11, -1, -1, -1, -1)
-
 #pragma GCC push_options
 #pragma GCC target("ssse3,sse4.1")
+// The next tap's neighbourhood (advances d): the 16 bytes at its offset are B G R of (x,y),
+// (x,y+1), (x+1,y), (x+1,y+1), then 4 bytes of the next pixel; regrouped per channel into the
+// dword lanes B, G, R of the four neighbours and zero, matching the weight bytes (w(x,y), w(x,y+1),
+// w(x+1,y), w(x+1,y+1)).
+inline __m128i neighbours(const uint8_t* p, const int16_t*& d) {
+  const __m128i regroup = _mm_setr_epi8(0, 3, 6, 9, 1, 4, 7, 10, 2, 5, 8, 11, -1, -1, -1, -1);
+  return _mm_shuffle_epi8(_mm_loadu_si128(reinterpret_cast<const __m128i*>(p + 2 * ptrdiff_t(*d++))), regroup);
+}
+
 // The SIMD kernels' run loop, around K::pixel<C>(start pointers, deltas, weights): one output
 // pixel as the dwords B, G, R, 0 (each 0..255). Four pixels are packed into one 16-byte store.
 template <class K>
@@ -177,13 +181,9 @@ struct SimdRun {
 struct Avx2Kernel {
   template <int C>
   static __m128i pixel(const uint8_t* const* p, const int16_t*& d, const uint32_t*& w) {
-    const __m128i regroup = OMMA_REGROUP;
     __m128i acc = _mm_setzero_si128();
 #pragma GCC unroll 8
-    for (int t = 0; t < C; ++t) {
-      const __m128i v = _mm_shuffle_epi8(_mm_loadu_si128(reinterpret_cast<const __m128i*>(p[t] + 2 * ptrdiff_t(*d++))), regroup);
-      acc = _mm_add_epi16(acc, _mm_maddubs_epi16(v, _mm_set1_epi32(int(*w++))));
-    }
+    for (int t = 0; t < C; ++t) acc = _mm_add_epi16(acc, _mm_maddubs_epi16(neighbours(p[t], d), _mm_set1_epi32(int(*w++))));
     return _mm_srli_epi32(_mm_add_epi32(_mm_madd_epi16(acc, _mm_set1_epi16(1)), _mm_set1_epi32(64)), 7);
   }
 };
@@ -202,11 +202,10 @@ __attribute__((flatten)) void render_tiles_avx2(const CompiledMap& map, const ui
 struct VnniKernel {
   template <int C>
   static __m128i pixel(const uint8_t* const* p, const int16_t*& d, const uint32_t*& w) {
-    const __m128i regroup = OMMA_REGROUP;
     __m128i acc = _mm_setr_epi32(64, 64, 64, 0);
 #pragma GCC unroll 8
     for (int t = 0; t < C; ++t) {
-      const __m128i v = _mm_shuffle_epi8(_mm_loadu_si128(reinterpret_cast<const __m128i*>(p[t] + 2 * ptrdiff_t(*d++))), regroup);
+      const __m128i v = neighbours(p[t], d);
       // acc += the four products per channel, the weights broadcast from memory ({1to4}; GCC 12
       // does not fold _mm_set1_epi32 into the instruction by itself)
       asm("vpdpbusd %2%{1to4%}, %1, %0" : "+v"(acc) : "v"(v), "m"(*w));
@@ -220,7 +219,6 @@ __attribute__((flatten)) void render_tiles_vnni(const CompiledMap& map, const ui
   render_tiles(SimdRun<VnniKernel>{}, map, store, t0, t1, out, step, pf);
 }
 #pragma GCC pop_options
-#undef OMMA_REGROUP
 #endif
 
 using TileRenderer = void (*)(const CompiledMap&, const uint8_t*, int, int, uint8_t*, size_t, bool);
