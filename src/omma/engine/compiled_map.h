@@ -5,15 +5,15 @@
 // Frame store. All camera frames of a rig live in ONE buffer (FrameStore) of "row pairs": camera c's
 // frame row y is store row R = row0[c] + y, which holds, for every column x, the 6 bytes
 //     B G R of pixel (x, y),  B G R of pixel (x, min(y + 1, H - 1)).
-// So the whole 2x2 bilinear neighbourhood
-// of (x, y) is the 12 contiguous bytes at byte R * stride_bytes + 6 x (x+1 follows x), one 16-byte
-// load; the bottom edge is replicated by the pair itself. stride_bytes = 6 * stride_px (the widest
+// So the whole 2x2 bilinear neighbourhood of (x, y) is the 12 contiguous bytes at byte
+// R * stride_bytes + 6 x (x+1 follows x), one 16-byte load; the bottom edge is replicated by the
+// pair itself. stride_bytes = 6 * stride_px (the widest
 // camera); 64 bytes of padding at the end keep every 16-byte load inside the buffer.
 //
 // Map layout. The output is cut into tiles of kTileW x kTileH pixels, rendered tile by tile (the
 // camera pixels a tile needs stay in the L1 cache), tiles in row-major order. Each tile row is a list
-// of RUNS: consecutive pixels with the same number C of taps whose tap t comes from the same camera
-// region as in the previous pixel. Per tap the map holds
+// of RUNS: consecutive pixels with the same number C of taps (sorted by camera) whose tap t lies
+// within int16 of tap t of the run's first pixel. Per tap the map holds
 //   delta[k]  int16   its neighbourhood's store offset minus the run's start offset for tap t
 //                     (base[]), in units of 2 bytes (offsets are even). Relative to the run, not to
 //                     the previous pixel: no chain of additions between pixels (measured 15-30 %
