@@ -184,7 +184,9 @@ TEST(EngineCli, VideoFilePerCameraAndFramesFolderSources) {
   r = run_omma("run --rig " + rig.string() + " --source frames:" + (dir / "frames").string() +
                " --size 96x96 --frames 5 --no-cache --json", 60);
   EXPECT_EQ(r.exit_code, 0) << r.err;
-  if (r.exit_code == 0) EXPECT_EQ(r.json()["frames"], 5);
+  if (r.exit_code == 0) {
+    EXPECT_EQ(r.json()["frames"], 5);
+  }
   fs::remove_all(dir);
 }
 
@@ -301,8 +303,11 @@ TEST(EngineCli, BenchJsonListsOursAndThePeers) {
                   1e-9);
     }
   EXPECT_TRUE(found_ratio);
-  for (const auto& e : j["results"])
-    if (std::string(e["name"]).rfind("omma-", 0) == 0) EXPECT_GT(e["bytes_per_pixel"].get<double>(), 1.0);
+  for (const auto& e : j["results"]) {
+    if (std::string(e["name"]).rfind("omma-", 0) == 0) {
+      EXPECT_GT(e["bytes_per_pixel"].get<double>(), 1.0);
+    }
+  }
 }
 
 }  // namespace
