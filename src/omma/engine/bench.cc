@@ -149,21 +149,32 @@ double process_cpu_seconds() {
   clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
   return ts.tv_sec + ts.tv_nsec * 1e-9;
 }
+
+// One untimed run (the caches to this workload), then runs for at least min_seconds and at least
+// min_iterations times.
+struct Timing {
+  long frames = 0;
+  double wall_s = 0, cpu_s = 0;
+};
+Timing time_workload(const Workload& w, double min_seconds, int min_iterations) {
+  w.run();
+  Timing t;
+  const auto t0 = std::chrono::steady_clock::now();
+  const double c0 = process_cpu_seconds();
+  while (t.frames < min_iterations || t.wall_s < min_seconds) {
+    w.run();
+    ++t.frames;
+    t.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  }
+  t.cpu_s = process_cpu_seconds() - c0;
+  return t;
+}
 }  // namespace
 
 double measure_fps(const Workload& w, double min_seconds, int min_iterations, double* cpu_s_per_frame) {
-  w.run();  // warm-up
-  int n = 0;
-  const auto t0 = std::chrono::steady_clock::now();
-  const double c0 = process_cpu_seconds();
-  double elapsed = 0;
-  while (n < min_iterations || elapsed < min_seconds) {
-    w.run();
-    ++n;
-    elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  }
-  if (cpu_s_per_frame) *cpu_s_per_frame = (process_cpu_seconds() - c0) / n;
-  return n / elapsed;
+  const Timing t = time_workload(w, min_seconds, min_iterations);
+  if (cpu_s_per_frame) *cpu_s_per_frame = t.cpu_s / t.frames;
+  return t.frames / t.wall_s;
 }
 
 namespace {
@@ -246,30 +257,20 @@ std::vector<BenchEntry> run_bench_suite(const Rig& rig_in, const BenchOptions& o
   // Interleaved measurement (see bench.h).
   const int rounds = std::max(1, opt.rounds);
   const double slice = opt.min_seconds / rounds;
-  std::vector<double> wall(ws.size(), 0), cpu(ws.size(), 0);
-  std::vector<long> count(ws.size(), 0);
+  std::vector<Timing> sum(ws.size());
   for (int r = 0; r < rounds; ++r) {
     spdlog::info("bench: round {}/{} over {} workloads", r + 1, rounds, ws.size());
     for (size_t i = 0; i < ws.size(); ++i) {
-      ws[i].run();  // untimed: the previous workload left the caches to itself
-      const auto t0 = std::chrono::steady_clock::now();
-      const double c0 = process_cpu_seconds();
-      double elapsed = 0;
-      do {
-        ws[i].run();
-        ++count[i];
-        elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      } while (elapsed < slice);
-      wall[i] += elapsed;
-      cpu[i] += process_cpu_seconds() - c0;
+      const Timing t = time_workload(ws[i], slice, 1);
+      sum[i].frames += t.frames, sum[i].wall_s += t.wall_s, sum[i].cpu_s += t.cpu_s;
     }
   }
   std::vector<BenchEntry> out;
   for (size_t i = 0; i < ws.size(); ++i) {
     nlohmann::json info = ws[i].info;
-    info["cpu_ms_per_frame"] = cpu[i] / count[i] * 1e3;  // CPU time of all threads per frame
-    info["frames"] = count[i];
-    out.push_back({ws[i].name, count[i] / wall[i], info});
+    info["cpu_ms_per_frame"] = sum[i].cpu_s / sum[i].frames * 1e3;  // CPU time of all threads per frame
+    info["frames"] = sum[i].frames;
+    out.push_back({ws[i].name, sum[i].frames / sum[i].wall_s, info});
   }
   return out;
 }

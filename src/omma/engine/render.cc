@@ -33,6 +33,13 @@ struct Cursor {
 // end of the tile's row in the output: the next tile may belong to another thread) and, before
 // that, possibly up to 4 bytes past the run (the next run overwrites them).
 
+// Channel ch of the neighbourhood at s (B G R of (x,y), (x,y+1), (x+1,y), (x+1,y+1)) weighted by
+// the four weight bytes of w.
+inline int32_t weighted_sum(const uint8_t* s, uint32_t w, int ch) {
+  return int32_t(w & 255) * s[ch] + int32_t((w >> 8) & 255) * s[3 + ch] + int32_t((w >> 16) & 255) * s[6 + ch] +
+         int32_t(w >> 24) * s[9 + ch];
+}
+
 // Portable kernel: the definition the SIMD kernels reproduce bit for bit: with weights summing to
 // 128 over a pixel's taps, the output is (sum w v + 64) >> 7.
 struct ScalarKernel {
@@ -43,8 +50,7 @@ struct ScalarKernel {
       for (int t = 0; t < C; ++t) {
         const uint8_t* s = store + 2 * (int64_t(base[t]) + *cu.delta++);
         const uint32_t w = *cu.weight++;
-        const int32_t w0 = w & 255, w1 = (w >> 8) & 255, w2 = (w >> 16) & 255, w3 = w >> 24;
-        for (int ch = 0; ch < 3; ++ch) acc[ch] += w0 * s[ch] + w1 * s[3 + ch] + w2 * s[6 + ch] + w3 * s[9 + ch];
+        for (int ch = 0; ch < 3; ++ch) acc[ch] += weighted_sum(s, w, ch);
       }
       for (int ch = 0; ch < 3; ++ch) o[ch] = static_cast<uint8_t>(acc[ch] >> 7);
     }
@@ -62,9 +68,7 @@ struct SadKernel {
       for (int t = 0; t < C; ++t) {
         const uint8_t* v = store + 2 * (int64_t(base[t]) + *cu.delta++);
         const uint32_t w = *cu.weight++;
-        const int32_t w0 = w & 255, w1 = (w >> 8) & 255, w2 = (w >> 16) & 255, w3 = w >> 24;
-        for (int ch = 0; ch < 3; ++ch)  // the sample times 128
-          s[t][ch] = float(w0 * v[ch] + w1 * v[3 + ch] + w2 * v[6 + ch] + w3 * v[9 + ch]);
+        for (int ch = 0; ch < 3; ++ch) s[t][ch] = float(weighted_sum(v, w, ch));  // the sample times 128
         y[t] = (0.114f * s[t][0] + 0.587f * s[t][1] + 0.299f * s[t][2]) * (1.0f / (128.0f * 255.0f));
         pw[t] = float(*cu.prior++ + 1);
       }
