@@ -15,31 +15,28 @@ float srgb_to_linear(float v) { return v <= 0.04045f ? v / 12.92f : std::pow((v 
 }  // namespace
 
 cv::Mat to_alignment_image(const cv::Mat& image, double flatfield_sigma_px) {
+  auto to_gray = [](cv::Mat m) {
+    if (m.channels() == 3) cv::cvtColor(m, m, cv::COLOR_BGR2GRAY);
+    if (m.channels() == 4) cv::cvtColor(m, m, cv::COLOR_BGRA2GRAY);
+    return m;
+  };
   const double scale = image.depth() == CV_8U ? 1.0 / 255 : image.depth() == CV_16U ? 1.0 / 65535 : 1.0;
   if (flatfield_sigma_px <= 0) {
-    cv::Mat gray = image;
-    if (gray.channels() == 3) cv::cvtColor(gray, gray, cv::COLOR_BGR2GRAY);
-    if (gray.channels() == 4) cv::cvtColor(gray, gray, cv::COLOR_BGRA2GRAY);
     cv::Mat out;
-    gray.convertTo(out, CV_32F, scale);
+    to_gray(image).convertTo(out, CV_32F, scale);
     return out;
   }
   cv::Mat lin;
-  image.convertTo(lin, CV_MAKETYPE(CV_32F, image.channels()), scale);
-  if (image.depth() == CV_8U) {
-    // 256-entry table for 8-bit frames.
+  if (image.depth() == CV_8U) {  // a 256-entry table
     cv::Mat lut(1, 256, CV_32F);
     for (int i = 0; i < 256; ++i) lut.at<float>(i) = srgb_to_linear(i / 255.0f);
-    cv::Mat idx;
-    image.convertTo(idx, CV_MAKETYPE(CV_8U, image.channels()));
-    cv::LUT(idx, lut, lin);
+    cv::LUT(image, lut, lin);
   } else {
+    image.convertTo(lin, CV_MAKETYPE(CV_32F, image.channels()), scale);
     cv::Mat flat = lin.reshape(1);
     flat.forEach<float>([](float& v, const int*) { v = srgb_to_linear(std::clamp(v, 0.0f, 1.0f)); });
   }
-  cv::Mat gray = lin;
-  if (gray.channels() == 3) cv::cvtColor(gray, gray, cv::COLOR_BGR2GRAY);
-  if (gray.channels() == 4) cv::cvtColor(gray, gray, cv::COLOR_BGRA2GRAY);
+  const cv::Mat gray = to_gray(lin);
   cv::Mat mean;
   cv::GaussianBlur(gray, mean, cv::Size(), flatfield_sigma_px, flatfield_sigma_px, cv::BORDER_REFLECT);
   // The floor keeps black regions (the colon's lumen, the night sky) from amplifying noise.
