@@ -31,7 +31,7 @@ void add_run_command(CLI::App& root) {
   struct Opts {
     std::string rig, method = "linear", projection = "vr180", size = "1080x1080", cache;
     std::vector<std::string> sources, sinks;
-    double duration = 0, fps = 30, source_fps = 30, first_timeout = 10, min_weight = 1.0 / 32;
+    double duration = 0, fps = 30, source_fps = 30, first_timeout = 10, min_weight = engine::MapOptions{}.min_weight;
     long frames = 0;
     int threads = 0;
     bool loop = false, json = false, no_cache = false;
@@ -45,7 +45,7 @@ void add_run_command(CLI::App& root) {
   cmd->add_option("--size", o.size, "Panorama size WxH, pixels (default 1080x1080)");
   cmd->add_option("--min-weight", o.min_weight,
                   "Drop taps lighter than this fraction of a pixel's weight, renormalising the others "
-                  "(faster, smaller map; 0 = keep all; default 1/32 = 0.03125)")
+                  "(faster, smaller map; 0 = keep all; default 1/20 = 0.05)")
       ->check(CLI::Range(0.0, 0.49));
   cmd->add_option("--duration", o.duration, "Stop after S seconds (default: when every source has ended)")
       ->check(CLI::NonNegativeNumber);
