@@ -258,11 +258,13 @@ std::vector<BenchEntry> run_bench_suite(const Rig& rig_in, const BenchOptions& o
   const int rounds = std::max(1, opt.rounds);
   const double slice = opt.min_seconds / rounds;
   std::vector<Timing> sum(ws.size());
+  std::vector<std::vector<double>> round_fps(ws.size());
   for (int r = 0; r < rounds; ++r) {
     spdlog::info("bench: round {}/{} over {} workloads", r + 1, rounds, ws.size());
     for (size_t i = 0; i < ws.size(); ++i) {
       const Timing t = time_workload(ws[i], slice, 1);
       sum[i].frames += t.frames, sum[i].wall_s += t.wall_s, sum[i].cpu_s += t.cpu_s;
+      round_fps[i].push_back(t.frames / t.wall_s);
     }
   }
   std::vector<BenchEntry> out;
@@ -270,7 +272,8 @@ std::vector<BenchEntry> run_bench_suite(const Rig& rig_in, const BenchOptions& o
     nlohmann::json info = ws[i].info;
     info["cpu_ms_per_frame"] = sum[i].cpu_s / sum[i].frames * 1e3;  // CPU time of all threads per frame
     info["frames"] = sum[i].frames;
-    out.push_back({ws[i].name, sum[i].frames / sum[i].wall_s, info});
+    info["round_fps"] = round_fps[i];
+    out.push_back({ws[i].name, sum[i].frames / sum[i].wall_s, info, round_fps[i]});
   }
   return out;
 }
@@ -280,16 +283,30 @@ nlohmann::json BenchRatio::to_json() const {
   if (vs_remap > 0) j["vs_opencv_remap"] = vs_remap, j["target_10x_opencv_remap_met"] = vs_remap >= 10;
   if (vs_multiband > 0)
     j["vs_opencv_multiband"] = vs_multiband, j["target_100x_opencv_multiband_met"] = vs_multiband >= 100;
+  if (!vs_remap_rounds.empty()) j["vs_opencv_remap_rounds"] = vs_remap_rounds;
+  if (!vs_multiband_rounds.empty()) j["vs_opencv_multiband_rounds"] = vs_multiband_rounds;
   if (bound_over > 0) j["memcpy_bound_over_ours"] = bound_over, j["target_within_2x_bound_met"] = bound_over <= 2;
   if (name.rfind("omma-mrf-1080x1080", 0) == 0) j["target_400fps_met"] = fps >= 400;
   return j;
 }
 
 std::vector<BenchRatio> bench_ratios(const std::vector<BenchEntry>& entries) {
-  auto fps_of = [&](const std::string& name) {
+  auto find = [&](const std::string& name) -> const BenchEntry* {
     for (const auto& e : entries)
-      if (e.name == name) return e.fps;
-    return 0.0;
+      if (e.name == name) return &e;
+    return nullptr;
+  };
+  auto fps_of = [&](const std::string& name) {
+    const BenchEntry* e = find(name);
+    return e ? e->fps : 0.0;
+  };
+  auto per_round = [&](const BenchEntry& ours, const std::string& peer) {
+    std::vector<double> r;
+    const BenchEntry* p = find(peer);
+    if (!p || p->round_fps.size() != ours.round_fps.size()) return r;
+    for (size_t i = 0; i < ours.round_fps.size(); ++i)
+      if (p->round_fps[i] > 0) r.push_back(ours.round_fps[i] / p->round_fps[i]);
+    return r;
   };
   std::vector<BenchRatio> out;
   for (const auto& e : entries) {
@@ -299,6 +316,8 @@ std::vector<BenchRatio> bench_ratios(const std::vector<BenchEntry>& entries) {
     if (const double a = fps_of("opencv-remap-" + size); a > 0) r.vs_remap = e.fps / a;
     if (const double b = fps_of("opencv-multiband-" + size); b > 0) r.vs_multiband = e.fps / b;
     if (const double m = fps_of("memcpy-bound-" + size); m > 0) r.bound_over = m / e.fps;
+    r.vs_remap_rounds = per_round(e, "opencv-remap-" + size);
+    r.vs_multiband_rounds = per_round(e, "opencv-multiband-" + size);
     out.push_back(r);
   }
   return out;

@@ -50,11 +50,12 @@ double measure_fps(const Workload& w, double min_seconds, int min_iterations = 3
 
 struct BenchEntry {
   std::string name;
-  double fps = 0;
+  double fps = 0;  // all rounds together: frames / seconds
   nlohmann::json info;
+  std::vector<double> round_fps;  // each round's own fps (run_bench_suite)
 };
 struct BenchOptions {
-  double min_seconds = 0.5;       // per workload, in all
+  double min_seconds = 2;         // per workload, in all
   int rounds = 5;                 // the workloads are measured in turn, this many slices each
   bool quick = false;             // small sizes (tests)
   std::vector<std::string> only;  // substrings of names to run; empty = all
@@ -76,6 +77,9 @@ struct BenchRatio {
   double vs_remap = 0;      // fps / opencv-remap fps
   double vs_multiband = 0;  // fps / opencv-multiband fps
   double bound_over = 0;    // memcpy-bound fps / fps (1 = at the bound)
+  // Per round (where both entries have the same rounds): ours / peer A and ours / peer B of that
+  // round alone, which shows how much the ratio moves with the machine's load.
+  std::vector<double> vs_remap_rounds, vs_multiband_rounds;
   nlohmann::json to_json() const;
 };
 // One BenchRatio per "omma-*" entry with all threads (not the -1thread ones).

@@ -30,6 +30,22 @@ TEST(EngineBench, RatiosCompareOursWithThePeersOfTheSameSize) {
   EXPECT_TRUE(j1["target_within_2x_bound_met"].get<bool>());
   EXPECT_FALSE(j1.contains("vs_opencv_multiband"));
   EXPECT_FALSE(j1.contains("target_400fps_met"));
+  EXPECT_TRUE(r[0].vs_multiband_rounds.empty());  // no rounds recorded
+}
+
+// Per-round ratios: ours / peer of the same round, where both have the same rounds.
+TEST(EngineBench, PerRoundRatiosPairTheSameRounds) {
+  const std::vector<BenchEntry> e = {{"omma-mrf-1080x1080", 300, {}, {200, 300, 400}},
+                                     {"opencv-multiband-1080x1080", 3, {}, {2, 3, 5}},
+                                     {"opencv-remap-1080x1080", 30, {}, {20, 30}}};
+  const auto r = bench_ratios(e);
+  ASSERT_EQ(r.size(), 1u);
+  ASSERT_EQ(r[0].vs_multiband_rounds.size(), 3u);
+  EXPECT_DOUBLE_EQ(r[0].vs_multiband_rounds[0], 100.0);
+  EXPECT_DOUBLE_EQ(r[0].vs_multiband_rounds[1], 100.0);
+  EXPECT_DOUBLE_EQ(r[0].vs_multiband_rounds[2], 80.0);
+  EXPECT_TRUE(r[0].vs_remap_rounds.empty());  // rounds do not pair up
+  EXPECT_EQ(r[0].to_json()["vs_opencv_multiband_rounds"].size(), 3u);
 }
 
 }  // namespace
