@@ -73,12 +73,12 @@ TEST(EngineCli, RunWritesVideoPngSequencePassthroughAndJsonSummary) {
   const RunResult r = run_omma("run --rig " + rig.string() + " --source pano:" + lake() + "@30 --size 200x200" +
                                " --method linear --sink " + (dir / "pano.mp4").string() + " --sink png:" +
                                (dir / "png").string() + " --sink cam:4:" + (dir / "cam4.avi").string() +
-                               " --duration 2 --fps 15 --no-cache --json", 60);
+                               " --frames 20 --fps 15 --no-cache --json", 60);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto j = r.json();
   const long frames = j["frames"];
-  EXPECT_GE(frames, 15);
-  EXPECT_LE(frames, 35);
+  EXPECT_EQ(frames, 20);  // a frame count, not a duration: the CI machine's speed varies
+  EXPECT_LE(j["fps"].get<double>(), 15 * 1.1);  // the --fps cap holds
   EXPECT_EQ(j["dropped_cameras"].size(), 0u);
   EXPECT_GT(j["map"]["bytes_per_pixel"].get<double>(), 1.0);
   // The PNG sequence has every frame; frames are panoramas of the lake (not black) that move.
@@ -257,19 +257,25 @@ TEST(EngineCli, LiveViewPlaysInHeadlessChromium) {
   RunResult run;
   std::thread engine([&] {
     run = run_omma("run --rig " + rig.string() + " --source pano:" + lake() +
-                   " --size 320x320 --no-cache --duration 10 --sink http:" + std::to_string(port) + " --json", 60);
+                   " --size 320x320 --no-cache --duration 15 --sink http:" + std::to_string(port) + " --json", 90);
   });
   for (int i = 0; i < 100 && !port_open(port); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(100));
-  const fs::path shot = dir / "shot.png";
+  const fs::path shot = dir / "shot.png", log = dir / "chromium.log";
   const std::string cmd = "timeout 40 chromium --headless --no-sandbox --disable-gpu --disable-dev-shm-usage "
                           "--window-size=400,400 --virtual-time-budget=3000 --screenshot=" + shot.string() +
-                          " http://127.0.0.1:" + std::to_string(port) + "/ >/dev/null 2>&1";
-  const int rc = std::system(cmd.c_str());
+                          " http://127.0.0.1:" + std::to_string(port) + "/ >" + log.string() + " 2>&1";
+  // On a loaded machine Chromium now and then exits without a screenshot: up to three tries while
+  // the engine still serves (15 s).
+  int rc = -1;
+  for (int attempt = 0; attempt < 3 && !fs::exists(shot) && port_open(port); ++attempt) rc = std::system(cmd.c_str());
   engine.join();
   EXPECT_EQ(rc, 0);
   EXPECT_EQ(run.exit_code, 0) << run.err;
   const cv::Mat img = cv::imread(shot.string());
-  ASSERT_FALSE(img.empty());
+  ASSERT_FALSE(img.empty()) << "no screenshot; chromium said:\n" << [&] {
+    std::ifstream f(log);
+    return std::string(std::istreambuf_iterator<char>(f), {});
+  }();
   // The page background is #111; the panorama (320x320, centred at the top) is the bright lake.
   cv::Mat gray;
   cv::cvtColor(img(cv::Rect(100, 60, 200, 200)), gray, cv::COLOR_BGR2GRAY);
