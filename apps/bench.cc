@@ -55,6 +55,7 @@ void add_bench_command(CLI::App& root) {
     for (const auto& e : entries) {
       nlohmann::json r = {{"name", e.name}, {"fps", e.fps}};
       for (auto it = e.info.begin(); it != e.info.end(); ++it) r[it.key()] = it.value();
+      r["round_fps"] = e.round_fps;
       results.push_back(r);
     }
     const auto ratios = engine::bench_ratios(entries);

@@ -272,7 +272,6 @@ std::vector<BenchEntry> run_bench_suite(const Rig& rig_in, const BenchOptions& o
     nlohmann::json info = ws[i].info;
     info["cpu_ms_per_frame"] = sum[i].cpu_s / sum[i].frames * 1e3;  // CPU time of all threads per frame
     info["frames"] = sum[i].frames;
-    info["round_fps"] = round_fps[i];
     out.push_back({ws[i].name, sum[i].frames / sum[i].wall_s, info, round_fps[i]});
   }
   return out;
