@@ -354,12 +354,10 @@ double psnr_u8(const cv::Mat& a, const cv::Mat& b) {
   cv::Mat d;
   cv::absdiff(a, b, d);
   d.convertTo(d, CV_64F);
-  const double mse = cv::mean(d.mul(d))[0] * d.channels() / d.channels();
   cv::Scalar s = cv::mean(d.mul(d));
   double m = 0;
   for (int c = 0; c < a.channels(); ++c) m += s[c];
   m /= a.channels();
-  (void)mse;
   if (m <= 0) return std::numeric_limits<double>::infinity();
   return 10 * std::log10(255.0 * 255.0 / m);
 }

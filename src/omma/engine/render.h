@@ -16,7 +16,7 @@ namespace omma::engine {
 enum class Kernel {
   kAuto,        // the fastest this CPU runs
   kScalar,      // portable C++
-  kAvx2,        // AVX2: per tap one 16-byte load, pshufb, pmaddwd
+  kAvx2,        // AVX2: per tap one 16-byte load, pshufb, pmaddubsw
   kAvx512Vnni,  // AVX-512 VNNI (+VL, BW): per tap one 16-byte load, pshufb, vpdpbusd
 };
 std::string to_string(Kernel k);
