@@ -11,12 +11,20 @@ double orthographic_distance(const Vec3& q, const Vec3& c, const Vec3& w) {
 }
 
 std::vector<Contributor> find_contributors(const Rig& rig, const Vec3& w_in, const SearchOptions& opt) {
+  return find_contributors(rig, w_in, std::numeric_limits<double>::infinity(), opt);
+}
+
+std::vector<Contributor> find_contributors(const Rig& rig, const Vec3& w_in, double depth_mm,
+                                           const SearchOptions& opt) {
   const Vec3 w = w_in.normalized();
+  const bool at_infinity = !(depth_mm < std::numeric_limits<double>::infinity());
   std::vector<Contributor> out;
   for (size_t i = 0; i < rig.cameras.size(); ++i) {
     const CameraModel cam = rig.cameras[i].model();
-    if (!cam.sees(w)) continue;  // eq. 2.3
-    const auto px = cam.project(w);
+    // The camera's own ray towards X = q + D w (w itself at infinity, the thesis's model).
+    const Vec3 ray = at_infinity ? w : surface_ray(opt.q, rig.cameras[i].position_mm, w, depth_mm).normalized();
+    if (!cam.sees(ray)) continue;  // eq. 2.3
+    const auto px = cam.project(ray);
     if (!px || !cam.inside(*px)) continue;
     Contributor c;
     c.camera = static_cast<int>(i);

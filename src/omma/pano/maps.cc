@@ -8,14 +8,17 @@
 #include <stdexcept>
 
 #include "omma/pano/stitch.h"
+#include "omma/pano/surface.h"
 
 namespace omma::pano {
 
-cv::Mat coverage_map(const Rig& rig, const PanoGrid& grid, const SearchOptions& search) {
+cv::Mat coverage_map(const Rig& rig, const PanoGrid& grid, const SearchOptions& search, const cv::Mat& depth) {
+  check_depth(depth, grid);
   cv::Mat out(grid.height, grid.width, CV_8UC1);
   tbb::parallel_for(0, grid.height, [&](int row) {
     for (int col = 0; col < grid.width; ++col) {
-      const size_t n = find_contributors(rig, grid.pixel_direction(col, row), search).size();
+      const size_t n =
+          find_contributors(rig, grid.pixel_direction(col, row), depth_at(depth, col, row), search).size();
       out.at<unsigned char>(row, col) = static_cast<unsigned char>(std::min<size_t>(n, 255));
     }
   });
@@ -46,13 +49,15 @@ cv::Mat seam_mask(const cv::Mat& map, bool is_single_camera_map) {
 }
 
 cv::Mat boundary_map(const Rig& rig, const std::vector<cv::Mat>& frames_in, const PanoGrid& grid,
-                     const SearchOptions& search) {
+                     const SearchOptions& search, const cv::Mat& depth) {
   check_frames(rig, frames_in);
+  check_depth(depth, grid);
   const std::vector<cv::Mat> frames = frames_to_float(frames_in);
   cv::Mat out(grid.height, grid.width, CV_32FC1, cv::Scalar(0));
   tbb::parallel_for(0, grid.height, [&](int row) {
     for (int col = 0; col < grid.width; ++col) {
-      const auto cs = find_contributors(rig, grid.pixel_direction(col, row), search);  // eq. 4.12
+      const auto cs =
+          find_contributors(rig, grid.pixel_direction(col, row), depth_at(depth, col, row), search);  // eq. 4.12
       if (cs.size() < 2) continue;
       auto by_r = [](const Contributor& a, const Contributor& b) { return a.r < b.r; };
       const Contributor& j = *std::min_element(cs.begin(), cs.end(), by_r);  // eq. 4.13
@@ -81,15 +86,16 @@ cv::Mat boundary_overlay(const cv::Mat& pano, const cv::Mat& boundary, double th
 }
 
 double inter_camera_psnr(const Rig& rig, const std::vector<cv::Mat>& frames_in, const PanoGrid& grid,
-                         const SearchOptions& search) {
+                         const SearchOptions& search, const cv::Mat& depth) {
   check_frames(rig, frames_in);
+  check_depth(depth, grid);
   const std::vector<cv::Mat> frames = frames_to_float(frames_in);
   std::vector<double> row_sum(grid.height, 0.0);
   tbb::parallel_for(0, grid.height, [&](int row) {
     double sum = 0;
     std::vector<double> y;
     for (int col = 0; col < grid.width; ++col) {
-      const auto cs = find_contributors(rig, grid.pixel_direction(col, row), search);
+      const auto cs = find_contributors(rig, grid.pixel_direction(col, row), depth_at(depth, col, row), search);
       if (cs.size() < 2) continue;  // MSE_w = 0 for a single contributor
       y.clear();
       for (const auto& c : cs) y.push_back(luma(sample_bilinear(frames[c.camera], c.px)));

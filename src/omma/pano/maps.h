@@ -1,6 +1,8 @@
 // Maps that use the overlap of neighbouring cameras (thesis §4.3): coverage count, the directions
 // seen by a single camera, the object boundary map (eq. 4.12-4.16) and the inter-camera PSNR
-// (eq. 4.19-4.21). Frames: as in stitch.h (any depth; checked with check_frames). Intensities are
+// (eq. 4.19-4.21). Each takes an optional projection surface `depth` (surface.h; empty = the scene
+// at infinity, the thesis's model): the contributors of a direction are then those of its surface
+// point (contributors.h). Frames: as in stitch.h (any depth; checked with check_frames). Intensities are
 // the gray level Y (BT.601 luma) in [0,1], as in §4.3.
 #pragma once
 
@@ -15,7 +17,8 @@ namespace omma::pano {
 
 // Number of cameras seeing each direction (eq. 2.3, and the projection inside the image),
 // CV_8UC1, saturated at 255.
-cv::Mat coverage_map(const Rig& rig, const PanoGrid& grid, const SearchOptions& search = {});
+cv::Mat coverage_map(const Rig& rig, const PanoGrid& grid, const SearchOptions& search = {},
+                     const cv::Mat& depth = {});
 
 // Values of the single-camera map (Fig. 4.6c).
 inline constexpr unsigned char kSingleCamera = 255;  // seen by exactly one camera
@@ -32,7 +35,7 @@ cv::Mat seam_mask(const cv::Mat& map, bool is_single_camera_map);
 // k = argmax |r_i| among the contributors of each direction. CV_32FC1 in [0,1]; 0 where fewer
 // than two cameras see the direction.
 cv::Mat boundary_map(const Rig& rig, const std::vector<cv::Mat>& frames, const PanoGrid& grid,
-                     const SearchOptions& search = {});
+                     const SearchOptions& search = {}, const cv::Mat& depth = {});
 // eq. 4.16: the panorama with the directions where L_ob > threshold painted pure green
 // (Fig. 4.6d, 4.7). Same type as `pano` (8U or 32F, 3 channels).
 cv::Mat boundary_overlay(const cv::Mat& pano, const cv::Mat& boundary, double threshold);
@@ -43,6 +46,6 @@ cv::Mat boundary_binary(const cv::Mat& boundary, double threshold);
 // of each direction (0 where N <= 1), MSE_pan = mean over all m x n panorama pixels,
 // PSNR = -10 log10(MSE_pan) in dB. +infinity if every direction agrees exactly.
 double inter_camera_psnr(const Rig& rig, const std::vector<cv::Mat>& frames, const PanoGrid& grid,
-                         const SearchOptions& search = {});
+                         const SearchOptions& search = {}, const cv::Mat& depth = {});
 
 }  // namespace omma::pano

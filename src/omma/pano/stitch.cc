@@ -95,6 +95,7 @@ cv::Mat stitch(const Rig& rig, const std::vector<cv::Mat>& frames_in, const Stit
   check_frames(rig, frames_in);
   const PanoGrid& grid = opt.grid;
   if (grid.width <= 0 || grid.height <= 0) throw std::invalid_argument("panorama size must be positive");
+  check_depth(opt.depth, grid);
   const std::vector<cv::Mat> frames = frames_to_float(frames_in);
   const bool needs_neighbours = uses_neighbours(opt.method);
 
@@ -110,7 +111,7 @@ cv::Mat stitch(const Rig& rig, const std::vector<cv::Mat>& frames_in, const Stit
       auto& cs = rows[r - first];
       cs.resize(grid.width);
       for (int c = 0; c < grid.width; ++c)
-        cs[c] = find_contributors(rig, grid.pixel_direction(c, r), opt.blend.search);
+        cs[c] = find_contributors(rig, grid.pixel_direction(c, r), depth_at(opt.depth, c, r), opt.blend.search);
     }
     auto at = [&](int c, int r) -> const std::vector<Contributor>* { return &rows[r - first][c]; };
     for (int row = block.begin(); row < block.end(); ++row) {

@@ -14,6 +14,7 @@
 #include "omma/core/grid.h"
 #include "omma/core/rig.h"
 #include "omma/pano/method.h"
+#include "omma/pano/surface.h"
 #include "omma/pano/weights.h"
 
 namespace omma::pano {
@@ -22,6 +23,9 @@ struct StitchOptions {
   Method method = Method::kMrf;
   PanoGrid grid;         // output projection and size (default vr180 1080x1080)
   BlendParams blend;     // observer point q, Gaussian sigma, SAD epsilon
+  // The projection surface D(w) (surface.h, contributors.h): CV_32FC1 of the grid's size, mm from
+  // q; empty = +infinity everywhere (the thesis's model, eq. 2.3-2.5). Every method works on any D.
+  cv::Mat depth;
   bool progress = true;  // progress bar on stderr (also silenced by set_progress_enabled(false))
 };
 

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdint>
 #include <vector>
+#include <limits>
 #include <memory>
 #include <mutex>
 
@@ -24,6 +25,7 @@ constexpr double kPeriod = 240.0;  // mm, the tube repeats along z
 constexpr double kGeoCell = 0.3;   // mm, radius table cell along z (and about along the circumference)
 constexpr double kTexCell = 0.15;  // mm, albedo table cell
 constexpr double kMaxDistance = 400.0;
+constexpr double kNoHit = std::numeric_limits<double>::infinity();
 constexpr double kBlock = 4.0;     // mm, z blocks of the slope bounds
 constexpr int kSkipBlocks = 4;     // the free-space skip looks this many blocks either way
 constexpr double kTwoPi = 2 * kPi;
@@ -151,13 +153,21 @@ class ColonScene final : public Scene {
   }
 
   cv::Vec3f radiance(const Vec3& o, const Vec3& d, const Vec3& light) const override {
+    const double s = distance(o, d);
+    if (!(s < kNoHit)) return {0, 0, 0};
+    return shade(o + s * d, light);
+  }
+
+  // The first wall hit along o + s d, or kNoHit (outside the tube, along the axis, beyond
+  // kMaxDistance).
+  double distance(const Vec3& o, const Vec3& d) const override {
     const double rho0 = std::hypot(o.x(), o.y());
-    if (rho0 >= radius_at(o.z(), fast_phi(o.y(), o.x()))) return {0, 0, 0};  // outside the tube
+    if (rho0 >= radius_at(o.z(), fast_phi(o.y(), o.x()))) return kNoHit;  // outside the tube
     // Enter the shell rho >= r_min_ (analytic), then march.
     const double a = d.x() * d.x() + d.y() * d.y();
     double s = 0;
     if (rho0 < r_min_) {
-      if (a < 1e-12) return {0, 0, 0};  // along the axis: the lumen vanishes into the dark
+      if (a < 1e-12) return kNoHit;  // along the axis: the lumen vanishes into the dark
       const double b = o.x() * d.x() + o.y() * d.y(), c = rho0 * rho0 - r_min_ * r_min_;
       s = (-b + std::sqrt(b * b - a * c)) / a;
     }
@@ -177,7 +187,7 @@ class ColonScene final : public Scene {
     const double max_skip = kSkipBlocks * kBlock / std::max(adz, 1e-9);
     double g = gap(o, d, s), s_prev = s, g_prev = g;
     while (true) {
-      if (s > kMaxDistance) return {0, 0, 0};
+      if (s > kMaxDistance) return kNoHit;
       if (g <= 0) break;
       const double z = o.z() + s * d.z();
       const int k = block_of(z);
@@ -226,8 +236,7 @@ class ColonScene final : public Scene {
         side = -1;
       }
     }
-    const Vec3 p = o + hi * d;
-    return shade(p, light);
+    return hi;
   }
 
   std::string spec() const override { return "colon"; }
@@ -387,6 +396,7 @@ class SharedScene final : public Scene {
  public:
   explicit SharedScene(std::shared_ptr<const Scene> s) : s_(std::move(s)) {}
   cv::Vec3f radiance(const Vec3& o, const Vec3& d, const Vec3& l) const override { return s_->radiance(o, d, l); }
+  double distance(const Vec3& o, const Vec3& d) const override { return s_->distance(o, d); }
   std::string spec() const override { return s_->spec(); }
 
  private:

@@ -225,6 +225,17 @@ cv::Mat render_truth_linear(const Scene& scene, const PanoGrid& grid, const Dome
   return out;
 }
 
+cv::Mat render_truth_depth(const Scene& scene, const PanoGrid& grid, const DomePose& pose) {
+  if (grid.width <= 0 || grid.height <= 0) throw std::invalid_argument("truth grid size must be positive");
+  cv::Mat out(grid.height, grid.width, CV_32FC1);
+  tbb::parallel_for(0, grid.height, [&](int r) {
+    float* dst = out.ptr<float>(r);
+    for (int c = 0; c < grid.width; ++c)
+      dst[c] = static_cast<float>(scene.distance(pose.translation_mm, pose.rotation * grid.pixel_direction(c, r)));
+  });
+  return out;
+}
+
 cv::Mat render_truth(const Scene& scene, const PanoGrid& grid, const DomePose& pose, int n, double exposure,
                      Progress* progress) {
   return encode_srgb8(render_truth_linear(scene, grid, pose, n, exposure, progress));

@@ -86,6 +86,12 @@ cv::Mat render_truth(const Scene& scene, const PanoGrid& grid, const DomePose& p
 cv::Mat render_truth_linear(const Scene& scene, const PanoGrid& grid, const DomePose& pose = {},
                             int supersample = 2, double exposure = 1.0, Progress* progress = nullptr);
 
+// The ground-truth depth of the truth panorama (issue 14): for every truth pixel, the distance (mm)
+// from the dome centre along its centre direction to the surface the truth shows (Scene::distance);
+// +infinity where the ray meets nothing within the scene's range (and for far-field scenes).
+// CV_32FC1, grid-sized. Written by the simulator as DIR/truth_depth.tiff (32-bit float, mm).
+cv::Mat render_truth_depth(const Scene& scene, const PanoGrid& grid, const DomePose& pose = {});
+
 // Truth supersampling that keeps the ray spacing at or below 0.09 deg (the pixel pitch of a
 // 4096-wide 360-degree photo): ceil(grid pixel pitch / 0.09 deg), clamped to 1..4. 2 for vr180
 // 1080x1080, 4 for vr180 540x540.

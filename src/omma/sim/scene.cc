@@ -111,6 +111,11 @@ class CheckerScene final : public Scene {
     if (ft < 0.2 || fp < 0.2) c0 *= 0.25f;
     return c0;
   }
+  double distance(const Vec3& o, const Vec3& d) const override {
+    const double b = o.dot(d), c = o.squaredNorm() - radius_ * radius_;
+    if (c > 0) return std::numeric_limits<double>::infinity();
+    return -b + std::sqrt(std::max(0.0, b * b - c));
+  }
   std::string spec() const override { return fmt::format("checker:{}", radius_); }
 
  private:
@@ -134,6 +139,10 @@ class UsafScene final : public Scene {
       case UsafPaint::kBlack: return {0.03f, 0.03f, 0.03f};
     }
     return {0, 0, 0};
+  }
+  double distance(const Vec3& o, const Vec3& d) const override {
+    if (d.z() <= 1e-9 || o.z() >= distance_) return std::numeric_limits<double>::infinity();
+    return (distance_ - o.z()) / d.z();
   }
   std::string spec() const override { return fmt::format("usaf:{}", distance_); }
 

@@ -10,6 +10,7 @@
 // rendered by an ideal camera reproduces the photo's own pixel values.
 #pragma once
 
+#include <limits>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -32,6 +33,15 @@ class Scene {
   // frame; dir a unit vector. `light` is where the dome's light source is (the dome centre); scenes
   // lit by the dome (colon) use it, far-field and self-lit scenes ignore it.
   virtual cv::Vec3f radiance(const Vec3& origin, const Vec3& dir, const Vec3& light) const = 0;
+  // Distance (mm) along the ray origin + s * dir (dir a unit vector) to the surface point whose
+  // radiance radiance() returns; +infinity for far-field scenes and for rays that meet nothing
+  // within the scene's range (the colon's dark lumen beyond 400 mm). The ground-truth depth of
+  // issue 14 (render_truth_depth).
+  virtual double distance(const Vec3& origin, const Vec3& dir) const {
+    (void)origin;
+    (void)dir;
+    return std::numeric_limits<double>::infinity();
+  }
   // The spec this scene was made from (e.g. "colon", "photo:/path/louvre.jpg").
   virtual std::string spec() const = 0;
 };

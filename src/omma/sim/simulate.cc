@@ -44,10 +44,19 @@ SimulateResult simulate(const Rig& nominal, const Scene& scene, const SimulateOp
     const int n = o.truth_supersample > 0 ? o.truth_supersample : auto_truth_supersample(o.truth_grid);
     Progress progress("simulate truth", o.truth_grid.height, o.progress);
     res.truth = render_truth(scene, o.truth_grid, o.pose, n, o.effects.exposure, &progress);
+    res.truth_depth = render_truth_depth(scene, o.truth_grid, o.pose);
     progress.finish();
     res.truth_ms = ms_since(t0);
   }
   return res;
+}
+
+ColonCase colon_case(uint64_t seed) {
+  ColonCase c;
+  c.scene.seed = static_cast<unsigned>(6 + seed);
+  c.options.effects.seed = seed;
+  c.options.pose.translation_mm = Vec3(0, 0, 12.0 * (static_cast<double>(seed) - 1));
+  return c;
 }
 
 nlohmann::json simulation_summary(const SimulateResult& r, const SimulateOptions& o, const Scene& scene) {
@@ -81,6 +90,7 @@ nlohmann::json simulation_summary(const SimulateResult& r, const SimulateOptions
            o.truth ? nlohmann::json{{"projection", to_string(o.truth_grid.projection)},
                                     {"width", o.truth_grid.width},
                                     {"height", o.truth_grid.height},
+                                    {"depth", "truth_depth.tiff: float32 mm from the dome centre, inf = none"},
                                     {"supersample", o.truth_supersample > 0 ? o.truth_supersample
                                                                             : auto_truth_supersample(o.truth_grid)}}
                    : nlohmann::json(nullptr)},
@@ -114,6 +124,7 @@ void write_frames_folder(const fs::path& dir, const SimulateResult& r, const Sim
       if (o.raw) write_image(target / raw_frame_filename(id), r.frames[i].raw);
     }
     if (!r.truth.empty()) write_image(target / "truth.png", r.truth);
+    if (!r.truth_depth.empty()) write_image(target / "truth_depth.tiff", r.truth_depth);
     save_rig(r.nominal, target / "rig.json");
     save_rig(r.true_rig, target / "rig_true.json");
     write_text_atomically(target / "sim.json", simulation_summary(r, o, scene).dump(2) + "\n");

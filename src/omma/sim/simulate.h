@@ -3,6 +3,9 @@
 //   DIR/cam_XX.png        8-bit sRGB frames (render.h), XX = camera id
 //   DIR/cam_XX_raw.png    16-bit RGGB Bayer, values 0 .. 2^bits - 1 (with raw = true)
 //   DIR/truth.png         the ideal panorama from the dome centre on the truth grid (8-bit sRGB)
+//   DIR/truth_depth.tiff  the true depth of every truth pixel: 32-bit float, mm from the dome centre
+//                         along the pixel's direction, +inf where nothing lies within the scene's
+//                         range (render_truth_depth; `omma stitch --depth truth:FILE` reads it)
 //   DIR/rig.json          the nominal rig (what the stitcher is told)
 //   DIR/rig_true.json     the rig the frames were rendered with (= rig.json without perturbation)
 //   DIR/sim.json          what was simulated: scene, seed, effects, per-camera gains, perturbation
@@ -34,6 +37,7 @@ struct SimulateResult {
   Rig true_rig;                     // the rig rendered (perturbed)
   std::vector<CameraFrame> frames;  // in rig order
   cv::Mat truth;                    // CV_8UC3 sRGB (empty if options.truth is false)
+  cv::Mat truth_depth;              // CV_32FC1 mm (render_truth_depth; empty if options.truth is false)
   double cameras_ms = 0, truth_ms = 0;
 };
 
@@ -45,6 +49,16 @@ SimulateResult simulate(const Rig& nominal, const Scene& scene, const SimulateOp
 // Throws IoError if `dir` is a file or cannot be written.
 void write_frames_folder(const std::filesystem::path& dir, const SimulateResult& result,
                          const SimulateOptions& options, const Scene& scene);
+
+// The colon cases of the depth tables (issue 14 point 4; tests, `omma demo`, scripts/depth_table.sh):
+// seed s (1, 2, 3, ...) simulates with effects.seed = s (noise, colour gains), the colon texture
+// seed 6 + s (the default colon is seed 1's) and the dome (s - 1) * 12 mm along the tube, so that
+// each seed sees other folds and polyps at other distances.
+struct ColonCase {
+  ColonParams scene;
+  SimulateOptions options;  // effects.seed and pose set; everything else default
+};
+ColonCase colon_case(uint64_t seed);
 
 // The content of DIR/sim.json.
 nlohmann::json simulation_summary(const SimulateResult& result, const SimulateOptions& options,

@@ -1,0 +1,445 @@
+#include "omma/pano/sweep.h"
+
+#include <fmt/format.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include <opencv2/imgproc.hpp>
+
+#include "omma/pano/stitch.h"
+
+namespace omma::pano {
+
+bool SweepOptions::IsValid(std::string* why) const {
+  auto fail = [&](const std::string& m) {
+    if (why) *why = m;
+    return false;
+  };
+  if (!(near_mm > 0) || !std::isfinite(near_mm)) return fail("near distance must be a positive number of mm");
+  if (!(far_mm > near_mm)) return fail(fmt::format("far distance {} mm must exceed near {} mm", far_mm, near_mm));
+  if (steps < 2 || steps > 256) return fail(fmt::format("steps must be 2..256, got {}", steps));
+  if (factor < 1 || factor > 64) return fail(fmt::format("coarse factor must be 1..64, got {}", factor));
+  if (window < 1 || window > 8) return fail(fmt::format("patch radius must be 1..8, got {}", window));
+  if (paths != 4 && paths != 8) return fail("paths must be 4 or 8");
+  if (!(noise_sigma > 0) || !(w0 > 0) || !(p1 >= 0) || !(p2 >= p1) || !(edge_gray > 0) || !(margin_scale > 0) ||
+      !(fill_sigma > 0) || !(fill_lambda > 0) || !(prior_mm >= 0) || !(temporal_weight >= 0))
+    return fail("sweep weights must be positive (p2 >= p1)");
+  return true;
+}
+
+namespace {
+
+// Where camera i sees the surface point of every coarse pixel of `rect` at one candidate depth:
+// map_x / map_y in cv::remap's convention (pixel centres at integers), valid = 255 where camera i
+// sees the point (eq. 2.3 on its own ray, inside its image).
+struct Layer {
+  cv::Rect rect;
+  cv::Mat map_x, map_y;  // CV_32FC1
+  cv::Mat valid;         // CV_8UC1
+  bool empty() const { return rect.area() == 0; }
+};
+
+// Sums over the (2r+1)^2 window around every pixel (zero outside), separable running sums.
+void box_sum(const float* in, int w, int h, int r, float* tmp, float* out) {
+  for (int y = 0; y < h; ++y) {
+    const float* a = in + size_t(y) * w;
+    float* t = tmp + size_t(y) * w;
+    double s = 0;
+    for (int x = 0; x < std::min(r, w); ++x) s += a[x];
+    for (int x = 0; x < w; ++x) {
+      if (x + r < w) s += a[x + r];
+      t[x] = static_cast<float>(s);
+      if (x - r >= 0) s -= a[x - r];
+    }
+  }
+  std::vector<double> s(w, 0.0);
+  for (int y = 0; y < std::min(r, h); ++y)
+    for (int x = 0; x < w; ++x) s[x] += tmp[size_t(y) * w + x];
+  for (int y = 0; y < h; ++y) {
+    if (y + r < h)
+      for (int x = 0; x < w; ++x) s[x] += tmp[size_t(y + r) * w + x];
+    for (int x = 0; x < w; ++x) out[size_t(y) * w + x] = static_cast<float>(s[x]);
+    if (y - r >= 0)
+      for (int x = 0; x < w; ++x) s[x] -= tmp[size_t(y - r) * w + x];
+  }
+}
+
+}  // namespace
+
+struct DepthSweep::Impl {
+  Rig rig;
+  PanoGrid grid, coarse;
+  SweepOptions opt;
+  std::vector<Vec3> dirs;       // per coarse pixel
+  std::vector<double> inv;      // per candidate, 1/mm
+  std::vector<double> sigma;    // per camera: blur to the coarse pitch, camera pixels
+  bool cached = false;
+  std::vector<Layer> layers;    // [k * cameras + i] when cached
+  int cams() const { return static_cast<int>(rig.cameras.size()); }
+
+  Layer make_layer(int k, int i) const;
+  void sample(int k, const std::vector<cv::Mat>& gray, std::vector<Layer>& tmp_layers,
+              std::vector<cv::Mat>& values) const;
+};
+
+Layer DepthSweep::Impl::make_layer(int k, int i) const {
+  Layer L;
+  const RigCamera& rc = rig.cameras[i];
+  const CameraModel cam = rc.model();
+  const Vec3 q = opt.search.q;
+  const double D = 1 / inv[k];
+  // Footprint: rays through a 9 x 9 lattice of the camera's pixels (border included) meet the
+  // sphere |X - q| = D; their directions from q bound the rect (with a margin).
+  int c0 = coarse.width, r0 = coarse.height, c1 = -1, r1 = -1;
+  bool wraps = false;
+  std::vector<double> cols;
+  for (int a = 0; a <= 8; ++a)
+    for (int b = 0; b <= 8; ++b) {
+      const Vec3 d = cam.unproject(Vec2(rc.in.width * a / 8.0, rc.in.height * b / 8.0));
+      const Vec3 o = rc.position_mm - q;  // |o + t d| = D, t > 0
+      const double bb = o.dot(d), cc = o.squaredNorm() - D * D;
+      if (cc >= 0) continue;
+      const double t = -bb + std::sqrt(bb * bb - cc);
+      const auto px = coarse.pixel((o + t * d).normalized());
+      if (!px) continue;
+      c0 = std::min(c0, int(std::floor(px->x())));
+      c1 = std::max(c1, int(std::floor(px->x())));
+      r0 = std::min(r0, int(std::floor(px->y())));
+      r1 = std::max(r1, int(std::floor(px->y())));
+      cols.push_back(px->x());
+    }
+  if (c1 < 0) return L;
+  // On the 360-degree grids a footprint across phi = 0 (or around the pole) spans the whole width.
+  if (coarse.projection != Projection::kVr180 && c1 - c0 > coarse.width / 2) wraps = true;
+  const int m = 3;
+  if (wraps) {
+    c0 = 0;
+    c1 = coarse.width - 1;
+  }
+  c0 = std::max(0, c0 - m);
+  r0 = std::max(0, r0 - m);
+  c1 = std::min(coarse.width - 1, c1 + m);
+  r1 = std::min(coarse.height - 1, r1 + m);
+  if (r0 <= 1 + m && coarse.projection != Projection::kVr180) r0 = 0;  // the pole row
+  L.rect = cv::Rect(c0, r0, c1 - c0 + 1, r1 - r0 + 1);
+  L.map_x.create(L.rect.size(), CV_32FC1);
+  L.map_y.create(L.rect.size(), CV_32FC1);
+  L.valid.create(L.rect.size(), CV_8UC1);
+  const Vec3 b = q - rc.position_mm;
+  int any = 0;
+  for (int r = 0; r < L.rect.height; ++r)
+    for (int c = 0; c < L.rect.width; ++c) {
+      const Vec3& w = dirs[size_t(r + r0) * coarse.width + (c + c0)];
+      const Vec3 ray = (w + inv[k] * b).normalized();  // contributors.h: w + s (q - c_i)
+      std::optional<Vec2> px;
+      if (cam.sees(ray)) px = cam.project(ray);
+      const bool ok = px && cam.inside(*px);
+      L.valid.at<uint8_t>(r, c) = ok ? 255 : 0;
+      L.map_x.at<float>(r, c) = ok ? static_cast<float>(px->x() - 0.5) : -1.f;
+      L.map_y.at<float>(r, c) = ok ? static_cast<float>(px->y() - 0.5) : -1.f;
+      any += ok;
+    }
+  if (any == 0) L.rect = cv::Rect();
+  return L;
+}
+
+DepthSweep::DepthSweep(const Rig& rig, const PanoGrid& grid, const SweepOptions& opt)
+    : impl_(std::make_unique<Impl>()) {
+  std::string why;
+  if (!opt.IsValid(&why)) throw std::invalid_argument("depth sweep: " + why);
+  if (rig.cameras.empty()) throw std::invalid_argument("depth sweep: the rig has no cameras");
+  if (grid.width <= 0 || grid.height <= 0) throw std::invalid_argument("depth sweep: empty grid");
+  double inner = 0;
+  for (const auto& c : rig.cameras) inner = std::max(inner, (c.position_mm - opt.search.q).norm());
+  if (opt.near_mm <= inner)
+    throw std::invalid_argument(fmt::format(
+        "depth sweep: near distance {} mm lies inside the dome (cameras up to {:.2f} mm from the observer)",
+        opt.near_mm, inner));
+  Impl& m = *impl_;
+  m.rig = rig;
+  m.grid = grid;
+  m.opt = opt;
+  m.coarse = PanoGrid{grid.projection, std::max(1, (grid.width + opt.factor / 2) / opt.factor),
+                      std::max(1, (grid.height + opt.factor / 2) / opt.factor)};
+  m.dirs.resize(size_t(m.coarse.width) * m.coarse.height);
+  for (int r = 0; r < m.coarse.height; ++r)
+    for (int c = 0; c < m.coarse.width; ++c) m.dirs[size_t(r) * m.coarse.width + c] = m.coarse.pixel_direction(c, r);
+  for (int k = 0; k < opt.steps; ++k) {
+    const double t = double(k) / (opt.steps - 1);
+    m.inv.push_back((1 - t) / opt.near_mm + t / opt.far_mm);
+  }
+  // Coarse pitch (rad): the larger of the two axes' spacing.
+  double pitch = 0;
+  switch (grid.projection) {
+    case Projection::kEquirect: pitch = std::max(2 * kPi / m.coarse.width, kPi / 2 / m.coarse.height); break;
+    case Projection::kVr180: pitch = std::max(kPi / m.coarse.width, kPi / m.coarse.height); break;
+    case Projection::kEquirectFull: pitch = std::max(2 * kPi / m.coarse.width, kPi / m.coarse.height); break;
+  }
+  for (const auto& c : rig.cameras) m.sigma.push_back(0.5 * pitch * std::max(c.in.fu, c.in.fv));
+  // Cache the layers when they are small (the engine's coarse grids); else build them per call.
+  const double px_per_layer = double(m.coarse.width) * m.coarse.height * 0.15;
+  const double bytes = px_per_layer * 9 * opt.steps * m.cams();
+  m.cached = bytes < 96e6;
+  if (m.cached) {
+    m.layers.resize(size_t(opt.steps) * m.cams());
+    tbb::parallel_for(0, opt.steps * m.cams(), [&](int ki) { m.layers[ki] = m.make_layer(ki / m.cams(), ki % m.cams()); });
+  }
+}
+
+DepthSweep::~DepthSweep() = default;
+DepthSweep::DepthSweep(DepthSweep&&) noexcept = default;
+DepthSweep& DepthSweep::operator=(DepthSweep&&) noexcept = default;
+const PanoGrid& DepthSweep::coarse_grid() const { return impl_->coarse; }
+const PanoGrid& DepthSweep::grid() const { return impl_->grid; }
+const SweepOptions& DepthSweep::options() const { return impl_->opt; }
+double DepthSweep::inverse_depth(int k) const { return impl_->inv.at(k); }
+
+DepthEstimate DepthSweep::estimate(const std::vector<cv::Mat>& frames_in, const cv::Mat& previous,
+                                   bool upsample) const {
+  const Impl& m = *impl_;
+  check_frames(m.rig, frames_in);
+  const SweepOptions& o = m.opt;
+  const int W = m.coarse.width, H = m.coarse.height, K = o.steps, N = W * H, nc = m.cams();
+  if (!previous.empty() && (previous.type() != CV_32FC1 || previous.cols != W || previous.rows != H))
+    throw std::invalid_argument("depth sweep: the previous estimate is not on this sweep's coarse grid");
+  // Gray levels, blurred to the coarse pitch.
+  std::vector<cv::Mat> gray(nc);
+  tbb::parallel_for(0, nc, [&](int i) {
+    cv::Mat f = frames_in[i], g;
+    if (f.channels() == 3) cv::cvtColor(f, f, cv::COLOR_BGR2GRAY);  // BT.601 luma
+    f.convertTo(g, CV_32F, f.depth() == CV_8U ? 1 / 255.0 : f.depth() == CV_16U ? 1 / 65535.0 : 1.0);
+    if (m.sigma[i] > 0.3) cv::GaussianBlur(g, g, cv::Size(), m.sigma[i]);
+    gray[i] = g;
+  });
+  // Cost volume, candidate-major while it is filled: num = sum w (1 - zncc), den = sum w.
+  std::vector<float> num(size_t(K) * N, 0.f), den(size_t(K) * N, 0.f);
+  cv::Mat guide_sum(H, W, CV_32FC1, cv::Scalar(0)), guide_n(H, W, CV_32FC1, cv::Scalar(0));
+  const int kmid = K / 2;
+  const int r = o.window;
+  const float win_area = float((2 * r + 1) * (2 * r + 1));
+  const float sn2 = float(o.noise_sigma * o.noise_sigma);
+  tbb::parallel_for(0, K, [&](int k) {
+    std::vector<Layer> own(m.cached ? 0 : nc);
+    std::vector<const Layer*> lay(nc);
+    for (int i = 0; i < nc; ++i) {
+      if (m.cached) {
+        lay[i] = &m.layers[size_t(k) * nc + i];
+      } else {
+        own[i] = m.make_layer(k, i);
+        lay[i] = &own[i];
+      }
+    }
+    std::vector<cv::Mat> val(nc);
+    for (int i = 0; i < nc; ++i)
+      if (!lay[i]->empty())
+        cv::remap(gray[i], val[i], lay[i]->map_x, lay[i]->map_y, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+    if (k == kmid)
+      for (int i = 0; i < nc; ++i) {
+        if (lay[i]->empty()) continue;
+        cv::Mat gs = guide_sum(lay[i]->rect), gn = guide_n(lay[i]->rect);
+        cv::add(gs, val[i], gs, lay[i]->valid);
+        cv::add(gn, cv::Scalar(1), gn, lay[i]->valid);
+      }
+    float* nk = num.data() + size_t(k) * N;
+    float* dk = den.data() + size_t(k) * N;
+    std::vector<float> ch[6], sum[6], tmp;
+    for (int i = 0; i < nc; ++i)
+      for (int j = i + 1; j < nc; ++j) {
+        if (lay[i]->empty() || lay[j]->empty()) continue;
+        const cv::Rect I = lay[i]->rect & lay[j]->rect;
+        if (I.area() == 0) continue;
+        const int w = I.width, h = I.height, n = w * h;
+        for (auto& v : ch) v.assign(n, 0.f);
+        for (auto& v : sum) v.resize(n);
+        tmp.resize(n);
+        const cv::Point oi = I.tl() - lay[i]->rect.tl(), oj = I.tl() - lay[j]->rect.tl();
+        int both = 0;
+        for (int y = 0; y < h; ++y)
+          for (int x = 0; x < w; ++x) {
+            if (!lay[i]->valid.at<uint8_t>(y + oi.y, x + oi.x) || !lay[j]->valid.at<uint8_t>(y + oj.y, x + oj.x))
+              continue;
+            const float a = val[i].at<float>(y + oi.y, x + oi.x), b = val[j].at<float>(y + oj.y, x + oj.x);
+            const int p = y * w + x;
+            ch[0][p] = 1;
+            ch[1][p] = a;
+            ch[2][p] = b;
+            ch[3][p] = a * a;
+            ch[4][p] = b * b;
+            ch[5][p] = a * b;
+            ++both;
+          }
+        if (both == 0) continue;
+        for (int c = 0; c < 6; ++c) box_sum(ch[c].data(), w, h, r, tmp.data(), sum[c].data());
+        for (int y = 0; y < h; ++y)
+          for (int x = 0; x < w; ++x) {
+            const int p = y * w + x;
+            if (ch[0][p] == 0) continue;
+            const float cnt = sum[0][p];
+            if (cnt < 0.5f * win_area) continue;
+            const float ma = sum[1][p] / cnt, mb = sum[2][p] / cnt;
+            const float va = std::max(0.f, sum[3][p] / cnt - ma * ma), vb = std::max(0.f, sum[4][p] / cnt - mb * mb);
+            const float cov = sum[5][p] / cnt - ma * mb;
+            const float zncc = std::clamp(cov / std::sqrt(va * vb + 1e-12f), -1.f, 1.f);
+            const float v = std::min(va, vb);
+            const float wt = cnt / win_area * v / (v + sn2);
+            const size_t u = size_t(y + I.y) * W + (x + I.x);
+            nk[u] += wt * (1 - zncc);
+            dk[u] += wt;
+          }
+      }
+  });
+  // Final cost C(u, k), pixel-major; evidence per pixel.
+  std::vector<float> C(size_t(N) * K);
+  std::vector<float> evidence(N, 0.f);
+  const float w0 = float(o.w0);
+  const double srange = m.inv.front() - m.inv.back();
+  tbb::parallel_for(0, N, [&](int u) {
+    float e = 0;
+    const float sp = previous.empty() ? 0.f : previous.ptr<float>()[u];
+    for (int k = 0; k < K; ++k) {
+      const float d = den[size_t(k) * N + u];
+      float c = (num[size_t(k) * N + u] + w0) / (d + w0);
+      if (o.temporal_weight > 0 && sp > 0)
+        c += float(o.temporal_weight *
+                   std::min(1.0, std::abs(m.inv[k] - sp) / srange * (K - 1)));
+      C[size_t(u) * K + k] = c;
+      e += d;
+    }
+    evidence[u] = e / K;
+  });
+  num.clear();
+  num.shrink_to_fit();
+  den.clear();
+  den.shrink_to_fit();
+  cv::Mat guide;
+  cv::divide(guide_sum, cv::max(guide_n, 1.0), guide);
+  // Semi-global aggregation.
+  std::vector<float> S(size_t(N) * K, 0.f);
+  const int dirs8[8][2] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}, {1, 1}, {-1, -1}, {1, -1}, {-1, 1}};
+  const float P1 = float(o.p1);
+  auto run_path = [&](int dx, int dy, std::vector<float>& out) {
+    std::vector<float> prev(size_t(W) * K), cur(size_t(W) * K);
+    std::vector<float> prev_min(W), cur_min(W);
+    const int y0 = dy >= 0 ? 0 : H - 1, ys = dy >= 0 ? 1 : -1;
+    const int x0 = dx >= 0 ? 0 : W - 1, xs = dx >= 0 ? 1 : -1;
+    for (int yi = 0, y = y0; yi < H; ++yi, y += ys) {
+      for (int xi = 0, x = x0; xi < W; ++xi, x += xs) {
+        const int u = y * W + x;
+        const float* c = &C[size_t(u) * K];
+        float* L = &cur[size_t(x) * K];
+        const int px = x - dx, py = y - dy;
+        const bool has = px >= 0 && px < W && py >= 0 && py < H && (dy == 0 || yi > 0);
+        float mn = std::numeric_limits<float>::max();
+        if (!has) {
+          for (int k = 0; k < K; ++k) {
+            L[k] = c[k];
+            mn = std::min(mn, L[k]);
+          }
+        } else {
+          const float* Lp = dy == 0 ? &cur[size_t(px) * K] : &prev[size_t(px) * K];
+          const float mp = dy == 0 ? cur_min[px] : prev_min[px];
+          const float dg = std::abs(guide.at<float>(y, x) - guide.at<float>(py, px));
+          const float P2 = std::max(P1, float(o.p2 / (1 + dg / o.edge_gray)));
+          for (int k = 0; k < K; ++k) {
+            float best = std::min(Lp[k], mp + P2);
+            if (k > 0) best = std::min(best, Lp[k - 1] + P1);
+            if (k + 1 < K) best = std::min(best, Lp[k + 1] + P1);
+            L[k] = c[k] + best - mp;
+            mn = std::min(mn, L[k]);
+          }
+        }
+        cur_min[x] = mn;
+        float* o2 = &out[size_t(u) * K];
+        for (int k = 0; k < K; ++k) o2[k] += L[k];
+      }
+      std::swap(prev, cur);
+      std::swap(prev_min, cur_min);
+    }
+  };
+  {
+    // Paths on two workers, each summing its paths into its own buffer.
+    const int P = o.paths;
+    std::vector<float> part(size_t(N) * K, 0.f);
+    tbb::parallel_for(0, 2, [&](int g) {
+      std::vector<float>& dst = g == 0 ? S : part;
+      for (int d = g; d < P; d += 2) run_path(dirs8[d][0], dirs8[d][1], dst);
+    });
+    for (size_t t = 0; t < S.size(); ++t) S[t] += part[t];
+  }
+  C.clear();
+  C.shrink_to_fit();
+  // Winner, sub-candidate refinement, confidence.
+  cv::Mat s_best(H, W, CV_32FC1), conf(H, W, CV_32FC1);
+  std::vector<int> kbest(N);
+  const double dinv = (m.inv.back() - m.inv.front()) / (K - 1);
+  tbb::parallel_for(0, N, [&](int u) {
+    const float* s = &S[size_t(u) * K];
+    int kb = int(std::min_element(s, s + K) - s);
+    double kf = kb;
+    if (kb > 0 && kb + 1 < K) {
+      const double a = s[kb - 1], b = s[kb], c = s[kb + 1], den2 = a - 2 * b + c;
+      if (den2 > 1e-9) kf = kb + std::clamp(0.5 * (a - c) / den2, -0.5, 0.5);
+    }
+    float second = std::numeric_limits<float>::max();
+    for (int k = 0; k < K; ++k)
+      if (std::abs(k - kb) >= 2) second = std::min(second, s[k]);
+    const double margin = second == std::numeric_limits<float>::max() ? 0 : second - s[kb];
+    const double e = evidence[u];
+    const double c = (1 - std::exp(-margin / (o.paths * o.margin_scale))) * e / (e + o.w0);
+    kbest[u] = kb;
+    s_best.ptr<float>()[u] = float(m.inv.front() + kf * dinv);
+    conf.ptr<float>()[u] = float(std::clamp(c, 0.0, 1.0));
+  });
+  DepthEstimate out;
+  // Prior: the median confident estimate (or the option), and the ends of the range.
+  std::vector<float> good;
+  long near_n = 0, far_n = 0;
+  for (int u = 0; u < N; ++u)
+    if (conf.ptr<float>()[u] > 0.3f) {
+      good.push_back(s_best.ptr<float>()[u]);
+      near_n += kbest[u] == 0;
+      far_n += kbest[u] == K - 1;
+    }
+  out.confident = long(good.size());
+  out.at_near = good.empty() ? 0 : double(near_n) / good.size();
+  out.at_far = good.empty() ? 0 : double(far_n) / good.size();
+  double s_prior;
+  if (o.prior_mm > 0) {
+    s_prior = 1 / o.prior_mm;
+  } else if (!good.empty()) {
+    std::nth_element(good.begin(), good.begin() + good.size() / 2, good.end());
+    s_prior = good[good.size() / 2];
+  } else {
+    s_prior = 0.5 * (m.inv.front() + m.inv.back());
+  }
+  out.prior_mm = 1 / s_prior;
+  // Fallback by normalised convolution towards the prior.
+  cv::Mat cs = conf.mul(s_best), cs_blur, c_blur;
+  cv::GaussianBlur(cs, cs_blur, cv::Size(), o.fill_sigma, o.fill_sigma, cv::BORDER_REPLICATE);
+  cv::GaussianBlur(conf, c_blur, cv::Size(), o.fill_sigma, o.fill_sigma, cv::BORDER_REPLICATE);
+  cv::Mat fill = (cs_blur + o.fill_lambda * s_prior) / (c_blur + o.fill_lambda);
+  cv::Mat s_final = conf.mul(s_best) + (1 - conf).mul(fill);
+  out.coarse_inverse = s_final;
+  out.coarse_confidence = conf;
+  if (upsample) {
+    cv::Mat s_up, c_up;
+    cv::resize(s_final, s_up, cv::Size(m.grid.width, m.grid.height), 0, 0, cv::INTER_LINEAR);
+    cv::resize(conf, c_up, cv::Size(m.grid.width, m.grid.height), 0, 0, cv::INTER_LINEAR);
+    cv::Mat lo = s_up < float(m.inv.back());
+    s_up.setTo(float(m.inv.back()), lo);
+    cv::divide(1.0, s_up, out.depth);
+    out.confidence = c_up;
+  }
+  return out;
+}
+
+DepthEstimate estimate_depth(const Rig& rig, const std::vector<cv::Mat>& frames, const PanoGrid& grid,
+                             const SweepOptions& opt) {
+  return DepthSweep(rig, grid, opt).estimate(frames);
+}
+
+}  // namespace omma::pano

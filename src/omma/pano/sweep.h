@@ -1,0 +1,126 @@
+// Depth of every panorama direction from the cameras' overlaps (issue 14 point 3): a sweep of
+// spheres around the observer q (the "plane sweep" of multi-view stereo with spheres as planes,
+// since the panorama is a set of directions from q), a patch cost robust to noise, colour gain
+// and vignetting, semi-global aggregation over the panorama grid with edge-aware penalties, a
+// confidence, and a smooth fallback to a prior distance where nothing can be measured.
+//
+// Grid. The sweep runs on a coarse grid of the output's projection, `factor` times smaller in each
+// axis (coarse pixel (c, r) looks at the direction of output pixel area ((c + 1/2) f, (r + 1/2) f)).
+// The depth is upsampled to the output grid at the end (bilinear in inverse depth).
+//
+// Candidates. D_k, k = 0 .. steps-1, uniform in inverse depth s = 1/D between 1/near and 1/far
+// (the parallax of a camera at baseline b is b * s, so equal steps in s are equal steps in pixels).
+//
+// Cost (per coarse pixel u and candidate k). Every camera i that sees the surface point
+// X = q + D_k w_u (contributors.h) is sampled there, as gray level Y (BT.601 luma of the frame's
+// values in [0,1]) of the frame blurred to the coarse grid's pitch (Gaussian, sigma = half a coarse
+// pixel in camera pixels), into the layer L_ik. For every pair of cameras (i, j) that both see u at
+// D_k, over the (2 window + 1)^2 patch of coarse pixels P around u where both see the surface:
+//     ZNCC_ij = cov(L_i, L_j) / sqrt(var L_i var L_j)   (zero-mean normalised cross-correlation:
+//               invariant to a gain and an offset per camera and patch, i.e. to the colour gains
+//               and the slowly varying vignetting)
+//     w_ij    = n/|P| * v / (v + sigma_n^2),  v = min(var L_i, var L_j)  (texture weight: a flat
+//               patch gives no evidence, n = pixels of P both cameras see)
+//     C(u, k) = (sum_ij w_ij (1 - ZNCC_ij) + w_0 * 1) / (sum_ij w_ij + w_0)
+// in [0, 2]; w_0 pulls directions without evidence (one camera, no texture) to the neutral 1.
+// The SAD of eq. 4.17 is the special case of one candidate (D = infinity), a 1-pixel patch and
+// absolute differences instead of ZNCC.
+//
+// Aggregation (semi-global matching, Hirschmueller 2008) along `paths` (4 or 8) directions r of
+// the coarse grid:
+//     L_r(u, k) = C(u, k) + min(L_r(u-r, k), L_r(u-r, k+-1) + P1, min_j L_r(u-r, j) + P2(u))
+//                 - min_j L_r(u-r, j),       P2(u) = max(P1, P2 / (1 + |G(u) - G(u-r)| / edge_gray))
+// with G the mean gray level of the cameras at the middle candidate (edge-aware: depth may jump
+// where the image has an edge). S(u, k) = sum_r L_r(u, k); k* = argmin S, refined by a parabola
+// through S(k*-1), S(k*), S(k*+1) to a fractional k.
+//
+// Confidence in [0, 1]: c = (1 - exp(-margin / (paths * margin_scale))) * E / (E + w_0), margin =
+// the lowest S at least two candidates from k* minus S(k*), E = the mean evidence sum_ij w_ij of u.
+// Fallback: s_fill = (G_sigma * (c s) + lambda s_prior) / (G_sigma * c + lambda) (normalised
+// convolution, sigma = fill_sigma coarse pixels) and the result s = c s* + (1 - c) s_fill, so
+// untextured or single-camera directions take the depth of confident neighbours, and far from any
+// the prior distance (prior_mm, or the median of the confident estimates).
+//
+// Temporal (the engine): a previous inverse-depth map (coarse grid) adds
+// temporal_weight * min(|s_k - s_prev(u)| / (s_0 - s_{K-1}) * K, 1) to C, which keeps the depth of
+// static wall from flickering with the sensor noise.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "omma/core/grid.h"
+#include "omma/core/rig.h"
+#include "omma/pano/contributors.h"
+
+namespace omma::pano {
+
+struct SweepOptions {
+  double near_mm = 8;      // nearest candidate distance from q, mm (must lie outside the dome)
+  double far_mm = 300;     // farthest candidate, mm
+  int steps = 48;          // number of candidates (uniform in 1/D)
+  int factor = 4;          // coarse grid = output / factor
+  int window = 2;          // patch radius, coarse pixels (patch 5x5)
+  double noise_sigma = 0.01;   // sigma_n: gray-level noise for the texture weight
+  double w0 = 0.05;            // evidence of the neutral cost 1
+  double p1 = 0.03, p2 = 0.3;  // SGM penalties, cost units
+  double edge_gray = 0.03;     // edge-aware P2 scale, gray levels
+  int paths = 8;               // 4 or 8
+  double margin_scale = 0.05;  // confidence scale of the cost margin per path
+  double fill_sigma = 8;       // fallback smoothing, coarse pixels
+  double fill_lambda = 1e-3;   // weight of the prior in the fallback
+  double prior_mm = 0;         // prior distance; 0 = median of the confident estimates
+  double temporal_weight = 0;  // with a previous estimate (engine), see the file comment
+  SearchOptions search;        // the observer q
+  bool IsValid(std::string* why = nullptr) const;
+};
+
+struct DepthEstimate {
+  cv::Mat depth;              // CV_32FC1, output grid, mm from q
+  cv::Mat confidence;         // CV_32FC1, output grid, [0, 1]
+  cv::Mat coarse_inverse;     // CV_32FC1, coarse grid, 1/mm (final, after the fallback)
+  cv::Mat coarse_confidence;  // CV_32FC1, coarse grid
+  double prior_mm = 0;        // the prior distance used
+  // Of the directions with confidence > 0.3: the fraction whose best candidate is the nearest /
+  // the farthest (a sweep range that excludes the scene piles the estimate up at its ends).
+  double at_near = 0, at_far = 0;
+  long confident = 0;         // number of those directions
+};
+
+// The sweep's geometry for one rig, output grid and options, computed once (per camera and
+// candidate: where the camera sees every coarse direction's surface point); estimate() then runs per
+// frame set. Thread-safe for concurrent estimate() calls.
+class DepthSweep {
+ public:
+  // Throws std::invalid_argument if the options are invalid (IsValid) or near_mm does not lie
+  // outside every camera centre.
+  DepthSweep(const Rig& rig, const PanoGrid& grid, const SweepOptions& opt);
+  ~DepthSweep();
+  DepthSweep(DepthSweep&&) noexcept;
+  DepthSweep& operator=(DepthSweep&&) noexcept;
+
+  // frames: one per camera (as stitch.h: 8U/16U/32F, 1 or 3 channels, checked). previous: an
+  // earlier result's coarse_inverse (for temporal_weight > 0), or empty. upsample = false leaves
+  // depth/confidence empty (the engine uses the coarse grid).
+  DepthEstimate estimate(const std::vector<cv::Mat>& frames, const cv::Mat& previous = {},
+                         bool upsample = true) const;
+
+  const PanoGrid& coarse_grid() const;
+  const PanoGrid& grid() const;
+  const SweepOptions& options() const;
+  // Candidate k's inverse depth (1/mm).
+  double inverse_depth(int k) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// One-shot: DepthSweep(rig, grid, opt).estimate(frames).
+DepthEstimate estimate_depth(const Rig& rig, const std::vector<cv::Mat>& frames, const PanoGrid& grid,
+                             const SweepOptions& opt = {});
+
+}  // namespace omma::pano
