@@ -19,6 +19,8 @@
 #include "omma/core/rig.h"
 #include "omma/isp/isp.h"
 #include "omma/pano/maps.h"
+#include "omma/pano/surface.h"
+#include "omma/pano/sweep.h"
 
 namespace omma::app {
 namespace {
@@ -26,6 +28,7 @@ namespace {
 struct StitchArgs {
   std::string rig, frames, method = "mrf", projection = "vr180", size, out;
   std::string boundary, boundary_overlay, single_camera, coverage;
+  std::string depth = "inf", depth_out;
   double threshold = 0.2;
   bool json = false;
   // --raw: develop DIR/cam_XX_raw.png with the ISP (thesis §5.1.2, appendix A) before stitching.
@@ -36,6 +39,89 @@ struct StitchArgs {
 
 std::filesystem::path overlay_path_for(const std::filesystem::path& boundary) {
   return boundary.parent_path() / (boundary.stem().string() + "_overlay" + boundary.extension().string());
+}
+
+// --depth: the projection surface (issue 14). Returns the depth map (empty for inf) and facts for
+// the JSON summary.
+struct DepthChoice {
+  cv::Mat depth;
+  nlohmann::json info;
+};
+
+// Parses "NEAR,FAR,STEPS" (any suffix may be left out).
+pano::SweepOptions parse_sweep(const std::string& text) {
+  pano::SweepOptions so;
+  if (text.empty()) return so;
+  std::vector<double> v;
+  size_t start = 0;
+  while (start <= text.size()) {
+    const size_t comma = text.find(',', start);
+    const std::string part = text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+    try {
+      size_t used = 0;
+      v.push_back(std::stod(part, &used));
+      if (used != part.size()) throw std::invalid_argument(part);
+    } catch (const std::exception&) {
+      throw std::invalid_argument("--depth estimate:NEAR,FAR,STEPS: '" + part + "' is not a number");
+    }
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  if (v.size() > 3) throw std::invalid_argument("--depth estimate:NEAR,FAR,STEPS takes at most three numbers");
+  if (v.size() > 0) so.near_mm = v[0];
+  if (v.size() > 1) so.far_mm = v[1];
+  if (v.size() > 2) {
+    if (v[2] != std::floor(v[2])) throw std::invalid_argument("--depth estimate: STEPS must be a whole number");
+    so.steps = static_cast<int>(v[2]);
+  }
+  std::string why;
+  if (!so.IsValid(&why)) throw std::invalid_argument("--depth estimate: " + why);
+  return so;
+}
+
+DepthChoice choose_depth(const std::string& spec, const Rig& rig, const std::vector<cv::Mat>& frames,
+                         const PanoGrid& grid) {
+  DepthChoice d;
+  auto after = [&](const std::string& prefix) { return spec.substr(prefix.size()); };
+  if (spec == "inf") {
+    d.info = {{"mode", "inf"}};
+  } else if (spec.rfind("sphere:", 0) == 0) {
+    double r = 0;
+    try {
+      size_t used = 0;
+      r = std::stod(after("sphere:"), &used);
+      if (used != after("sphere:").size()) throw std::invalid_argument("");
+    } catch (const std::exception&) {
+      throw std::invalid_argument("--depth sphere:R needs a radius in mm, got '" + spec + "'");
+    }
+    d.depth = pano::sphere_depth(rig, grid, r);
+    d.info = {{"mode", "sphere"}, {"radius_mm", r}};
+  } else if (spec.rfind("truth:", 0) == 0) {
+    d.depth = pano::read_depth(after("truth:"), grid);
+    d.info = {{"mode", "truth"}, {"file", after("truth:")}};
+  } else if (spec == "estimate" || spec.rfind("estimate:", 0) == 0) {
+    const pano::SweepOptions so = parse_sweep(spec == "estimate" ? "" : after("estimate:"));
+    const pano::DepthSweep sweep(rig, grid, so);
+    const pano::DepthEstimate e = sweep.estimate(frames);
+    // A range that excludes the scene piles the confident estimates up at one of its ends.
+    if (e.confident > 0 && (e.at_near > 0.5 || e.at_far > 0.5))
+      throw std::invalid_argument(fmt::format(
+          "--depth {}: the sweep range {}..{} mm excludes the scene: {:.0f} % of the confident directions lie at "
+          "its {} end (widen NEAR,FAR)",
+          spec, so.near_mm, so.far_mm, 100 * std::max(e.at_near, e.at_far), e.at_near > e.at_far ? "near" : "far"));
+    if (e.confident == 0)
+      spdlog::warn("--depth estimate: no direction could be measured; the prior distance {:.1f} mm is used everywhere",
+               e.prior_mm);
+    d.depth = e.depth;
+    d.info = {{"mode", "estimate"}, {"near_mm", so.near_mm}, {"far_mm", so.far_mm}, {"steps", so.steps},
+              {"coarse", {sweep.coarse_grid().width, sweep.coarse_grid().height}}, {"prior_mm", e.prior_mm},
+              {"confident_fraction", double(e.confident) / sweep.coarse_grid().width / sweep.coarse_grid().height},
+              {"at_near", e.at_near}, {"at_far", e.at_far}, {"mean_confidence", cv::mean(e.confidence)[0]}};
+  } else {
+    throw std::invalid_argument("--depth must be inf, sphere:R, truth:FILE or estimate[:NEAR,FAR,STEPS], got '" +
+                                spec + "'");
+  }
+  return d;
 }
 
 void run_stitch(const StitchArgs& a) {
@@ -71,21 +157,33 @@ void run_stitch(const StitchArgs& a) {
     frames = load_frames(a.frames, rig);
   }
 
+  std::filesystem::path depth_data;
+  if (!a.depth_out.empty()) {
+    const std::filesystem::path p(a.depth_out);
+    if (p.extension() == ".tiff" || p.extension() == ".tif")
+      throw std::invalid_argument("--depth-out names the picture (e.g. depth.png); the data go beside it as .tiff");
+    depth_data = std::filesystem::path(p).replace_extension(".tiff");
+  }
+  const auto td = std::chrono::steady_clock::now();
+  const DepthChoice depth = choose_depth(a.depth, rig, frames, grid);
+  const double depth_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - td).count();
+
   pano::StitchOptions opt;
   opt.method = method;
   opt.grid = grid;
+  opt.depth = depth.depth;
   const auto t0 = std::chrono::steady_clock::now();
   const cv::Mat pano_img = pano::stitch(rig, frames, opt);
   const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-  const double icp = pano::inter_camera_psnr(rig, frames, grid, opt.blend.search);
+  const double icp = pano::inter_camera_psnr(rig, frames, grid, opt.blend.search, opt.depth);
 
   cv::Mat boundary, overlay, single, coverage;
   if (!a.boundary.empty() || !a.boundary_overlay.empty()) {
-    boundary = pano::boundary_map(rig, frames, grid, opt.blend.search);
+    boundary = pano::boundary_map(rig, frames, grid, opt.blend.search, opt.depth);
     overlay = pano::boundary_overlay(to_u8(pano_img), boundary, a.threshold);
   }
   if (!a.single_camera.empty() || !a.coverage.empty())
-    coverage = pano::coverage_map(rig, grid, opt.blend.search);
+    coverage = pano::coverage_map(rig, grid, opt.blend.search, opt.depth);
   if (!a.single_camera.empty()) single = pano::single_camera_map(coverage);
 
   write_image(a.out, to_u8(pano_img));
@@ -99,6 +197,13 @@ void run_stitch(const StitchArgs& a) {
   }
   if (!single.empty()) write_image(a.single_camera, single);
   if (!a.coverage.empty()) write_image(a.coverage, coverage);
+  if (!a.depth_out.empty()) {
+    const cv::Mat d = depth.depth.empty()
+                          ? cv::Mat(grid.height, grid.width, CV_32FC1, cv::Scalar(pano::kInfiniteDepth))
+                          : depth.depth;
+    pano::write_depth(depth_data, d);
+    write_image(a.depth_out, pano::depth_colormap(d, 0, 0, "depth (" + a.depth + ")"));
+  }
 
   nlohmann::json icp_json = std::isfinite(icp) ? nlohmann::json(icp) : nlohmann::json(nullptr);
   if (a.json) {
@@ -106,6 +211,8 @@ void run_stitch(const StitchArgs& a) {
                 {"width", grid.width},
                 {"height", grid.height},
                 {"ms", ms},
+                {"depth", depth.info},
+                {"depth_ms", depth_ms},
                 {"inter_camera_psnr_db", icp_json}});
   } else {
     std::cout << fmt::format("{}: {}x{} {} panorama by {} in {:.0f} ms, inter-camera PSNR {:.2f} dB\n", a.out,
@@ -150,6 +257,18 @@ void add_stitch_command(CLI::App& root) {
       "(the seam band, usable as `omma eval --mask`), dark gray = seen by none");
   cmd->add_option("--coverage", a.coverage,
                   "Write the coverage map: number of cameras per direction (8-bit gray)");
+  cmd->add_option("--depth", a.depth,
+                  "Projection surface D(w), the distance at which each direction meets the scene:\n"
+                  "  inf                   the scene at infinity (the thesis's model, eq. 2.3-2.5)\n"
+                  "  sphere:R              a fixed stitching distance: a sphere of R mm around the dome centre\n"
+                  "  truth:FILE            a depth file of the panorama's size (the simulator's truth_depth.tiff:\n"
+                  "                        32-bit float mm, or 16-bit in 1/100 mm)\n"
+                  "  estimate[:NEAR,FAR,STEPS]  estimated from the cameras' overlaps by a sphere sweep (ZNCC,\n"
+                  "                        semi-global smoothing); default 8,300,96 (mm, mm, candidates)")
+      ->capture_default_str();
+  cmd->add_option("--depth-out", a.depth_out,
+                  "Write the depth used as a colour picture with a legend (this name, e.g. depth.png) and as\n"
+                  "data beside it (same name, .tiff: 32-bit float mm, inf = infinity)");
   cmd->add_flag("--raw", a.raw,
                 "Read the raw Bayer frames DIR/cam_XX_raw.png (16-bit RGGB, 10-bit values) and develop each\n"
                 "with the ISP (demosaic, white balance, optional flat field) before stitching");
@@ -161,7 +280,7 @@ void add_stitch_command(CLI::App& root) {
   cmd->add_flag("--linear-output", a.linear_output,
                 "With --raw: keep the 8 most significant linear bits (the thesis hardware) instead of sRGB");
   cmd->add_flag("--json", a.json,
-                "Print one JSON object {method, width, height, ms, inter_camera_psnr_db} on stdout");
+                "Print one JSON object {method, width, height, ms, depth, depth_ms, inter_camera_psnr_db} on stdout");
   cmd->callback([] { run_stitch(a); });
 }
 

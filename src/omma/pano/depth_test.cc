@@ -119,11 +119,60 @@ TEST(PanoDepth, ColonTruthAndEstimate) {
     const EvalResult inf = evaluate(stitch(c.rig, c.frames, opt), c.truth, seam);
     opt.depth = clamp_depth(c.depth, 300);
     const EvalResult truth = evaluate(stitch(c.rig, c.frames, opt), c.truth, seam);
+    double best_sphere = 0, best_r = 0;
+    for (double R : {12., 15., 18., 22., 27., 35., 50.}) {
+      opt.depth = sphere_depth(c.rig, c.grid, R);
+      const double p = psnr_db(stitch(c.rig, c.frames, opt), c.truth);
+      if (p > best_sphere) best_sphere = p, best_r = R;
+    }
+    std::printf("best sphere %.0f mm: %.2f dB\n", best_r, best_sphere);
     SweepOptions so;
+    if (std::getenv("F")) so.factor = std::atoi(std::getenv("F"));
+    if (std::getenv("W")) so.window = std::atoi(std::getenv("W"));
+    if (std::getenv("P2")) so.p2 = std::atof(std::getenv("P2"));
+    if (std::getenv("MED")) so.median = std::atoi(std::getenv("MED"));
+    if (std::getenv("K")) so.steps = std::atoi(std::getenv("K"));
+    if (std::getenv("NEAR")) so.near_mm = std::atof(std::getenv("NEAR"));
+    if (std::getenv("P1")) so.p1 = std::atof(std::getenv("P1"));
     const DepthEstimate est = estimate_depth(c.rig, c.frames, c.grid, so);
     opt.depth = est.depth;
     const EvalResult e = evaluate(stitch(c.rig, c.frames, opt), c.truth, seam);
     const DepthError de = depth_error(est.depth, c.depth, 300);
+    if (std::getenv("DUMP")) {
+      cv::imwrite("/tmp/d_est.png", depth_colormap(est.depth, 10, 60));
+      cv::imwrite("/tmp/d_true.png", depth_colormap(c.depth, 10, 60));
+      cv::Mat conf8;
+      est.confidence.convertTo(conf8, CV_8U, 255);
+      cv::imwrite("/tmp/d_conf.png", conf8);
+      cv::Mat rel = cv::abs(est.depth - c.depth) / c.depth, rel8;
+      rel.convertTo(rel8, CV_8U, 255 / 0.2);
+      cv::imwrite("/tmp/d_rel.png", rel8);
+      cv::Mat p = stitch(c.rig, c.frames, opt), p8, t8 = c.truth, err;
+      p.convertTo(p8, CV_8UC3, 255);
+      cv::absdiff(p8, t8, err);
+      cv::imwrite("/tmp/d_err.png", err * 4);
+      cv::imwrite("/tmp/d_pano.png", p8);
+      StitchOptions o2 = opt;
+      o2.depth = clamp_depth(c.depth, 300);
+      cv::Mat pt = stitch(c.rig, c.frames, o2), truthf;
+      c.truth.convertTo(truthf, CV_32FC3, 1 / 255.0);
+      cv::Mat e1 = (p - truthf).mul(p - truthf), e2 = (pt - truthf).mul(pt - truthf), d;
+      cv::cvtColor(e1 - e2, d, cv::COLOR_BGR2GRAY);
+      cv::GaussianBlur(d, d, cv::Size(), 4);
+      double mx; cv::minMaxLoc(d, nullptr, &mx);
+      cv::Mat d8; d.convertTo(d8, CV_8U, 255 / mx);
+      cv::imwrite("/tmp/d_loss.png", d8);
+      for (int rr : {0, 3, 6, 10, 15, 25, 135, 250, 265})
+        std::printf("row %d: truth %.1f %.1f %.1f  est %.1f %.1f %.1f  cov %d %d %d\n", rr, c.depth.at<float>(rr, 60),
+                    c.depth.at<float>(rr, 135), c.depth.at<float>(rr, 200), est.depth.at<float>(rr, 60),
+                    est.depth.at<float>(rr, 135), est.depth.at<float>(rr, 200), seam.at<uint8_t>(rr, 60), seam.at<uint8_t>(rr, 135), seam.at<uint8_t>(rr, 200));
+      // loss share by truth depth bins
+      for (double lo : {0., 15., 20., 25., 30., 40., 60.}) {
+        cv::Mat m = (c.depth >= lo) & (c.depth < (lo == 60 ? 1e9 : lo < 30 ? lo + 5 : lo == 30 ? 40 : 60));
+        std::printf("depth [%g..): %5.1f %% of pixels, loss sum %.3f\n", lo, 100.0 * cv::countNonZero(m) / m.total(), [&]{ cv::Mat mf; m.convertTo(mf, CV_32F, 1 / 255.0); return cv::sum(d.mul(mf))[0]; }());
+      }
+    }
+    std::printf("mean rel %.3f within10 %.3f\n", de.mean_rel, de.within_10);
     std::printf("seed %d: inf %.2f  truth %.2f  estimate %.2f dB (seam %.2f %.2f %.2f); depth median rel %.3f, "
                 "prior %.1f mm, confident %ld near %.3f far %.3f\n",
                 int(seed), inf.psnr_db, truth.psnr_db, e.psnr_db, inf.seam_psnr_db, truth.seam_psnr_db,

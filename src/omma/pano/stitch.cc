@@ -59,50 +59,13 @@ cv::Vec3f sample_bilinear(const cv::Mat& img, const Vec2& px) {
          fy * ((1 - fx) * at(x0, y0 + 1) + fx * at(x0 + 1, y0 + 1));
 }
 
-namespace {
-
-// One output pixel: weights of the method (weights.h), bilinear samples, weighted sum.
-cv::Vec3f blend_pixel(const Rig& rig, const std::vector<cv::Mat>& frames, const StitchOptions& opt,
-                      const std::vector<Contributor>& cs,
-                      const std::array<const std::vector<Contributor>*, 4>& nb) {
-  std::vector<double> w = method_weights(rig, opt.method, cs, nb, opt.blend);
-  std::vector<cv::Vec3f> samples(cs.size());
-  for (size_t i = 0; i < cs.size(); ++i)
-    if (w[i] > 0) samples[i] = sample_bilinear(frames[cs[i].camera], cs[i].px);
-  if (opt.method == Method::kSad) {  // eq. 4.17-4.18 over the cameras with a non-zero prior
-    std::vector<Tap> taps;
-    std::vector<double> gray;
-    std::vector<size_t> index;
-    for (size_t i = 0; i < cs.size(); ++i) {
-      if (w[i] <= 0) continue;
-      taps.push_back({cs[i].camera, cs[i].px, w[i]});
-      gray.push_back(luma(samples[i]));
-      index.push_back(i);
-    }
-    const std::vector<double> ws = sad_weights(taps, gray, opt.blend.sad_epsilon);
-    std::fill(w.begin(), w.end(), 0.0);
-    for (size_t k = 0; k < index.size(); ++k) w[index[k]] = ws[k];
-  }
-  cv::Vec3d sum(0, 0, 0);
-  for (size_t i = 0; i < cs.size(); ++i)
-    if (w[i] > 0) sum += w[i] * cv::Vec3d(samples[i]);
-  return cv::Vec3f(sum);
-}
-
-}  // namespace
-
-cv::Mat stitch(const Rig& rig, const std::vector<cv::Mat>& frames_in, const StitchOptions& opt) {
-  check_frames(rig, frames_in);
+void for_each_pixel_weights(const Rig& rig, const StitchOptions& opt, const PixelWeightsFn& f, Progress* progress) {
   const PanoGrid& grid = opt.grid;
   if (grid.width <= 0 || grid.height <= 0) throw std::invalid_argument("panorama size must be positive");
   check_depth(opt.depth, grid);
-  const std::vector<cv::Mat> frames = frames_to_float(frames_in);
   const bool needs_neighbours = uses_neighbours(opt.method);
-
-  cv::Mat pano(grid.height, grid.width, CV_32FC3, cv::Scalar::all(0));
-  Progress progress("stitch " + to_string(opt.method), grid.height, opt.progress);
   // Work in blocks of rows. Each block finds the contributors (eq. 2.3, 5.21-5.26) of its rows and,
-  // for the MRF family, of the row above and below it (eq. 4.8's 4-neighbourhood), then blends.
+  // for the MRF family, of the row above and below it (eq. 4.8's 4-neighbourhood), then weighs.
   tbb::parallel_for(tbb::blocked_range<int>(0, grid.height, 8), [&](const tbb::blocked_range<int>& block) {
     const int first = needs_neighbours ? std::max(0, block.begin() - 1) : block.begin();
     const int last = needs_neighbours ? std::min(grid.height, block.end() + 1) : block.end();
@@ -124,11 +87,48 @@ cv::Mat stitch(const Rig& rig, const std::vector<cv::Mat>& frames_in, const Stit
           for (int k = 0; k < 4; ++k)
             if (n[k][0] >= 0) nb[k] = at(n[k][0], n[k][1]);
         }
-        pano.at<cv::Vec3f>(row, col) = blend_pixel(rig, frames, opt, cs, nb);
+        f(col, row, cs, method_weights(rig, opt.method, cs, nb, opt.blend));
       }
-      progress.step();
+      if (progress) progress->step();
     }
   });
+}
+
+cv::Mat stitch(const Rig& rig, const std::vector<cv::Mat>& frames_in, const StitchOptions& opt) {
+  check_frames(rig, frames_in);
+  const PanoGrid& grid = opt.grid;
+  if (grid.width <= 0 || grid.height <= 0) throw std::invalid_argument("panorama size must be positive");
+  const std::vector<cv::Mat> frames = frames_to_float(frames_in);
+  cv::Mat pano(grid.height, grid.width, CV_32FC3, cv::Scalar::all(0));
+  Progress progress("stitch " + to_string(opt.method), grid.height, opt.progress);
+  // One output pixel: the method's weights, bilinear samples, weighted sum.
+  for_each_pixel_weights(
+      rig, opt,
+      [&](int col, int row, const std::vector<Contributor>& cs, const std::vector<double>& weights) {
+        std::vector<double> w = weights;
+        std::vector<cv::Vec3f> samples(cs.size());
+        for (size_t i = 0; i < cs.size(); ++i)
+          if (w[i] > 0) samples[i] = sample_bilinear(frames[cs[i].camera], cs[i].px);
+        if (opt.method == Method::kSad) {  // eq. 4.17-4.18 over the cameras with a non-zero prior
+          std::vector<Tap> taps;
+          std::vector<double> gray;
+          std::vector<size_t> index;
+          for (size_t i = 0; i < cs.size(); ++i) {
+            if (w[i] <= 0) continue;
+            taps.push_back({cs[i].camera, cs[i].px, w[i]});
+            gray.push_back(luma(samples[i]));
+            index.push_back(i);
+          }
+          const std::vector<double> ws = sad_weights(taps, gray, opt.blend.sad_epsilon);
+          std::fill(w.begin(), w.end(), 0.0);
+          for (size_t k = 0; k < index.size(); ++k) w[index[k]] = ws[k];
+        }
+        cv::Vec3d sum(0, 0, 0);
+        for (size_t i = 0; i < cs.size(); ++i)
+          if (w[i] > 0) sum += w[i] * cv::Vec3d(samples[i]);
+        pano.at<cv::Vec3f>(row, col) = cv::Vec3f(sum);
+      },
+      &progress);
   progress.finish();
   return pano;
 }

@@ -9,9 +9,11 @@
 #pragma once
 
 #include <opencv2/core.hpp>
+#include <functional>
 #include <vector>
 
 #include "omma/core/grid.h"
+#include "omma/core/progress.h"
 #include "omma/core/rig.h"
 #include "omma/pano/method.h"
 #include "omma/pano/surface.h"
@@ -41,6 +43,16 @@ std::vector<cv::Mat> frames_to_float(const std::vector<cv::Mat>& frames);
 cv::Vec3f sample_bilinear(const cv::Mat& image32fc3, const Vec2& px);
 // Gray level Y of BT.601 (the YCbCr luma the thesis uses in §4.3) of a BGR colour.
 inline double luma(const cv::Vec3f& bgr) { return 0.114 * bgr[0] + 0.587 * bgr[1] + 0.299 * bgr[2]; }
+
+// Every output pixel of options.grid with its contributors on the surface options.depth
+// (contributors.h) and the method's geometric weights (weights.h; for sad the mrf prior of eq.
+// 4.18), summing to 1: what stitch() blends, and what the engine's depth-adaptive map compiles.
+// f(col, row, contributors, weights) is called once per pixel seen by a camera, from oneTBB
+// threads (rows in blocks). `progress` (optional) is stepped once per finished row.
+using PixelWeightsFn =
+    std::function<void(int col, int row, const std::vector<Contributor>& cs, const std::vector<double>& weights)>;
+void for_each_pixel_weights(const Rig& rig, const StitchOptions& options, const PixelWeightsFn& f,
+                            Progress* progress = nullptr);
 
 // The panorama, CV_32FC3 BGR [0,1], options.grid.height x options.grid.width; black where no
 // camera sees the direction. sad uses the per-frame weights of eq. 4.17-4.18 (sad_weights).

@@ -22,7 +22,8 @@ bool SweepOptions::IsValid(std::string* why) const {
   if (!(near_mm > 0) || !std::isfinite(near_mm)) return fail("near distance must be a positive number of mm");
   if (!(far_mm > near_mm)) return fail(fmt::format("far distance {} mm must exceed near {} mm", far_mm, near_mm));
   if (steps < 2 || steps > 256) return fail(fmt::format("steps must be 2..256, got {}", steps));
-  if (factor < 1 || factor > 64) return fail(fmt::format("coarse factor must be 1..64, got {}", factor));
+  if (factor < 0 || factor > 64) return fail(fmt::format("coarse factor must be 0..64, got {}", factor));
+  if (factor == 0 && !(pitch_deg > 0)) return fail("coarse pitch must be positive");
   if (window < 1 || window > 8) return fail(fmt::format("patch radius must be 1..8, got {}", window));
   if (paths != 4 && paths != 8) return fail("paths must be 4 or 8");
   if (!(noise_sigma > 0) || !(w0 > 0) || !(p1 >= 0) || !(p2 >= p1) || !(edge_gray > 0) || !(margin_scale > 0) ||
@@ -113,8 +114,25 @@ Layer DepthSweep::Impl::make_layer(int k, int i) const {
       cols.push_back(px->x());
     }
   if (c1 < 0) return L;
-  // On the 360-degree grids a footprint across phi = 0 (or around the pole) spans the whole width.
+  // On the 360-degree grids a footprint across phi = 0 spans the whole width.
   if (coarse.projection != Projection::kVr180 && c1 - c0 > coarse.width / 2) wraps = true;
+  // A footprint around a pole of the grid (its top row, and the bottom row of vr180 and
+  // equirect-full, where every column is one direction) spans the whole width down to that row.
+  const Vec3 b = q - rc.position_mm;
+  auto sees_point = [&](const Vec3& w) {
+    const Vec3 ray = (w + inv[k] * b).normalized();
+    if (!cam.sees(ray)) return false;
+    const auto px = cam.project(ray);
+    return px && cam.inside(*px);
+  };
+  if (sees_point(coarse.direction(0.5 * coarse.width, 0))) {
+    wraps = true;
+    r0 = 0;
+  }
+  if (coarse.projection != Projection::kEquirect && sees_point(coarse.direction(0.5 * coarse.width, coarse.height))) {
+    wraps = true;
+    r1 = coarse.height - 1;
+  }
   const int m = 3;
   if (wraps) {
     c0 = 0;
@@ -124,12 +142,10 @@ Layer DepthSweep::Impl::make_layer(int k, int i) const {
   r0 = std::max(0, r0 - m);
   c1 = std::min(coarse.width - 1, c1 + m);
   r1 = std::min(coarse.height - 1, r1 + m);
-  if (r0 <= 1 + m && coarse.projection != Projection::kVr180) r0 = 0;  // the pole row
   L.rect = cv::Rect(c0, r0, c1 - c0 + 1, r1 - r0 + 1);
   L.map_x.create(L.rect.size(), CV_32FC1);
   L.map_y.create(L.rect.size(), CV_32FC1);
   L.valid.create(L.rect.size(), CV_8UC1);
-  const Vec3 b = q - rc.position_mm;
   int any = 0;
   for (int r = 0; r < L.rect.height; ++r)
     for (int c = 0; c < L.rect.width; ++c) {
@@ -163,8 +179,18 @@ DepthSweep::DepthSweep(const Rig& rig, const PanoGrid& grid, const SweepOptions&
   m.rig = rig;
   m.grid = grid;
   m.opt = opt;
-  m.coarse = PanoGrid{grid.projection, std::max(1, (grid.width + opt.factor / 2) / opt.factor),
-                      std::max(1, (grid.height + opt.factor / 2) / opt.factor)};
+  int factor = opt.factor;
+  if (factor == 0) {
+    double out_pitch = 0;  // output grid pitch, degrees
+    switch (grid.projection) {
+      case Projection::kEquirect: out_pitch = std::max(360.0 / grid.width, 90.0 / grid.height); break;
+      case Projection::kVr180: out_pitch = std::max(180.0 / grid.width, 180.0 / grid.height); break;
+      case Projection::kEquirectFull: out_pitch = std::max(360.0 / grid.width, 180.0 / grid.height); break;
+    }
+    factor = std::clamp(static_cast<int>(std::lround(opt.pitch_deg / out_pitch)), 1, 64);
+  }
+  m.coarse = PanoGrid{grid.projection, std::max(1, (grid.width + factor / 2) / factor),
+                      std::max(1, (grid.height + factor / 2) / factor)};
   m.dirs.resize(size_t(m.coarse.width) * m.coarse.height);
   for (int r = 0; r < m.coarse.height; ++r)
     for (int c = 0; c < m.coarse.width; ++c) m.dirs[size_t(r) * m.coarse.width + c] = m.coarse.pixel_direction(c, r);
@@ -394,6 +420,11 @@ DepthEstimate DepthSweep::estimate(const std::vector<cv::Mat>& frames_in, const 
     s_best.ptr<float>()[u] = float(m.inv.front() + kf * dinv);
     conf.ptr<float>()[u] = float(std::clamp(c, 0.0, 1.0));
   });
+  if (o.median > 0) {  // outliers of the winner-take-all (isolated wrong minima)
+    cv::Mat med;
+    cv::medianBlur(s_best, med, 2 * o.median + 1);
+    s_best = med;
+  }
   DepthEstimate out;
   // Prior: the median confident estimate (or the option), and the ends of the range.
   std::vector<float> good;

@@ -1,0 +1,271 @@
+#include "omma/engine/depth_render.h"
+
+#include <fmt/format.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+
+#include <opencv2/imgproc.hpp>
+
+#include "omma/pano/stitch.h"
+#include "omma/pano/surface.h"
+
+namespace omma::engine {
+
+bool DepthRenderOptions::IsValid(std::string* why) const {
+  auto fail = [&](const std::string& m) {
+    if (why) *why = m;
+    return false;
+  };
+  if (!map.IsValid(why)) return false;
+  if (map.method == pano::Method::kSad) return fail("the depth-adaptive renderer does not run sad (per-frame weights)");
+  if (!sweep.IsValid(why)) return false;
+  if (!(reference_mm > 0) || !std::isfinite(reference_mm)) return fail("reference distance must be positive");
+  if (threads < 0) return fail("threads must be >= 0");
+  return true;
+}
+
+namespace {
+
+// One tap: the direction in the camera's frame (unnormalised w.u, w.v, w.t), w.b, the weight.
+struct DTap {
+  float wu, wv, wt, wb;
+  float weight;
+  uint16_t cam;
+  uint16_t pad;
+};
+
+// Per camera: b = q - c in the camera's frame, |b|^2, cos^2(aov/2), intrinsics.
+struct DCam {
+  float bu, bv, bt, bb, cos2;
+  float fu, fv, cu, cv;
+  int width, height;
+  bool distort;
+  std::array<double, 5> k;
+};
+
+double ms_since(std::chrono::steady_clock::time_point t) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
+}
+
+}  // namespace
+
+struct DepthRenderer::Impl {
+  Rig rig;
+  DepthRenderOptions opt;
+  StoreLayout layout;
+  std::vector<DCam> cams;
+  std::vector<uint32_t> first;  // per pixel + 1
+  std::vector<DTap> taps;
+  std::unique_ptr<pano::DepthSweep> sweep;
+  std::unique_ptr<tbb::task_arena> arena;
+  cv::Mat inverse, confidence, inverse_full;
+  double compile_s = 0;
+};
+
+DepthRenderer::DepthRenderer(const Rig& rig, const DepthRenderOptions& opt) : impl_(std::make_unique<Impl>()) {
+  std::string why;
+  if (!opt.IsValid(&why)) throw std::invalid_argument("depth renderer: " + why);
+  const auto t0 = std::chrono::steady_clock::now();
+  Impl& m = *impl_;
+  m.rig = rig;
+  m.opt = opt;
+  m.layout = StoreLayout::for_rig(rig);
+  m.arena = std::make_unique<tbb::task_arena>(opt.threads > 0 ? opt.threads : tbb::task_arena::automatic);
+  const Vec3 q = opt.map.params.search.q;
+  for (const auto& c : rig.cameras) {
+    const Vec3 b = q - c.position_mm;
+    DCam d;
+    d.bu = float(b.dot(c.frame.u));
+    d.bv = float(b.dot(c.frame.v));
+    d.bt = float(b.dot(c.frame.t));
+    d.bb = float(b.squaredNorm());
+    const double ca = std::cos(c.in.aov / 2);
+    d.cos2 = float(ca * ca);
+    d.fu = float(c.in.fu);
+    d.fv = float(c.in.fv);
+    d.cu = float(c.in.cu);
+    d.cv = float(c.in.cv);
+    d.width = c.in.width;
+    d.height = c.in.height;
+    d.distort = c.in.has_distortion();
+    d.k = c.in.k;
+    m.cams.push_back(d);
+  }
+  const PanoGrid& g = opt.map.grid;
+  const size_t npx = size_t(g.width) * g.height;
+  // Per row: the taps of its pixels (one thread writes a row).
+  std::vector<std::vector<DTap>> row_taps(g.height);
+  std::vector<std::vector<uint8_t>> row_count(g.height, std::vector<uint8_t>(g.width, 0));
+  auto make_tap = [&](int cam, const Vec3& w, double weight) {
+    const RigCamera& c = rig.cameras[cam];
+    const Vec3 b = q - c.position_mm;
+    return DTap{float(w.dot(c.frame.u)), float(w.dot(c.frame.v)), float(w.dot(c.frame.t)), float(w.dot(b)),
+                float(weight), uint16_t(cam), 0};
+  };
+  std::vector<std::vector<std::vector<int>>> cams_of(g.height);  // per row, per pixel: cameras with taps
+  for (auto& r : cams_of) r.resize(g.width);
+  pano::StitchOptions so;
+  so.method = opt.map.method;
+  so.grid = g;
+  so.blend = opt.map.params;
+  so.progress = false;
+  so.depth = pano::sphere_depth(rig, g, opt.reference_mm, q);
+  std::vector<std::vector<std::vector<DTap>>> pix(g.height);
+  for (auto& r : pix) r.resize(g.width);
+  pano::for_each_pixel_weights(rig, so, [&](int col, int row, const std::vector<pano::Contributor>& cs,
+                                            const std::vector<double>& w) {
+    // The strongest tap always stays; the others if at least min_weight; renormalised.
+    size_t best = 0;
+    for (size_t i = 1; i < cs.size(); ++i)
+      if (w[i] > w[best]) best = i;
+    double sum = 0;
+    std::vector<size_t> keep;
+    for (size_t i = 0; i < cs.size(); ++i)
+      if (w[i] > 0 && (i == best || w[i] >= opt.map.min_weight)) {
+        keep.push_back(i);
+        sum += w[i];
+      }
+    const Vec3 dir = g.pixel_direction(col, row);
+    auto& out = pix[row][col];
+    for (size_t i : keep) {
+      out.push_back(make_tap(cs[i].camera, dir, w[i] / sum));
+      cams_of[row][col].push_back(cs[i].camera);
+    }
+  });
+  so.depth = cv::Mat();  // the cameras that see the direction at infinity only
+  pano::for_each_pixel_weights(rig, so, [&](int col, int row, const std::vector<pano::Contributor>& cs,
+                                            const std::vector<double>& w) {
+    const Vec3 dir = g.pixel_direction(col, row);
+    auto& out = pix[row][col];
+    const auto& have = cams_of[row][col];
+    for (size_t i = 0; i < cs.size(); ++i)
+      if (w[i] > 0 && std::find(have.begin(), have.end(), cs[i].camera) == have.end() && out.size() < 255)
+        out.push_back(make_tap(cs[i].camera, dir, 1e-3 * std::max(w[i], 1e-3)));
+  });
+  m.first.assign(npx + 1, 0);
+  size_t n = 0;
+  for (int r = 0; r < g.height; ++r)
+    for (int c = 0; c < g.width; ++c) {
+      m.first[size_t(r) * g.width + c] = uint32_t(n);
+      n += pix[r][c].size();
+    }
+  m.first[npx] = uint32_t(n);
+  m.taps.resize(n);
+  tbb::parallel_for(0, g.height, [&](int r) {
+    size_t k = m.first[size_t(r) * g.width];
+    for (int c = 0; c < g.width; ++c)
+      for (const DTap& t : pix[r][c]) m.taps[k++] = t;
+  });
+  m.sweep = std::make_unique<pano::DepthSweep>(rig, g, opt.sweep);
+  m.compile_s = ms_since(t0) / 1000;
+}
+
+DepthRenderer::~DepthRenderer() = default;
+
+DepthFrameStats DepthRenderer::render(const FrameStore& store, const std::vector<cv::Mat>& frames, cv::Mat& out,
+                                      const cv::Mat& fixed_inverse) {
+  Impl& m = *impl_;
+  if (store.layout().row0 != m.layout.row0 || store.layout().stride_px != m.layout.stride_px)
+    throw std::invalid_argument("depth renderer: the frame store's layout is not this rig's");
+  DepthFrameStats st;
+  const PanoGrid& g = m.opt.map.grid;
+  m.arena->execute([&] {
+    const auto t0 = std::chrono::steady_clock::now();
+    if (!fixed_inverse.empty()) {
+      const PanoGrid& cg = m.sweep->coarse_grid();
+      if (fixed_inverse.type() != CV_32FC1 || fixed_inverse.cols != cg.width || fixed_inverse.rows != cg.height)
+        throw std::invalid_argument("depth renderer: the fixed inverse depth is not on the coarse grid");
+      m.inverse = fixed_inverse.clone();
+      m.confidence = cv::Mat(fixed_inverse.size(), CV_32FC1, cv::Scalar(1));
+    } else {
+      const bool temporal = m.opt.sweep.temporal_weight > 0 && !m.inverse.empty();
+      const pano::DepthEstimate e = m.sweep->estimate(frames, temporal ? m.inverse : cv::Mat(), false);
+      m.inverse = e.coarse_inverse;
+      m.confidence = e.coarse_confidence;
+    }
+    cv::resize(m.inverse, m.inverse_full, cv::Size(g.width, g.height), 0, 0, cv::INTER_LINEAR);
+    st.estimate_ms = ms_since(t0);
+    const auto t1 = std::chrono::steady_clock::now();
+    out.create(g.height, g.width, CV_8UC3);
+    const uint8_t* data = store.data();
+    const StoreLayout& L = m.layout;
+    tbb::parallel_for(tbb::blocked_range<int>(0, g.height, 4), [&](const tbb::blocked_range<int>& rows) {
+      for (int row = rows.begin(); row < rows.end(); ++row) {
+        const float* srow = m.inverse_full.ptr<float>(row);
+        uint8_t* o = out.ptr<uint8_t>(row);
+        for (int col = 0; col < g.width; ++col) {
+          const size_t p = size_t(row) * g.width + col;
+          const float s = srow[col];
+          float acc0 = 0, acc1 = 0, acc2 = 0, wsum = 0;
+          for (uint32_t k = m.first[p]; k < m.first[p + 1]; ++k) {
+            const DTap& t = m.taps[k];
+            const DCam& c = m.cams[t.cam];
+            // contributors.h: the ray w + s b in the camera's frame; eq. 2.3 on it.
+            const float z = t.wt + s * c.bt;
+            if (z <= 0) continue;
+            const float r2 = 1 + 2 * s * t.wb + s * s * c.bb;
+            if (z * z < c.cos2 * r2) continue;
+            const float iz = 1 / z;
+            float x = (t.wu + s * c.bu) * iz, y = (t.wv + s * c.bv) * iz;
+            if (c.distort) {  // eq. 5.23-5.26
+              const Vec2 d = distort(c.k, Vec2(x, y));
+              x = float(d.x());
+              y = float(d.y());
+            }
+            const float px = c.cu + c.fu * x, py = c.cv + c.fv * y;  // eq. 5.21-5.22
+            if (!(px >= 0 && py >= 0 && px < c.width && py < c.height)) continue;
+            // Bilinear, centres at +0.5, edges replicated: the row pair at (x0, y0) holds the 2x2.
+            const float xx = std::clamp(px - 0.5f, 0.f, float(c.width - 1));
+            const float yy = std::clamp(py - 0.5f, 0.f, float(c.height - 1));
+            const int x0 = std::min(int(xx), c.width - 2), y0 = int(yy);
+            const float fx = xx - x0, fy = yy - y0;
+            const uint8_t* n = data + L.offset(t.cam, x0, y0);
+            const float w00 = (1 - fx) * (1 - fy), w01 = (1 - fx) * fy, w10 = fx * (1 - fy), w11 = fx * fy;
+            acc0 += t.weight * (w00 * n[0] + w01 * n[3] + w10 * n[6] + w11 * n[9]);
+            acc1 += t.weight * (w00 * n[1] + w01 * n[4] + w10 * n[7] + w11 * n[10]);
+            acc2 += t.weight * (w00 * n[2] + w01 * n[5] + w10 * n[8] + w11 * n[11]);
+            wsum += t.weight;
+          }
+          if (wsum > 0) {
+            const float inv = 1 / wsum;
+            o[3 * col + 0] = uint8_t(std::min(255.f, acc0 * inv + 0.5f));
+            o[3 * col + 1] = uint8_t(std::min(255.f, acc1 * inv + 0.5f));
+            o[3 * col + 2] = uint8_t(std::min(255.f, acc2 * inv + 0.5f));
+          } else {
+            o[3 * col + 0] = o[3 * col + 1] = o[3 * col + 2] = 0;
+          }
+        }
+      }
+    });
+    st.render_ms = ms_since(t1);
+  });
+  st.mean_depth_mm = 1 / std::max(1e-9, cv::mean(m.inverse)[0]);
+  st.mean_confidence = cv::mean(m.confidence)[0];
+  return st;
+}
+
+const cv::Mat& DepthRenderer::coarse_inverse() const { return impl_->inverse; }
+const cv::Mat& DepthRenderer::coarse_confidence() const { return impl_->confidence; }
+cv::Mat DepthRenderer::depth() const {
+  if (impl_->inverse_full.empty()) return {};
+  cv::Mat d;
+  cv::divide(1.0, impl_->inverse_full, d);
+  return d;
+}
+void DepthRenderer::reset() { impl_->inverse.release(); }
+const StoreLayout& DepthRenderer::layout() const { return impl_->layout; }
+const pano::DepthSweep& DepthRenderer::sweep() const { return *impl_->sweep; }
+size_t DepthRenderer::taps() const { return impl_->taps.size(); }
+double DepthRenderer::bytes_per_pixel() const {
+  const PanoGrid& g = impl_->opt.map.grid;
+  return double(impl_->taps.size() * sizeof(DTap) + impl_->first.size() * 4) / (double(g.width) * g.height);
+}
+double DepthRenderer::compile_seconds() const { return impl_->compile_s; }
+
+}  // namespace omma::engine

@@ -1,0 +1,81 @@
+// The depth-adaptive renderer of the engine (issue 14 point 5): per frame, the depth of the scene on
+// a coarse grid of the output (pano::DepthSweep, the same estimator as `omma stitch --depth
+// estimate`, with a temporal term against the previous frame's depth), then every output pixel
+// rendered with its taps moved to where each camera sees the surface point at that depth.
+//
+// Map. Compiled once per rig + grid + method (like compiled_map.h, beside it): for every output
+// pixel the contributors and static weights of the method on the sphere of radius reference_mm
+// (pano::for_each_pixel_weights), plus, with a weight of 1e-3 of theirs, the cameras that see the
+// direction only at infinity (they take over where the others leave their images). Taps lighter
+// than min_weight are dropped as in MapOptions. Per tap the map holds the direction w in the
+// camera's frame, as x_inf = w.u / w.t, y_inf = w.v / w.t, 1 / w.t and w.b (b = q - c_i), so that
+// moving the tap to inverse depth s is (contributors.h):
+//     k = s / w.t,  x = (x_inf + k b.u) / (1 + k b.t),  y = (y_inf + k b.v) / (1 + k b.t)
+//     cone (eq. 2.3): (w.t (1 + k b.t))^2 >= cos^2(aov/2) (1 + 2 s w.b + s^2 |b|^2)
+// then the lens (eq. 5.23-5.26, only for cameras with distortion), the pixel (eq. 5.21-5.22) and a
+// bilinear sample from the frame store (compiled_map.h's row pairs: one 12-byte neighbourhood).
+// A tap whose moved position leaves its camera's image or cone is dropped and the remaining
+// weights renormalised. Per pixel, s is the coarse inverse depth interpolated bilinearly.
+//
+// Static mrf reweighting by depth is not redone per frame: the weights are those at reference_mm
+// (the reference stitcher recomputes the contributors at every pixel's own depth); measured against
+// `omma stitch --depth estimate` in depth_render_test.cc and README "Depth".
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "omma/engine/compiled_map.h"
+#include "omma/pano/sweep.h"
+
+namespace omma::engine {
+
+struct DepthRenderOptions {
+  MapOptions map;             // grid, method (not sad), params (observer q), min_weight
+  pano::SweepOptions sweep;   // the per-frame estimate (its temporal_weight is used between frames)
+  double reference_mm = 22;   // the surface the static weights are computed on (the colon wall)
+  int threads = 0;            // 0 = all
+  bool IsValid(std::string* why = nullptr) const;
+};
+
+struct DepthFrameStats {
+  double estimate_ms = 0, render_ms = 0;
+  double mean_depth_mm = 0;     // harmonic mean over the coarse grid
+  double mean_confidence = 0;
+};
+
+class DepthRenderer {
+ public:
+  // Compiles the map and the sweep's geometry (seconds). Throws std::invalid_argument on invalid
+  // options.
+  DepthRenderer(const Rig& rig, const DepthRenderOptions& opt);
+  ~DepthRenderer();
+
+  // One panorama: estimates the depth from `frames` (one per camera, BGR 8-bit, rig order: the same
+  // frames as in `store`) unless `fixed_inverse` is given (coarse grid, 1/mm), then renders from
+  // `store` into `out` (CV_8UC3, grid-sized).
+  DepthFrameStats render(const FrameStore& store, const std::vector<cv::Mat>& frames, cv::Mat& out,
+                         const cv::Mat& fixed_inverse = {});
+
+  // The last estimate (coarse grid): inverse depth (1/mm) and confidence; and the depth upsampled to
+  // the output grid (mm).
+  const cv::Mat& coarse_inverse() const;
+  const cv::Mat& coarse_confidence() const;
+  cv::Mat depth() const;
+  // Forget the previous frame's depth (the temporal term starts afresh).
+  void reset();
+
+  const StoreLayout& layout() const;
+  const pano::DepthSweep& sweep() const;
+  size_t taps() const;
+  double bytes_per_pixel() const;
+  double compile_seconds() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace omma::engine
