@@ -11,13 +11,18 @@
 #include "omma/core/io.h"
 #include "omma/core/rig.h"
 #include "omma/pano/maps.h"
+#include "omma/pano/depth_eval.h"
 #include "omma/pano/quality.h"
+#include "omma/pano/surface.h"
 
 namespace omma::app {
 namespace {
 
 struct EvalArgs {
   std::string pano, truth, mask, rig, projection = "vr180";
+  std::string depth, truth_depth, boundary;
+  double threshold = 0.2, max_depth = 300, jump = 1.15;
+  int tolerance = 2;
   bool json = false;
 };
 
@@ -46,13 +51,42 @@ void run_eval(const EvalArgs& a) {
     seam = pano::seam_mask(pano::coverage_map(rig, grid), false);
   }
   const pano::EvalResult r = pano::evaluate(pano_img, truth, seam);
+  // Depth (issue 14): the depth used against the true depth, and a boundary map (eq. 4.15, gray)
+  // thresholded (eq. 4.16) against the true occlusion boundaries.
+  nlohmann::json depth_json = nullptr, boundary_json = nullptr;
+  if ((!a.depth.empty() || !a.boundary.empty()) && a.truth_depth.empty())
+    throw std::invalid_argument("--depth and --boundary need --truth-depth");
+  cv::Mat true_depth;
+  const PanoGrid grid{parse_projection(a.projection), pano_img.cols, pano_img.rows};
+  if (!a.truth_depth.empty()) true_depth = pano::read_depth(a.truth_depth, grid);
+  if (!a.depth.empty()) {
+    const pano::DepthError e = pano::depth_error(pano::read_depth(a.depth, grid), true_depth, a.max_depth);
+    depth_json = {{"median_rel", e.median_rel}, {"mean_rel", e.mean_rel}, {"within_10", e.within_10},
+                  {"pixels", e.pixels}};
+  }
+  if (!a.boundary.empty()) {
+    cv::Mat b = read_image(a.boundary, cv::IMREAD_GRAYSCALE), bf;
+    if (b.size() != pano_img.size()) throw std::invalid_argument("--boundary: size differs from the panorama");
+    b.convertTo(bf, CV_32F, 1 / 255.0);
+    const pano::BoundaryScore s = pano::boundary_score(pano::boundary_binary(bf, a.threshold),
+                                                       pano::depth_discontinuities(true_depth, a.jump), a.tolerance);
+    boundary_json = {{"precision", s.precision}, {"recall", s.recall}, {"f1", s.f1}, {"predicted", s.predicted},
+                     {"truth", s.truth}};
+  }
   if (a.json) {
     print_json({{"psnr_db", number_or_null(r.psnr_db)},
                 {"ssim", r.ssim},
-                {"seam_psnr_db", seam.empty() ? nlohmann::json(nullptr) : number_or_null(r.seam_psnr_db)}});
+                {"seam_psnr_db", seam.empty() ? nlohmann::json(nullptr) : number_or_null(r.seam_psnr_db)},
+                {"depth", depth_json},
+                {"boundary", boundary_json}});
   } else {
     std::cout << fmt::format("PSNR {:.2f} dB, SSIM {:.4f}", r.psnr_db, r.ssim);
     if (!seam.empty()) std::cout << fmt::format(", seam PSNR {:.2f} dB", r.seam_psnr_db);
+    if (!depth_json.is_null())
+      std::cout << fmt::format(", depth error median {:.1f} %", 100 * depth_json["median_rel"].get<double>());
+    if (!boundary_json.is_null())
+      std::cout << fmt::format(", boundary P {:.2f} R {:.2f} F1 {:.2f}", boundary_json["precision"].get<double>(),
+                               boundary_json["recall"].get<double>(), boundary_json["f1"].get<double>());
     std::cout << "\n";
   }
 }
@@ -75,8 +109,22 @@ void add_eval_command(CLI::App& root) {
   cmd->add_option("--rig", a.rig, "Or: compute the seam band from this rig (with --projection)");
   cmd->add_option("--projection", a.projection, "Projection of the panorama for --rig: equirect or vr180")
       ->capture_default_str();
+  cmd->add_option("--truth-depth", a.truth_depth,
+                  "True depth of the panorama (the simulator's truth_depth.tiff), for --depth and --boundary");
+  cmd->add_option("--depth", a.depth,
+                  "A depth used for stitching (`omma stitch --depth-out`'s .tiff): median relative error against\n"
+                  "--truth-depth where the truth is at most --max-depth mm");
+  cmd->add_option("--max-depth", a.max_depth, "Compare depths up to this many mm")->capture_default_str();
+  cmd->add_option("--boundary", a.boundary,
+                  "A boundary map L_ob (`omma stitch --boundary`, gray 255 = 1.0), thresholded at --threshold\n"
+                  "(eq. 4.16): precision, recall and F1 against the true occlusion boundaries (where the true\n"
+                  "depth jumps by more than --jump between neighbours), within --tolerance pixels");
+  cmd->add_option("--threshold", a.threshold, "th_ob of eq. 4.16 for --boundary")->capture_default_str();
+  cmd->add_option("--jump", a.jump, "Depth ratio that makes an occlusion boundary")->capture_default_str();
+  cmd->add_option("--tolerance", a.tolerance, "Boundary match tolerance, pixels")->capture_default_str();
   cmd->add_flag("--json", a.json,
-                "Print one JSON object {psnr_db, ssim, seam_psnr_db} on stdout (null: no seam band given)");
+                "Print one JSON object {psnr_db, ssim, seam_psnr_db, depth, boundary} on stdout (null: not\n"
+                "asked for)");
   cmd->callback([] { run_eval(a); });
 }
 

@@ -104,7 +104,8 @@ DepthChoice choose_depth(const std::string& spec, const Rig& rig, const std::vec
     const pano::DepthSweep sweep(rig, grid, so);
     const pano::DepthEstimate e = sweep.estimate(frames);
     // A range that excludes the scene piles the confident estimates up at one of its ends.
-    if (e.confident > 0 && (e.at_near > 0.5 || e.at_far > 0.5))
+    // (at infinity the far end is the scene's own place: only a finite FAR can exclude it)
+    if (e.confident > 0 && (e.at_near > 0.5 || (std::isfinite(so.far_mm) && e.at_far > 0.5)))
       throw std::invalid_argument(fmt::format(
           "--depth {}: the sweep range {}..{} mm excludes the scene: {:.0f} % of the confident directions lie at "
           "its {} end (widen NEAR,FAR)",
@@ -264,7 +265,7 @@ void add_stitch_command(CLI::App& root) {
                   "  truth:FILE            a depth file of the panorama's size (the simulator's truth_depth.tiff:\n"
                   "                        32-bit float mm, or 16-bit in 1/100 mm)\n"
                   "  estimate[:NEAR,FAR,STEPS]  estimated from the cameras' overlaps by a sphere sweep (ZNCC,\n"
-                  "                        semi-global smoothing); default 8,300,96 (mm, mm, candidates)")
+                  "                        semi-global smoothing); default 8,inf,96 (mm, mm, candidates)")
       ->capture_default_str();
   cmd->add_option("--depth-out", a.depth_out,
                   "Write the depth used as a colour picture with a legend (this name, e.g. depth.png) and as\n"

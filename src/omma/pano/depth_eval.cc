@@ -42,25 +42,26 @@ DepthError depth_error(const cv::Mat& est, const cv::Mat& truth, double max_mm, 
   return e;
 }
 
-cv::Mat depth_discontinuities(const cv::Mat& depth, double ratio) {
-  if (depth.type() != CV_32FC1) throw std::invalid_argument("depth_discontinuities: CV_32FC1 needed");
-  cv::Mat out(depth.size(), CV_8UC1, cv::Scalar(0));
-  auto jump = [&](float a, float b) {
-    if (std::isinf(a) != std::isinf(b)) return true;
-    if (std::isinf(a)) return false;
-    return std::max(a, b) > ratio * std::min(a, b);
+cv::Mat depth_jump_map(const cv::Mat& depth) {
+  if (depth.type() != CV_32FC1) throw std::invalid_argument("depth_jump_map: CV_32FC1 needed");
+  cv::Mat out(depth.size(), CV_32FC1, cv::Scalar(0));
+  auto mark = [&](int r, int c, int r2, int c2) {
+    const float a = depth.at<float>(r, c), b = depth.at<float>(r2, c2);
+    if (std::isinf(a) && std::isinf(b)) return;
+    float& near = a <= b ? out.at<float>(r, c) : out.at<float>(r2, c2);
+    const float jump = std::isinf(std::max(a, b)) ? 10.f : std::min(10.f, std::max(a, b) / std::min(a, b) - 1);
+    near = std::max(near, jump);
   };
   for (int r = 0; r < depth.rows; ++r)
     for (int c = 0; c < depth.cols; ++c) {
-      const float d = depth.at<float>(r, c);
-      if (c + 1 < depth.cols && jump(d, depth.at<float>(r, c + 1))) {
-        // Mark the nearer side (the occluding edge).
-        if (d <= depth.at<float>(r, c + 1)) out.at<uint8_t>(r, c) = 255; else out.at<uint8_t>(r, c + 1) = 255;
-      }
-      if (r + 1 < depth.rows && jump(d, depth.at<float>(r + 1, c))) {
-        if (d <= depth.at<float>(r + 1, c)) out.at<uint8_t>(r, c) = 255; else out.at<uint8_t>(r + 1, c) = 255;
-      }
+      if (c + 1 < depth.cols) mark(r, c, r, c + 1);
+      if (r + 1 < depth.rows) mark(r, c, r + 1, c);
     }
+  return out;
+}
+
+cv::Mat depth_discontinuities(const cv::Mat& depth, double ratio) {
+  cv::Mat out = depth_jump_map(depth) > ratio - 1;
   return out;
 }
 
@@ -80,6 +81,23 @@ BoundaryScore boundary_score(const cv::Mat& pred, const cv::Mat& truth, int tol,
   s.recall = s.truth ? double(cv::countNonZero(t & p_grown)) / s.truth : 0;
   s.f1 = s.precision + s.recall > 0 ? 2 * s.precision * s.recall / (s.precision + s.recall) : 0;
   return s;
+}
+
+BoundaryScore best_boundary_score(const cv::Mat& boundary, const cv::Mat& truth, int tol, double* threshold,
+                                  const cv::Mat& mask) {
+  if (boundary.type() != CV_32FC1) throw std::invalid_argument("best_boundary_score: CV_32FC1 boundary map needed");
+  BoundaryScore best;
+  double best_th = 0;
+  for (int i = 1; i <= 100; ++i) {
+    const double th = 0.005 * i;
+    const BoundaryScore s = boundary_score(boundary > th, truth, tol, mask);  // eq. 4.16
+    if (s.f1 > best.f1) {
+      best = s;
+      best_th = th;
+    }
+  }
+  if (threshold) *threshold = best_th;
+  return best;
 }
 
 }  // namespace omma::pano

@@ -20,8 +20,12 @@ struct DepthError {
 // Compares where the true depth is finite and at most max_mm (and mask != 0 if a mask is given).
 DepthError depth_error(const cv::Mat& estimate, const cv::Mat& truth, double max_mm, const cv::Mat& mask = {});
 
+// Relative depth jump at every pixel: max over its 4-neighbours farther than itself of
+// (D_neighbour / D - 1) (the jump is marked on the nearer, occluding side), CV_32FC1, capped at 10;
+// 10 next to +infinity. A boundary map "from depth" for best_boundary_score.
+cv::Mat depth_jump_map(const cv::Mat& depth);
 // Occlusion boundaries: CV_8UC1, 255 where the depth jumps to a 4-neighbour by more than the
-// factor `ratio` (max(D1, D2) / min(D1, D2) > ratio; +infinity next to a finite depth counts as a jump).
+// factor `ratio` (depth_jump_map > ratio - 1; +infinity next to a finite depth counts as a jump).
 cv::Mat depth_discontinuities(const cv::Mat& depth, double ratio = 1.15);
 
 struct BoundaryScore {
@@ -33,5 +37,11 @@ struct BoundaryScore {
 // predicted one are found (recall); F1 their harmonic mean. Only pixels where mask != 0 count.
 BoundaryScore boundary_score(const cv::Mat& predicted, const cv::Mat& truth, int tolerance_px,
                              const cv::Mat& mask = {});
+
+// The best of boundary_score over the thresholds th = 0.005, 0.01, ... 0.5 of a boundary map L_ob
+// (CV_32FC1, eq. 4.15) thresholded by eq. 4.16 (the "optimal dataset scale" of boundary
+// benchmarks: each map at its own best threshold); *threshold gets the threshold.
+BoundaryScore best_boundary_score(const cv::Mat& boundary, const cv::Mat& truth, int tolerance_px,
+                                  double* threshold = nullptr, const cv::Mat& mask = {});
 
 }  // namespace omma::pano

@@ -5,6 +5,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <limits>
 #include <stdexcept>
 
@@ -21,6 +23,7 @@ bool SweepOptions::IsValid(std::string* why) const {
   };
   if (!(near_mm > 0) || !std::isfinite(near_mm)) return fail("near distance must be a positive number of mm");
   if (!(far_mm > near_mm)) return fail(fmt::format("far distance {} mm must exceed near {} mm", far_mm, near_mm));
+  // far_mm may be +infinity (the last candidate is then the scene at infinity, s = 0)
   if (steps < 2 || steps > 256) return fail(fmt::format("steps must be 2..256, got {}", steps));
   if (factor < 0 || factor > 64) return fail(fmt::format("coarse factor must be 0..64, got {}", factor));
   if (factor == 0 && !(pitch_deg > 0)) return fail("coarse pitch must be positive");
@@ -92,7 +95,7 @@ Layer DepthSweep::Impl::make_layer(int k, int i) const {
   const RigCamera& rc = rig.cameras[i];
   const CameraModel cam = rc.model();
   const Vec3 q = opt.search.q;
-  const double D = 1 / inv[k];
+  const double D = inv[k] > 0 ? 1 / inv[k] : 0;
   // Footprint: rays through a 9 x 9 lattice of the camera's pixels (border included) meet the
   // sphere |X - q| = D; their directions from q bound the rect (with a margin).
   int c0 = coarse.width, r0 = coarse.height, c1 = -1, r1 = -1;
@@ -101,11 +104,15 @@ Layer DepthSweep::Impl::make_layer(int k, int i) const {
   for (int a = 0; a <= 8; ++a)
     for (int b = 0; b <= 8; ++b) {
       const Vec3 d = cam.unproject(Vec2(rc.in.width * a / 8.0, rc.in.height * b / 8.0));
-      const Vec3 o = rc.position_mm - q;  // |o + t d| = D, t > 0
-      const double bb = o.dot(d), cc = o.squaredNorm() - D * D;
-      if (cc >= 0) continue;
-      const double t = -bb + std::sqrt(bb * bb - cc);
-      const auto px = coarse.pixel((o + t * d).normalized());
+      Vec3 w = d;  // at infinity the direction from q is the ray's own
+      if (inv[k] > 0) {
+        const Vec3 o = rc.position_mm - q;  // |o + t d| = D, t > 0
+        const double bb = o.dot(d), cc = o.squaredNorm() - D * D;
+        if (cc >= 0) continue;
+        const double t = -bb + std::sqrt(bb * bb - cc);
+        w = (o + t * d).normalized();
+      }
+      const auto px = coarse.pixel(w);
       if (!px) continue;
       c0 = std::min(c0, int(std::floor(px->x())));
       c1 = std::max(c1, int(std::floor(px->x())));
@@ -311,7 +318,7 @@ DepthEstimate DepthSweep::estimate(const std::vector<cv::Mat>& frames_in, const 
             const float cov = sum[5][p] / cnt - ma * mb;
             const float zncc = std::clamp(cov / std::sqrt(va * vb + 1e-12f), -1.f, 1.f);
             const float v = std::min(va, vb);
-            const float wt = cnt / win_area * v / (v + sn2);
+            const float wt = (cnt / win_area) * (cnt / win_area) * v / (v + sn2);
             const size_t u = size_t(y + I.y) * W + (x + I.x);
             nk[u] += wt * (1 - zncc);
             dk[u] += wt;
@@ -321,14 +328,25 @@ DepthEstimate DepthSweep::estimate(const std::vector<cv::Mat>& frames_in, const 
   // Final cost C(u, k), pixel-major; evidence per pixel.
   std::vector<float> C(size_t(N) * K);
   std::vector<float> evidence(N, 0.f);
-  const float w0 = float(o.w0);
+  const float w0 = float(o.w0), neutral = float(o.neutral_cost);
+  const float unknown = float(o.unknown_cost);
+  constexpr float kEvidence = 0.05f;  // pair weight below which a candidate has no evidence
   const double srange = m.inv.front() - m.inv.back();
   tbb::parallel_for(0, N, [&](int u) {
     float e = 0;
     const float sp = previous.empty() ? 0.f : previous.ptr<float>()[u];
+    // Candidates without evidence (no pair of cameras sees the point there: overlaps shrink as the
+    // surface comes nearer) are "unknown", not "bad": they get the best cost among the candidates
+    // with evidence, so that the smoothness term decides, not where the overlap happens to begin.
+    float best = std::numeric_limits<float>::max();
     for (int k = 0; k < K; ++k) {
       const float d = den[size_t(k) * N + u];
-      float c = (num[size_t(k) * N + u] + w0) / (d + w0);
+      if (d >= kEvidence) best = std::min(best, num[size_t(k) * N + u] / d);
+    }
+    const float fill = best == std::numeric_limits<float>::max() ? neutral : std::min(neutral, best + unknown);
+    for (int k = 0; k < K; ++k) {
+      const float d = den[size_t(k) * N + u];
+      float c = d >= kEvidence ? (num[size_t(k) * N + u] + w0 * neutral) / (d + w0) : fill;
       if (o.temporal_weight > 0 && sp > 0)
         c += float(o.temporal_weight *
                    std::min(1.0, std::abs(m.inv[k] - sp) / srange * (K - 1)));
@@ -460,9 +478,13 @@ DepthEstimate DepthSweep::estimate(const std::vector<cv::Mat>& frames_in, const 
     cv::Mat s_up, c_up;
     cv::resize(s_final, s_up, cv::Size(m.grid.width, m.grid.height), 0, 0, cv::INTER_LINEAR);
     cv::resize(conf, c_up, cv::Size(m.grid.width, m.grid.height), 0, 0, cv::INTER_LINEAR);
-    cv::Mat lo = s_up < float(m.inv.back());
-    s_up.setTo(float(m.inv.back()), lo);
-    cv::divide(1.0, s_up, out.depth);
+    out.depth.create(s_up.size(), CV_32FC1);
+    const float s_min = float(m.inv.back());
+    for (int r = 0; r < s_up.rows; ++r)
+      for (int c = 0; c < s_up.cols; ++c) {
+        const float s = std::max(s_min, s_up.at<float>(r, c));
+        out.depth.at<float>(r, c) = s > 0 ? 1 / s : std::numeric_limits<float>::infinity();
+      }
     out.confidence = c_up;
   }
   return out;

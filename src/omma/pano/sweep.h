@@ -21,10 +21,16 @@
 //     ZNCC_ij = cov(L_i, L_j) / sqrt(var L_i var L_j)   (zero-mean normalised cross-correlation:
 //               invariant to a gain and an offset per camera and patch, i.e. to the colour gains
 //               and the slowly varying vignetting)
-//     w_ij    = n/|P| * v / (v + sigma_n^2),  v = min(var L_i, var L_j)  (texture weight: a flat
-//               patch gives no evidence, n = pixels of P both cameras see)
-//     C(u, k) = (sum_ij w_ij (1 - ZNCC_ij) + w_0 * 1) / (sum_ij w_ij + w_0)
-// in [0, 2]; w_0 pulls directions without evidence (one camera, no texture) to the neutral 1.
+//     w_ij    = (n/|P|)^2 * v / (v + sigma_n^2),  v = min(var L_i, var L_j)  (texture weight: a flat
+//               patch gives no evidence; n = pixels of P both cameras see, squared so that the
+//               slivers where an overlap begins count little)
+//     C(u, k) = (sum_ij w_ij (1 - ZNCC_ij) + w_0 * neutral) / (sum_ij w_ij + w_0)
+// in [0, 2]. A candidate without evidence (sum_ij w_ij < 0.05: no two cameras see the point there;
+// overlaps shrink as the surface comes nearer, and at the colon wall's 20 mm much of the panorama is
+// seen by one camera only) is "unknown", not "bad": C = min(neutral, the pixel's best cost with
+// evidence + unknown_cost), so that the smoothness term, not where the overlap happens to begin,
+// decides. Measured on the colon (3 seeds): unknown_cost 0.25 beats 0.1 and 0.15 (the estimate
+// collapses to the near end), 0.2, 0.4 and a constant neutral cost.
 // The SAD of eq. 4.17 is the special case of one candidate (D = infinity), a 1-pixel patch and
 // absolute differences instead of ZNCC.
 //
@@ -48,6 +54,7 @@
 // static wall from flickering with the sensor noise.
 #pragma once
 
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -62,14 +69,18 @@ namespace omma::pano {
 
 struct SweepOptions {
   double near_mm = 8;      // nearest candidate distance from q, mm (must lie outside the dome)
-  double far_mm = 300;     // farthest candidate, mm
+  // Farthest candidate, mm; +infinity (the default) makes the last candidate the scene at infinity.
+  // A 5 mm dome still sees 2 pixels of parallax at 300 mm: far-field scenes need infinity.
+  double far_mm = std::numeric_limits<double>::infinity();
   int steps = 96;          // number of candidates (uniform in 1/D)
   // Coarse grid = output / factor; 0: the factor that makes its pitch closest to pitch_deg.
   int factor = 0;
   double pitch_deg = 1.33;  // about 5 pixels of the prototype's cameras (0.26 deg/pixel)
   int window = 2;          // patch radius, coarse pixels (patch 5x5)
   double noise_sigma = 0.01;   // sigma_n: gray-level noise for the texture weight
-  double w0 = 0.05;            // evidence of the neutral cost 1
+  double w0 = 0.2;             // evidence of the neutral cost
+  double unknown_cost = 0.25;  // candidates without evidence: the pixel's best cost + this (<= neutral)
+  double neutral_cost = 0.5;   // cost where no pair of cameras gives evidence (see below)
   double p1 = 0.2, p2 = 2.0;   // SGM penalties, cost units
   double edge_gray = 0.03;     // edge-aware P2 scale, gray levels
   int paths = 8;               // 4 or 8

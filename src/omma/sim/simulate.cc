@@ -53,7 +53,6 @@ SimulateResult simulate(const Rig& nominal, const Scene& scene, const SimulateOp
 
 ColonCase colon_case(uint64_t seed) {
   ColonCase c;
-  c.scene.seed = static_cast<unsigned>(6 + seed);
   c.options.effects.seed = seed;
   c.options.pose.translation_mm = Vec3(0, 0, 12.0 * (static_cast<double>(seed) - 1));
   return c;

@@ -51,9 +51,9 @@ void write_frames_folder(const std::filesystem::path& dir, const SimulateResult&
                          const SimulateOptions& options, const Scene& scene);
 
 // The colon cases of the depth tables (issue 14 point 4; tests, `omma demo`, scripts/depth_table.sh):
-// seed s (1, 2, 3, ...) simulates with effects.seed = s (noise, colour gains), the colon texture
-// seed 6 + s (the default colon is seed 1's) and the dome (s - 1) * 12 mm along the tube, so that
-// each seed sees other folds and polyps at other distances.
+// seed s (1, 2, 3, ...) simulates the default colon with effects.seed = s (noise, colour gains) and
+// the dome (s - 1) * 12 mm along the tube, so that each seed sees other folds and polyps at other
+// distances (`omma simulate --scene colon --seed s --dome-z 12(s-1)`; seed 1 is the demo's scene).
 struct ColonCase {
   ColonParams scene;
   SimulateOptions options;  // effects.seed and pose set; everything else default
