@@ -59,19 +59,30 @@ void run_eval(const EvalArgs& a) {
   cv::Mat true_depth;
   const PanoGrid grid{parse_projection(a.projection), pano_img.cols, pano_img.rows};
   if (!a.truth_depth.empty()) true_depth = pano::read_depth(a.truth_depth, grid);
+  auto score_json = [](const pano::BoundaryScore& s, double th) {
+    return nlohmann::json{{"precision", s.precision}, {"recall", s.recall}, {"f1", s.f1},
+                          {"predicted", s.predicted}, {"truth", s.truth}, {"threshold", th}};
+  };
+  cv::Mat occlusions;
+  if (!true_depth.empty()) occlusions = pano::depth_discontinuities(true_depth, a.jump);
   if (!a.depth.empty()) {
-    const pano::DepthError e = pano::depth_error(pano::read_depth(a.depth, grid), true_depth, a.max_depth);
+    const cv::Mat used = pano::read_depth(a.depth, grid);
+    const pano::DepthError e = pano::depth_error(used, true_depth, a.max_depth);
+    double th = 0;
+    const pano::BoundaryScore s = pano::best_boundary_score(pano::depth_jump_map(used), occlusions, a.tolerance, &th);
     depth_json = {{"median_rel", e.median_rel}, {"mean_rel", e.mean_rel}, {"within_10", e.within_10},
-                  {"pixels", e.pixels}};
+                  {"pixels", e.pixels}, {"boundary_from_depth", score_json(s, th)}};
   }
   if (!a.boundary.empty()) {
     cv::Mat b = read_image(a.boundary, cv::IMREAD_GRAYSCALE), bf;
     if (b.size() != pano_img.size()) throw std::invalid_argument("--boundary: size differs from the panorama");
     b.convertTo(bf, CV_32F, 1 / 255.0);
-    const pano::BoundaryScore s = pano::boundary_score(pano::boundary_binary(bf, a.threshold),
-                                                       pano::depth_discontinuities(true_depth, a.jump), a.tolerance);
-    boundary_json = {{"precision", s.precision}, {"recall", s.recall}, {"f1", s.f1}, {"predicted", s.predicted},
-                     {"truth", s.truth}};
+    const pano::BoundaryScore s =
+        pano::boundary_score(pano::boundary_binary(bf, a.threshold), occlusions, a.tolerance);
+    double th = 0;
+    const pano::BoundaryScore best = pano::best_boundary_score(bf, occlusions, a.tolerance, &th);
+    boundary_json = score_json(s, a.threshold);
+    boundary_json["best"] = score_json(best, th);
   }
   if (a.json) {
     print_json({{"psnr_db", number_or_null(r.psnr_db)},
@@ -118,7 +129,8 @@ void add_eval_command(CLI::App& root) {
   cmd->add_option("--boundary", a.boundary,
                   "A boundary map L_ob (`omma stitch --boundary`, gray 255 = 1.0), thresholded at --threshold\n"
                   "(eq. 4.16): precision, recall and F1 against the true occlusion boundaries (where the true\n"
-                  "depth jumps by more than --jump between neighbours), within --tolerance pixels");
+                  "depth jumps by more than --jump between neighbours), within --tolerance pixels; and at the\n"
+                  "map's best threshold (\"best\"). With --depth also the boundaries of the depth's own jumps");
   cmd->add_option("--threshold", a.threshold, "th_ob of eq. 4.16 for --boundary")->capture_default_str();
   cmd->add_option("--jump", a.jump, "Depth ratio that makes an occlusion boundary")->capture_default_str();
   cmd->add_option("--tolerance", a.tolerance, "Boundary match tolerance, pixels")->capture_default_str();
