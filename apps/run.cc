@@ -34,7 +34,7 @@ void add_run_command(CLI::App& root) {
     double duration = 0, fps = 30, source_fps = 30, first_timeout = 10, min_weight = engine::MapOptions{}.min_weight;
     long frames = 0;
     int threads = 0;
-    bool loop = false, json = false, no_cache = false;
+    bool loop = false, json = false, no_cache = false, depth = false;
   };
   static Opts o;
   cmd->add_option("--rig", o.rig, "Rig file (JSON)")->required();
@@ -58,6 +58,10 @@ void add_run_command(CLI::App& root) {
   cmd->add_option("--first-frame-timeout", o.first_timeout,
                   "A camera without a first frame after this many seconds is dropped (default 10)")
       ->check(CLI::PositiveNumber);
+  cmd->add_flag("--depth", o.depth,
+                "Depth-adaptive rendering (issue 14): the scene's depth estimated from the overlaps every\n"
+                "panorama on a coarse grid (sphere sweep, ZNCC, semi-global, temporal), each pixel's taps moved\n"
+                "to where the cameras see its surface point (not with sad)");
   cmd->add_flag("--loop", o.loop, "Restart image sequences and video files at their end");
   cmd->add_option("--threads", o.threads, "Renderer threads (0: all; default 0)")->check(CLI::NonNegativeNumber);
   cmd->add_option("--cache", o.cache, "Map cache folder (default $OMMA_CACHE_DIR or ~/.cache/omma)");
@@ -76,6 +80,7 @@ void add_run_command(CLI::App& root) {
     eo.max_frames = o.frames;
     eo.fps = o.fps;
     eo.threads = o.threads;
+    eo.depth = o.depth;
     eo.first_frame_timeout_s = o.first_timeout;
     engine::SourceOptions so;
     so.fps = o.source_fps;
@@ -112,6 +117,7 @@ void add_run_command(CLI::App& root) {
     if (show && tty) std::fprintf(stderr, "\n");
     nlohmann::json j = st.to_json();
     j["method"] = o.method;
+    j["depth_adaptive"] = o.depth;
     j["min_weight"] = o.min_weight;
     j["projection"] = o.projection;
     j["size"] = o.size;

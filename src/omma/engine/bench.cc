@@ -12,6 +12,7 @@
 #include <tbb/parallel_for.h>
 
 #include "omma/design/prototype.h"
+#include "omma/engine/depth_render.h"
 #include "omma/engine/synthetic.h"
 #include "omma/core/log.h"
 #include "omma/isp/isp.h"
@@ -72,6 +73,27 @@ Workload omma_workload(const Rig& rig, const MapOptions& opt, int threads, const
             {"taps_per_pixel", double(map->taps()) / (double(map->width) * map->height)},
             {"compile_s", compile_s}, {"threads", threads}, {"min_weight", opt.min_weight},
             {"kernel", to_string(best_kernel())}};
+  return w;
+}
+
+Workload omma_depth_workload(const Rig& rig, const MapOptions& opt, const std::vector<cv::Mat>& frames) {
+  DepthRenderOptions o;
+  o.map = opt;
+  auto dr = std::make_shared<DepthRenderer>(rig, o);
+  auto store = std::make_shared<FrameStore>(dr->layout());
+  for (size_t c = 0; c < frames.size(); ++c) store->set(int(c), frames[c]);
+  auto fr = std::make_shared<std::vector<cv::Mat>>(frames);
+  auto out = std::make_shared<cv::Mat>();
+  Workload w;
+  w.name = "omma-" + pano::to_string(opt.method) + "-depth-" + size_tag(opt.grid);
+  w.run = [dr, store, fr, out] { dr->render(*store, *fr, *out); };
+  const PanoGrid& cg = dr->sweep().coarse_grid();
+  w.info = {{"bytes_per_pixel", dr->bytes_per_pixel()},
+            {"taps_per_pixel", double(dr->taps()) / (double(opt.grid.width) * opt.grid.height)},
+            {"compile_s", dr->compile_seconds()},
+            {"depth_grid", fmt::format("{}x{}", cg.width, cg.height)},
+            {"depth_candidates", dr->sweep().options().steps},
+            {"depth_every_frame", true}};
   return w;
 }
 
@@ -221,6 +243,7 @@ std::vector<BenchEntry> run_bench_suite(const Rig& rig_in, const BenchOptions& o
           MapOptions all = mo;
           all.min_weight = 0;
           add(omma_workload(rig, all, 0, frames, "-alltaps"));
+          if (opt.depth && wanted("omma-mrf-depth-" + size_tag(g))) add(omma_depth_workload(rig, mo, frames));
         }
         if (m != pano::Method::kNearest)  // mrf if pano has it, else linear
           bound_map = std::make_shared<CompiledMap>(compile_map(rig, mo));
@@ -286,6 +309,8 @@ nlohmann::json BenchRatio::to_json() const {
   if (!vs_multiband_rounds.empty()) j["vs_opencv_multiband_rounds"] = vs_multiband_rounds;
   if (bound_over > 0) j["memcpy_bound_over_ours"] = bound_over, j["target_within_2x_bound_met"] = bound_over <= 2;
   if (name.rfind("omma-mrf-1080x1080", 0) == 0) j["target_400fps_met"] = fps >= 400;
+  if (vs_static > 0) j["vs_static"] = vs_static;
+  if (name == "omma-mrf-depth-1080x1080") j["target_25fps_met"] = fps >= 25;
   return j;
 }
 
@@ -317,6 +342,8 @@ std::vector<BenchRatio> bench_ratios(const std::vector<BenchEntry>& entries) {
     if (const double m = fps_of("memcpy-bound-" + size); m > 0) r.bound_over = m / e.fps;
     r.vs_remap_rounds = per_round(e, "opencv-remap-" + size);
     r.vs_multiband_rounds = per_round(e, "opencv-multiband-" + size);
+    if (const size_t d = e.name.find("-depth-"); d != std::string::npos)  // against the static map
+      if (const double st = fps_of(e.name.substr(0, d) + "-" + size); st > 0) r.vs_static = e.fps / st;
     out.push_back(r);
   }
   return out;

@@ -32,6 +32,11 @@ struct Workload {
 Workload omma_workload(const Rig& rig, const MapOptions& opt, int threads, const std::vector<cv::Mat>& frames,
                        const std::string& variant = "", const std::string& suffix = "");
 
+// The depth-adaptive renderer (depth_render.h, issue 14): per frame the depth estimate on its
+// coarse grid (with the temporal term) and the render with moved taps; named
+// "omma-<method>-depth-<W>x<H>".
+Workload omma_depth_workload(const Rig& rig, const MapOptions& opt, const std::vector<cv::Mat>& frames);
+
 // Peer A: per-camera cv::remap (fixed-point maps from cv::convertMaps, INTER_LINEAR) of every
 // camera's frame into its footprint on the panorama, no blending (each camera overwrites).
 Workload opencv_remap_workload(const Rig& rig, const PanoGrid& grid, const std::vector<cv::Mat>& frames);
@@ -58,6 +63,7 @@ struct BenchOptions {
   double min_seconds = 2;         // per workload, in all
   int rounds = 5;                 // the workloads are measured in turn, this many slices each
   bool quick = false;             // small sizes (tests)
+  bool depth = false;             // also the depth-adaptive mrf renderer (issue 14) beside the static one
   std::vector<std::string> only;  // substrings of names to run; empty = all
 };
 // The whole suite of point 4 on the thesis prototype rig (or `rig` if it has cameras). All
@@ -77,6 +83,7 @@ struct BenchRatio {
   double vs_remap = 0;      // fps / opencv-remap fps
   double vs_multiband = 0;  // fps / opencv-multiband fps
   double bound_over = 0;    // memcpy-bound fps / fps (1 = at the bound)
+  double vs_static = 0;     // depth-adaptive workloads: fps / the static map's fps (same method and size)
   // Per round (where both entries have the same rounds): ours / peer A and ours / peer B of that
   // round alone, which shows how much the ratio moves with the machine's load.
   std::vector<double> vs_remap_rounds, vs_multiband_rounds;

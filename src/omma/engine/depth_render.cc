@@ -17,6 +17,15 @@
 
 namespace omma::engine {
 
+pano::SweepOptions engine_sweep_options() {
+  pano::SweepOptions o;
+  o.pitch_deg = 2.0;
+  o.steps = 32;
+  o.paths = 4;
+  o.temporal_weight = 0.2;
+  return o;
+}
+
 bool DepthRenderOptions::IsValid(std::string* why) const {
   auto fail = [&](const std::string& m) {
     if (why) *why = m;
@@ -27,6 +36,7 @@ bool DepthRenderOptions::IsValid(std::string* why) const {
   if (!sweep.IsValid(why)) return false;
   if (!(reference_mm > 0) || !std::isfinite(reference_mm)) return fail("reference distance must be positive");
   if (threads < 0) return fail("threads must be >= 0");
+  if (!(temporal_alpha > 0 && temporal_alpha <= 1)) return fail("temporal alpha must be in (0, 1]");
   return true;
 }
 
@@ -61,6 +71,7 @@ struct DepthRenderer::Impl {
   StoreLayout layout;
   std::vector<DCam> cams;
   std::vector<uint32_t> first;  // per pixel + 1
+  std::vector<uint8_t> main;    // per pixel: its first `main` taps are the method's, the rest fallbacks
   std::vector<DTap> taps;
   std::unique_ptr<pano::DepthSweep> sweep;
   std::unique_ptr<tbb::task_arena> arena;
@@ -76,7 +87,7 @@ DepthRenderer::DepthRenderer(const Rig& rig, const DepthRenderOptions& opt) : im
   m.rig = rig;
   m.opt = opt;
   m.layout = StoreLayout::for_rig(rig);
-  m.arena = std::make_unique<tbb::task_arena>(opt.threads > 0 ? opt.threads : tbb::task_arena::automatic);
+  m.arena = opt.threads > 0 ? std::make_unique<tbb::task_arena>(opt.threads) : std::make_unique<tbb::task_arena>();
   const Vec3 q = opt.map.params.search.q;
   for (const auto& c : rig.cameras) {
     const Vec3 b = q - c.position_mm;
@@ -149,10 +160,12 @@ DepthRenderer::DepthRenderer(const Rig& rig, const DepthRenderOptions& opt) : im
         out.push_back(make_tap(cs[i].camera, dir, 1e-3 * std::max(w[i], 1e-3)));
   });
   m.first.assign(npx + 1, 0);
+  m.main.assign(npx, 0);
   size_t n = 0;
   for (int r = 0; r < g.height; ++r)
     for (int c = 0; c < g.width; ++c) {
       m.first[size_t(r) * g.width + c] = uint32_t(n);
+      m.main[size_t(r) * g.width + c] = uint8_t(cams_of[r][c].size());
       n += pix[r][c].size();
     }
   m.first[npx] = uint32_t(n);
@@ -184,9 +197,13 @@ DepthFrameStats DepthRenderer::render(const FrameStore& store, const std::vector
       m.inverse = fixed_inverse.clone();
       m.confidence = cv::Mat(fixed_inverse.size(), CV_32FC1, cv::Scalar(1));
     } else {
-      const bool temporal = m.opt.sweep.temporal_weight > 0 && !m.inverse.empty();
+      const bool have_prev = !m.inverse.empty();
+      const bool temporal = m.opt.sweep.temporal_weight > 0 && have_prev;
       const pano::DepthEstimate e = m.sweep->estimate(frames, temporal ? m.inverse : cv::Mat(), false);
-      m.inverse = e.coarse_inverse;
+      if (have_prev && m.opt.temporal_alpha < 1)
+        m.inverse = m.inverse + m.opt.temporal_alpha * (e.coarse_inverse - m.inverse);
+      else
+        m.inverse = e.coarse_inverse;
       m.confidence = e.coarse_confidence;
     }
     cv::resize(m.inverse, m.inverse_full, cv::Size(g.width, g.height), 0, 0, cv::INTER_LINEAR);
@@ -203,35 +220,42 @@ DepthFrameStats DepthRenderer::render(const FrameStore& store, const std::vector
           const size_t p = size_t(row) * g.width + col;
           const float s = srow[col];
           float acc0 = 0, acc1 = 0, acc2 = 0, wsum = 0;
-          for (uint32_t k = m.first[p]; k < m.first[p + 1]; ++k) {
-            const DTap& t = m.taps[k];
-            const DCam& c = m.cams[t.cam];
-            // contributors.h: the ray w + s b in the camera's frame; eq. 2.3 on it.
-            const float z = t.wt + s * c.bt;
-            if (z <= 0) continue;
-            const float r2 = 1 + 2 * s * t.wb + s * s * c.bb;
-            if (z * z < c.cos2 * r2) continue;
-            const float iz = 1 / z;
-            float x = (t.wu + s * c.bu) * iz, y = (t.wv + s * c.bv) * iz;
-            if (c.distort) {  // eq. 5.23-5.26
-              const Vec2 d = distort(c.k, Vec2(x, y));
-              x = float(d.x());
-              y = float(d.y());
+          auto taps = [&](uint32_t k0, uint32_t k1) {
+            for (uint32_t k = k0; k < k1; ++k) {
+              const DTap& t = m.taps[k];
+              const DCam& c = m.cams[t.cam];
+              // contributors.h: the ray w + s b in the camera's frame; eq. 2.3 on it.
+              const float z = t.wt + s * c.bt;
+              if (z <= 0) continue;
+              const float r2 = 1 + 2 * s * t.wb + s * s * c.bb;
+              if (z * z < c.cos2 * r2) continue;
+              const float iz = 1 / z;
+              float x = (t.wu + s * c.bu) * iz, y = (t.wv + s * c.bv) * iz;
+              if (c.distort) {  // eq. 5.23-5.26
+                const Vec2 d = distort(c.k, Vec2(x, y));
+                x = float(d.x());
+                y = float(d.y());
+              }
+              const float px = c.cu + c.fu * x, py = c.cv + c.fv * y;  // eq. 5.21-5.22
+              if (!(px >= 0 && py >= 0 && px < c.width && py < c.height)) continue;
+              // Bilinear, centres at +0.5, edges replicated: the row pair at (x0, y0) holds the 2x2.
+              const float xx = std::clamp(px - 0.5f, 0.f, float(c.width - 1));
+              const float yy = std::clamp(py - 0.5f, 0.f, float(c.height - 1));
+              const int x0 = std::min(int(xx), c.width - 2), y0 = int(yy);
+              const float fx = xx - x0, fy = yy - y0;
+              const uint8_t* n = data + L.offset(t.cam, x0, y0);
+              const float w00 = (1 - fx) * (1 - fy), w01 = (1 - fx) * fy, w10 = fx * (1 - fy), w11 = fx * fy;
+              acc0 += t.weight * (w00 * n[0] + w01 * n[3] + w10 * n[6] + w11 * n[9]);
+              acc1 += t.weight * (w00 * n[1] + w01 * n[4] + w10 * n[7] + w11 * n[10]);
+              acc2 += t.weight * (w00 * n[2] + w01 * n[5] + w10 * n[8] + w11 * n[11]);
+              wsum += t.weight;
             }
-            const float px = c.cu + c.fu * x, py = c.cv + c.fv * y;  // eq. 5.21-5.22
-            if (!(px >= 0 && py >= 0 && px < c.width && py < c.height)) continue;
-            // Bilinear, centres at +0.5, edges replicated: the row pair at (x0, y0) holds the 2x2.
-            const float xx = std::clamp(px - 0.5f, 0.f, float(c.width - 1));
-            const float yy = std::clamp(py - 0.5f, 0.f, float(c.height - 1));
-            const int x0 = std::min(int(xx), c.width - 2), y0 = int(yy);
-            const float fx = xx - x0, fy = yy - y0;
-            const uint8_t* n = data + L.offset(t.cam, x0, y0);
-            const float w00 = (1 - fx) * (1 - fy), w01 = (1 - fx) * fy, w10 = fx * (1 - fy), w11 = fx * fy;
-            acc0 += t.weight * (w00 * n[0] + w01 * n[3] + w10 * n[6] + w11 * n[9]);
-            acc1 += t.weight * (w00 * n[1] + w01 * n[4] + w10 * n[7] + w11 * n[10]);
-            acc2 += t.weight * (w00 * n[2] + w01 * n[5] + w10 * n[8] + w11 * n[11]);
-            wsum += t.weight;
-          }
+          };
+          // The method's taps; the fallbacks (cameras that see the direction only at infinity) only
+          // where every one of them left its image at this depth.
+          const uint32_t k0 = m.first[p], km = k0 + m.main[p], k1 = m.first[p + 1];
+          taps(k0, km);
+          if (wsum == 0) taps(km, k1);
           if (wsum > 0) {
             const float inv = 1 / wsum;
             o[3 * col + 0] = uint8_t(std::min(255.f, acc0 * inv + 0.5f));

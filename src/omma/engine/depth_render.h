@@ -5,9 +5,9 @@
 //
 // Map. Compiled once per rig + grid + method (like compiled_map.h, beside it): for every output
 // pixel the contributors and static weights of the method on the sphere of radius reference_mm
-// (pano::for_each_pixel_weights), plus, with a weight of 1e-3 of theirs, the cameras that see the
-// direction only at infinity (they take over where the others leave their images). Taps lighter
-// than min_weight are dropped as in MapOptions. Per tap the map holds the direction w in the
+// (pano::for_each_pixel_weights), plus, as fallbacks, the cameras that see the direction only at
+// infinity (used only where every one of the method's taps leaves its image or cone at the pixel's
+// depth). Taps lighter than min_weight are dropped as in MapOptions. Per tap the map holds the direction w in the
 // camera's frame, as x_inf = w.u / w.t, y_inf = w.v / w.t, 1 / w.t and w.b (b = q - c_i), so that
 // moving the tap to inverse depth s is (contributors.h):
 //     k = s / w.t,  x = (x_inf + k b.u) / (1 + k b.t),  y = (y_inf + k b.v) / (1 + k b.t)
@@ -32,10 +32,18 @@
 
 namespace omma::engine {
 
+// The sweep the engine runs every frame: the reference's (pano::SweepOptions defaults) on a coarser
+// grid with fewer candidates and paths, and the temporal term (measured in depth_render_test.cc and
+// README "Depth": speed per frame and PSNR against `omma stitch --depth estimate`).
+pano::SweepOptions engine_sweep_options();
+
 struct DepthRenderOptions {
   MapOptions map;             // grid, method (not sad), params (observer q), min_weight
-  pano::SweepOptions sweep;   // the per-frame estimate (its temporal_weight is used between frames)
+  pano::SweepOptions sweep = engine_sweep_options();  // the per-frame estimate (its temporal_weight is used between frames)
   double reference_mm = 22;   // the surface the static weights are computed on (the colon wall)
+  // Temporal filter of the inverse depth between panoramas: s = s_prev + alpha (s_new - s_prev)
+  // (1 = none). With sweep.temporal_weight it keeps the wall's depth from flickering with the noise.
+  double temporal_alpha = 0.35;
   int threads = 0;            // 0 = all
   bool IsValid(std::string* why = nullptr) const;
 };

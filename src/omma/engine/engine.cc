@@ -51,7 +51,10 @@ nlohmann::json EngineStats::to_json() const {
           {"camera_frames", camera_frames},
           {"dropped_frames", dropped_frames},
           {"dropped_cameras", dropped},
-          {"map", {{"bytes_per_pixel", map_bytes_per_pixel}, {"seconds", map_seconds}, {"from_cache", map_from_cache}}}};
+          {"map", {{"bytes_per_pixel", map_bytes_per_pixel}, {"seconds", map_seconds}, {"from_cache", map_from_cache}}},
+          {"depth", depth_compile_s > 0 ? nlohmann::json{{"estimate_ms_mean", depth_ms_mean},
+                                                         {"compile_s", depth_compile_s}}
+                                        : nlohmann::json(nullptr)}};
 }
 
 EngineStats run_engine(const Rig& rig, std::vector<std::unique_ptr<CameraSource>> sources,
@@ -80,6 +83,20 @@ EngineStats run_engine(const Rig& rig, std::vector<std::unique_ptr<CameraSource>
     cv::Mat out;
     render(*map, warm, out, {.threads = opt.threads});
   }
+  std::unique_ptr<DepthRenderer> depth;
+  if (opt.depth) {
+    DepthRenderOptions dopt;
+    dopt.map = mopt;
+    dopt.sweep = opt.depth_sweep;
+    dopt.threads = opt.threads;
+    depth = std::make_unique<DepthRenderer>(rig, dopt);
+    stats.depth_compile_s = depth->compile_seconds();
+    spdlog::info("depth-adaptive map: {:.1f} bytes/pixel, depth grid {}x{}, compiled in {:.2f} s",
+                 depth->bytes_per_pixel(), depth->sweep().coarse_grid().width, depth->sweep().coarse_grid().height,
+                 depth->compile_seconds());
+  }
+  std::vector<cv::Mat> current(n);  // depth mode: the frames in the store
+  double depth_ms_sum = 0;
   std::vector<std::unique_ptr<Latest>> latest;
   for (size_t c = 0; c < n; ++c) latest.push_back(std::make_unique<Latest>());
   std::atomic<bool> stop{false};
@@ -179,6 +196,7 @@ EngineStats run_engine(const Rig& rig, std::vector<std::unique_ptr<CameraSource>
         if (slot.fatal) throw SourceError(slot.reason);
         if (slot.seq > used_seq[c]) {
           store.set(int(c), slot.frame);
+          if (depth) current[c] = slot.frame;
           stats.dropped_frames += used_seq[c] > 0 ? slot.seq - used_seq[c] - 1 : slot.seq - 1;
           used_seq[c] = slot.seq;
           captured[c] = slot.captured;
@@ -231,7 +249,13 @@ EngineStats run_engine(const Rig& rig, std::vector<std::unique_ptr<CameraSource>
         continue;
       }
       const auto r0 = Clock::now();
-      render(*map, store, pano, {.threads = opt.threads});
+      if (depth) {
+        for (size_t c = 0; c < n; ++c)  // a camera without a frame yet (dropped): black
+          if (current[c].empty()) current[c] = cv::Mat(L.size[c], CV_8UC3, cv::Scalar::all(0));
+        depth_ms_sum += depth->render(store, current, pano).estimate_ms;
+      } else {
+        render(*map, store, pano, {.threads = opt.threads});
+      }
       render_ms_sum += ms_since(r0);
       for (auto& s : sinks) s->write(pano, store);
       Clock::time_point oldest = Clock::now();
@@ -287,6 +311,7 @@ EngineStats run_engine(const Rig& rig, std::vector<std::unique_ptr<CameraSource>
   for (size_t c = 0; c < n; ++c) stats.camera_frames += latest[c]->seq;
   stats.fps = stats.frames / stats.seconds;
   stats.render_ms_mean = render_ms_sum / stats.frames;
+  stats.depth_ms_mean = depth_ms_sum / stats.frames;
   stats.latency_ms_mean = latency_sum / stats.frames;
   return stats;
 }

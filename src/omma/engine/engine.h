@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "omma/engine/compiled_map.h"
+#include "omma/engine/depth_render.h"
 #include "omma/engine/render.h"
 #include "omma/engine/sinks.h"
 #include "omma/engine/sources.h"
@@ -28,6 +29,11 @@ struct EngineOptions {
   double fps = 30;                  // panorama rate (0: render whenever a camera has a new frame)
   double first_frame_timeout_s = 5; // a camera without a first frame by then is dropped
   int threads = 0;                  // renderer threads (0: all)
+  // Depth-adaptive rendering (issue 14, depth_render.h): the depth estimated every panorama on a
+  // coarse grid and the taps moved to it (map.method, not sad). A dropped camera's last frame stays
+  // in use (no recompile in this mode).
+  bool depth = false;
+  pano::SweepOptions depth_sweep = engine_sweep_options();
   // Called about twice a second from the render loop with the running statistics.
   std::function<void(const nlohmann::json&)> on_progress;
 };
@@ -53,6 +59,8 @@ struct EngineStats {
   double map_bytes_per_pixel = 0;
   double map_seconds = 0;
   bool map_from_cache = false;
+  double depth_ms_mean = 0;      // depth mode: estimate per panorama (included in render_ms_mean)
+  double depth_compile_s = 0;
   nlohmann::json to_json() const;
 };
 
