@@ -10,6 +10,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "apps/command.h"
+#include "apps/demo_depth.h"
 #include "omma/core/frames.h"
 #include "omma/core/io.h"
 #include "omma/core/log.h"
@@ -97,7 +98,7 @@ struct MethodRow {
 };
 
 void write_report(const fs::path& dir, const DemoOptions& o, const Rig& rig, const std::vector<MethodRow>& rows,
-                  const EngineRow& eng, double inter_psnr, double r_vir, double total_s) {
+                  const EngineRow& eng, double inter_psnr, double r_vir, double total_s, const DepthDemo& depth) {
   const std::string engine_text = fmt::format(
       "The real-time engine (`omma run`) renders the same mrf panorama from a compiled map ({:.1f} bytes per "
       "output pixel, compiled in {:.2f} s) at {:.0f} panoramas/s on this machine ({:.0f}x the thesis FPGA's 25 fps); "
@@ -123,7 +124,7 @@ void write_report(const fs::path& dir, const DemoOptions& o, const Rig& rig, con
                       r.eval.seam_psnr_db, r.ms);
   md += "\nGround truth: the ideal panorama from the dome centre, rendered noise-free by the simulator "
         "(truth.png). Seam PSNR: the directions seen by two or more cameras. Times: the plain reference "
-        "stitcher (pano::stitch).\n\n## Real-time engine (thesis ch. 5)\n\n" + engine_text + "\n";
+        "stitcher (pano::stitch).\n\n## Real-time engine (thesis ch. 5)\n\n" + engine_text + "\n\n" + depth.markdown;
   write_text_atomically(dir / "report.md", md);
 
   std::string html =
@@ -153,7 +154,7 @@ void write_report(const fs::path& dir, const DemoOptions& o, const Rig& rig, con
                         "<td><a href=\"pano_{0}.png\">image</a></td></tr>",
                         r.method, r.eval.psnr_db, r.eval.ssim, r.eval.seam_psnr_db, r.ms);
   html += "</table><p>Times: the plain reference stitcher (pano::stitch).</p><h2>Real-time engine</h2><p>" +
-          engine_text + "</p></body></html>\n";
+          engine_text + "</p>" + depth.html + "</body></html>\n";
   write_text_atomically(dir / "report.html", html);
 }
 
@@ -215,8 +216,9 @@ void run_demo(const DemoOptions& o) {
   const EngineRow eng = run_engine(rig, grid, frames, mrf);
   const double inter = pano::inter_camera_psnr(rig, frames, grid);
   const double r_vir = design::virtual_radius(rig, deg2rad(0.5));
+  const DepthDemo depth = run_depth_demo(rig, grid, frames, simr.truth, simr.truth_depth, mrf, dir, !o.json);
   const double total_s = ms_since(t_start) / 1000;
-  write_report(dir, o, rig, rows, eng, inter, r_vir, total_s);
+  write_report(dir, o, rig, rows, eng, inter, r_vir, total_s, depth);
 
   if (o.json) {
     nlohmann::json methods = nlohmann::json::object();
@@ -228,6 +230,7 @@ void run_demo(const DemoOptions& o) {
                 {"r_virtual_mm", r_vir}, {"methods", methods},
                 {"engine", {{"method", "mrf"}, {"fps", eng.fps}, {"compile_s", eng.compile_s},
                             {"bytes_per_pixel", eng.bytes_per_pixel}, {"psnr_vs_reference_db", eng.psnr_vs_reference}}},
+                {"depth", depth.json},
                 {"seconds", total_s}});
   } else {
     std::cout << fmt::format("\n{:<14} {:>9} {:>7} {:>10} {:>8}\n", "method", "PSNR dB", "SSIM", "seam dB", "ms");
@@ -237,6 +240,7 @@ void run_demo(const DemoOptions& o) {
     std::cout << fmt::format("real-time engine, mrf: {:.0f} panoramas/s ({:.0f}x the FPGA's 25 fps), {:.1f} dB "
                              "against the reference stitch, map compiled in {:.2f} s\n",
                              eng.fps, eng.fps / 25, eng.psnr_vs_reference, eng.compile_s);
+    std::cout << depth.summary << "\n";
     std::cout << fmt::format("inter-camera PSNR (eq. 4.19-4.21): {:.2f} dB; total {:.1f} s\n", inter, total_s);
     std::cout << "demo written to " << fs::absolute(dir).string() << "/ (open report.html)\n";
   }

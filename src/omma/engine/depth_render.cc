@@ -70,9 +70,8 @@ struct DepthRenderer::Impl {
   DepthRenderOptions opt;
   StoreLayout layout;
   std::vector<DCam> cams;
-  std::vector<uint32_t> first;  // per pixel + 1
-  std::vector<uint8_t> main;    // per pixel: its first `main` taps are the method's, the rest fallbacks
-  std::vector<DTap> taps;
+  std::vector<uint32_t> first, ffirst;  // per pixel + 1: first tap, first fallback tap
+  std::vector<DTap> taps, fallbacks;
   std::unique_ptr<pano::DepthSweep> sweep;
   std::unique_ptr<tbb::task_arena> arena;
   cv::Mat inverse, confidence, inverse_full;
@@ -160,20 +159,26 @@ DepthRenderer::DepthRenderer(const Rig& rig, const DepthRenderOptions& opt) : im
         out.push_back(make_tap(cs[i].camera, dir, 1e-3 * std::max(w[i], 1e-3)));
   });
   m.first.assign(npx + 1, 0);
-  m.main.assign(npx, 0);
-  size_t n = 0;
+  m.ffirst.assign(npx + 1, 0);
+  size_t n = 0, nf = 0;
   for (int r = 0; r < g.height; ++r)
     for (int c = 0; c < g.width; ++c) {
       m.first[size_t(r) * g.width + c] = uint32_t(n);
-      m.main[size_t(r) * g.width + c] = uint8_t(cams_of[r][c].size());
-      n += pix[r][c].size();
+      m.ffirst[size_t(r) * g.width + c] = uint32_t(nf);
+      n += cams_of[r][c].size();
+      nf += pix[r][c].size() - cams_of[r][c].size();
     }
   m.first[npx] = uint32_t(n);
+  m.ffirst[npx] = uint32_t(nf);
   m.taps.resize(n);
+  m.fallbacks.resize(nf);
   tbb::parallel_for(0, g.height, [&](int r) {
-    size_t k = m.first[size_t(r) * g.width];
-    for (int c = 0; c < g.width; ++c)
-      for (const DTap& t : pix[r][c]) m.taps[k++] = t;
+    size_t k = m.first[size_t(r) * g.width], f = m.ffirst[size_t(r) * g.width];
+    for (int c = 0; c < g.width; ++c) {
+      const size_t nm = cams_of[r][c].size();
+      for (size_t i = 0; i < pix[r][c].size(); ++i)
+        (i < nm ? m.taps[k++] : m.fallbacks[f++]) = pix[r][c][i];
+    }
   });
   m.sweep = std::make_unique<pano::DepthSweep>(rig, g, opt.sweep);
   m.compile_s = ms_since(t0) / 1000;
@@ -212,6 +217,11 @@ DepthFrameStats DepthRenderer::render(const FrameStore& store, const std::vector
     out.create(g.height, g.width, CV_8UC3);
     const uint8_t* data = store.data();
     const StoreLayout& L = m.layout;
+    const DTap* tap = m.taps.data();
+    const DTap* fb = m.fallbacks.data();
+    const uint32_t* first = m.first.data();
+    const uint32_t* ffirst = m.ffirst.data();
+    const DCam* cams = m.cams.data();
     tbb::parallel_for(tbb::blocked_range<int>(0, g.height, 4), [&](const tbb::blocked_range<int>& rows) {
       for (int row = rows.begin(); row < rows.end(); ++row) {
         const float* srow = m.inverse_full.ptr<float>(row);
@@ -220,10 +230,10 @@ DepthFrameStats DepthRenderer::render(const FrameStore& store, const std::vector
           const size_t p = size_t(row) * g.width + col;
           const float s = srow[col];
           float acc0 = 0, acc1 = 0, acc2 = 0, wsum = 0;
-          auto taps = [&](uint32_t k0, uint32_t k1) {
-            for (uint32_t k = k0; k < k1; ++k) {
-              const DTap& t = m.taps[k];
-              const DCam& c = m.cams[t.cam];
+          auto taps = [&](const DTap* t0, const DTap* t1) {
+            for (const DTap* tp = t0; tp < t1; ++tp) {
+              const DTap& t = *tp;
+              const DCam& c = cams[t.cam];
               // contributors.h: the ray w + s b in the camera's frame; eq. 2.3 on it.
               const float z = t.wt + s * c.bt;
               if (z <= 0) continue;
@@ -253,9 +263,8 @@ DepthFrameStats DepthRenderer::render(const FrameStore& store, const std::vector
           };
           // The method's taps; the fallbacks (cameras that see the direction only at infinity) only
           // where every one of them left its image at this depth.
-          const uint32_t k0 = m.first[p], km = k0 + m.main[p], k1 = m.first[p + 1];
-          taps(k0, km);
-          if (wsum == 0) taps(km, k1);
+          taps(tap + first[p], tap + first[p + 1]);
+          if (wsum == 0) taps(fb + ffirst[p], fb + ffirst[p + 1]);
           if (wsum > 0) {
             const float inv = 1 / wsum;
             o[3 * col + 0] = uint8_t(std::min(255.f, acc0 * inv + 0.5f));
@@ -286,9 +295,10 @@ void DepthRenderer::reset() { impl_->inverse.release(); }
 const StoreLayout& DepthRenderer::layout() const { return impl_->layout; }
 const pano::DepthSweep& DepthRenderer::sweep() const { return *impl_->sweep; }
 size_t DepthRenderer::taps() const { return impl_->taps.size(); }
-double DepthRenderer::bytes_per_pixel() const {
+double DepthRenderer::bytes_per_pixel() const {  // what a render streams: the taps and their index
   const PanoGrid& g = impl_->opt.map.grid;
-  return double(impl_->taps.size() * sizeof(DTap) + impl_->first.size() * 4) / (double(g.width) * g.height);
+  return double(impl_->taps.size() * sizeof(DTap) + impl_->first.size() * 4 + impl_->ffirst.size() * 4) /
+         (double(g.width) * g.height);
 }
 double DepthRenderer::compile_seconds() const { return impl_->compile_s; }
 
