@@ -227,25 +227,28 @@ void run_sweep_cmd(const SweepArgs& a) {
   const Rig rig = rig_for(a.rig, a.frames);
   hw::check_rig(o.base, rig);
   const std::vector<cv::Mat> frames = load_frames(a.frames, rig);
-  size_t total = 2;
+  size_t total = 1;
   for (const auto& p : o.params) total += p.values.size();
-  Progress progress("hw sweep", static_cast<int>(total));
+  Progress progress("hw sweep", total);
   o.progress = [&](const std::string& what) {
     spdlog::debug("hw sweep: {}", what);
-    progress.step();
+    if (what.rfind("minimal set", 0) != 0) progress.step();  // the search for the smallest set is not counted
   };
   const hw::SweepResult r = hw::run_sweep(rig, frames, o);
   progress.finish();
   fs::create_directories(a.out);
   write_text_atomically(fs::path(a.out) / "hw_sweep.csv", hw::sweep_csv(r, a.target));
   write_text_atomically(fs::path(a.out) / "hw_sweep.svg", hw::sweep_svg(r, a.target));
+  // The smallest set as a configuration usable with --config.
+  write_text_atomically(fs::path(a.out) / "hw_minimal.json", hw::config_to_json(r.minimal).dump(2) + "\n");
   nlohmann::json pts = nlohmann::json::array();
   for (const auto& p : r.points)
     pts.push_back({{"param", p.param}, {"value", p.value}, {"psnr_db", p.valid ? nlohmann::json(p.psnr_db) : nlohmann::json()}});
   nlohmann::json j = {{"base_psnr_db", r.base_psnr_db}, {"target_db", a.target}, {"points", pts},
                       {"minimal", hw::config_to_json(r.minimal)}, {"minimal_psnr_db", r.minimal_psnr_db},
                       {"minimal_steps", r.minimal_steps}, {"csv", (fs::path(a.out) / "hw_sweep.csv").string()},
-                      {"svg", (fs::path(a.out) / "hw_sweep.svg").string()}};
+                      {"svg", (fs::path(a.out) / "hw_sweep.svg").string()},
+                      {"minimal_config", (fs::path(a.out) / "hw_minimal.json").string()}};
   if (a.json) {
     print_json(j);
     return;
