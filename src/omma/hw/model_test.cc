@@ -256,6 +256,7 @@ TEST(Export, CorruptStreamsNameTheField) {
   expect_error("regs.hex", "00001800\n", "write enable");
   expect_error("regs.hex", read_text_file(dir / "regs.hex") + "87FF0000\n", "unknown register address");
   expect_error("pix_val.hex", "FFFF0000\n", "beyond the vignetting memory");
+  expect_error("regs.hex", read_text_file(dir / "regs.hex") + "FE000002\n", "read-only");
   EXPECT_NO_THROW(import_chip(dir));
   std::filesystem::remove_all(dir);
 }
