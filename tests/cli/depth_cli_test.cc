@@ -1,0 +1,114 @@
+// CLI tests for the projection surface (issue 14): `omma stitch --depth ... --depth-out`, the
+// simulator's true depth, `omma eval --depth`, and bad input (points 2 and 7).
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <limits>
+#include <opencv2/imgcodecs.hpp>
+
+#include "omma/pano/test_scene.h"
+#include "tests/cli/cli_util.h"
+
+namespace omma::test {
+namespace {
+namespace fs = std::filesystem;
+
+// DIR with rig.json, cam_XX.png (64 px cameras, 5 mm dome) and truth.png (vr180 128x128) of a
+// far-field photo.
+fs::path make_scene(const std::string& tag) {
+  const fs::path dir = temp_dir(tag);
+  const Rig rig = pano::testing::small_rig(64);
+  const cv::Mat tex = pano::testing::photo_texture(data_dir() + "/louvre.jpg", 360);
+  const PanoGrid grid{Projection::kVr180, 128, 128};
+  pano::testing::write_frames_folder(dir, rig, pano::testing::render_frames(rig, tex),
+                                     pano::testing::render_truth(grid, tex));
+  return dir;
+}
+
+std::string stitch(const fs::path& d, const std::string& depth, const fs::path& out) {
+  return "stitch --rig " + (d / "rig.json").string() + " --frames " + d.string() +
+         " --method mrf --projection vr180 --size 128x128 --depth '" + depth + "' --out " + out.string();
+}
+
+TEST(DepthCli, DepthModesAndDepthOut) {
+  const fs::path d = make_scene("depth");
+  // estimate: a far-field scene lies at infinity, and stitching through the estimate changes little.
+  const RunResult r = run_omma(stitch(d, "estimate", d / "p_est.png") + " --depth-out " +
+                               (d / "depth.png").string() + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto j = r.json();
+  EXPECT_EQ(j.at("depth").at("mode"), "estimate");
+  const cv::Mat data = cv::imread((d / "depth.tiff").string(), cv::IMREAD_UNCHANGED);
+  ASSERT_EQ(data.type(), CV_32FC1);
+  ASSERT_EQ(data.size(), cv::Size(128, 128));
+  double lo = 0;
+  cv::minMaxLoc(data, &lo);
+  EXPECT_GT(lo, 100.0);  // nothing near in a photo at infinity
+  const cv::Mat picture = cv::imread((d / "depth.png").string());
+  EXPECT_EQ(picture.cols, 360);  // colour map widened for the legend
+  EXPECT_GT(picture.rows, 128);  // legend strip
+  // truth:FILE reads the data back; sphere:R; inf.
+  for (const std::string mode : {"truth:" + (d / "depth.tiff").string(), std::string("sphere:1000"), std::string("inf")}) {
+    const RunResult s = run_omma(stitch(d, mode, d / "p.png") + " --json");
+    ASSERT_EQ(s.exit_code, 0) << mode << ": " << s.err;
+  }
+  const RunResult e = run_omma("eval --pano " + (d / "p_est.png").string() + " --truth " + (d / "truth.png").string() +
+                               " --json");
+  ASSERT_EQ(e.exit_code, 0) << e.err;
+  EXPECT_GT(e.json().at("psnr_db").get<double>(), 33.0);  // measured 35.4 dB (inf: 35.5 dB)
+}
+
+TEST(DepthCli, BadInput) {
+  const fs::path d = make_scene("depth-bad");
+  auto fails = [&](const std::string& depth, const std::string& message, const std::string& extra = "") {
+    const fs::path out = d / "never.png";
+    const RunResult r = run_omma(stitch(d, depth, out) + extra);
+    EXPECT_EQ(r.exit_code, 1) << depth;
+    EXPECT_NE(r.err.find("omma: error:"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(message), std::string::npos) << depth << ": " << r.err;
+    EXPECT_FALSE(fs::exists(out)) << depth;
+    fs::remove(out);
+  };
+  fails("sphere:3", "inside the dome");  // the cameras sit at 5 mm
+  fails("sphere:abc", "needs a radius");
+  cv::imwrite((d / "small.tiff").string(), cv::Mat(10, 10, CV_32FC1, cv::Scalar(20)));
+  fails("truth:" + (d / "small.tiff").string(), "is 10x10, the panorama is 128x128");
+  cv::Mat neg(128, 128, CV_32FC1, cv::Scalar(20));
+  neg.at<float>(5, 7) = -1;
+  cv::imwrite((d / "neg.tiff").string(), neg);
+  fails("truth:" + (d / "neg.tiff").string(), "must be > 0");
+  fails("truth:" + (d / "missing.tiff").string(), "missing.tiff");
+  fails("estimate:30,60", "excludes the scene");  // a far-field scene, swept only to 60 mm
+  fails("estimate:4", "inside the dome");
+  fails("estimate:20,10", "must exceed near");
+  fails("estimate:8,x", "is not a number");
+  fails("nearby", "must be inf, sphere:R, truth:FILE or estimate");
+  fails("inf", "--depth-out names the picture", " --depth-out " + (d / "x.tiff").string());
+}
+
+// The simulator writes the true depth of every truth pixel: inside a sphere of 50 mm around the
+// dome centre every direction is 50 mm away.
+TEST(DepthCli, SimulatorWritesTrueDepth) {
+  const fs::path d = temp_dir("depth-sim") / "sim";
+  const RunResult r = run_omma("simulate --scene checker:50 --truth-size 64x64 --supersample 1 --out " + d.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const cv::Mat depth = cv::imread((d / "truth_depth.tiff").string(), cv::IMREAD_UNCHANGED);
+  ASSERT_EQ(depth.type(), CV_32FC1);
+  ASSERT_EQ(depth.size(), cv::Size(64, 64));
+  double lo = 0, hi = 0;
+  cv::minMaxLoc(depth, &lo, &hi);
+  EXPECT_NEAR(lo, 50.0, 1e-3);
+  EXPECT_NEAR(hi, 50.0, 1e-3);
+  const RunResult s = run_omma("stitch --rig " + (d / "rig.json").string() + " --frames " + d.string() +
+                               " --size 64x64 --depth truth:" + (d / "truth_depth.tiff").string() + " --out " +
+                               (d / "p.png").string() + " --depth-out " + (d / "used.png").string());
+  ASSERT_EQ(s.exit_code, 0) << s.err;
+  const RunResult e = run_omma("eval --pano " + (d / "p.png").string() + " --truth " + (d / "truth.png").string() +
+                               " --truth-depth " + (d / "truth_depth.tiff").string() + " --depth " +
+                               (d / "used.tiff").string() + " --json");
+  ASSERT_EQ(e.exit_code, 0) << e.err;
+  EXPECT_LT(e.json().at("depth").at("median_rel").get<double>(), 1e-6);
+}
+
+}  // namespace
+}  // namespace omma::test
