@@ -13,17 +13,6 @@ namespace omma::test {
 namespace {
 namespace fs = std::filesystem;
 
-// DIR with rig.json, cam_XX.png (64 px cameras, 5 mm dome) and truth.png (vr180 128x128) of a
-// far-field photo.
-fs::path make_scene(const std::string& tag) {
-  const fs::path dir = temp_dir(tag);
-  const Rig rig = pano::testing::small_rig(64);
-  const cv::Mat tex = pano::testing::photo_texture(data_dir() + "/louvre.jpg", 360);
-  const PanoGrid grid{Projection::kVr180, 128, 128};
-  pano::testing::write_frames_folder(dir, rig, pano::testing::render_frames(rig, tex),
-                                     pano::testing::render_truth(grid, tex));
-  return dir;
-}
 
 std::string stitch(const fs::path& d, const std::string& depth, const fs::path& out) {
   return "stitch --rig " + (d / "rig.json").string() + " --frames " + d.string() +
@@ -31,7 +20,7 @@ std::string stitch(const fs::path& d, const std::string& depth, const fs::path& 
 }
 
 TEST(DepthCli, DepthModesAndDepthOut) {
-  const fs::path d = make_scene("depth");
+  const fs::path d = louvre_frames_folder("depth");
   // estimate: a far-field scene lies at infinity, and stitching through the estimate changes little.
   const RunResult r = run_omma(stitch(d, "estimate", d / "p_est.png") + " --depth-out " +
                                (d / "depth.png").string() + " --json");
@@ -59,7 +48,7 @@ TEST(DepthCli, DepthModesAndDepthOut) {
 }
 
 TEST(DepthCli, BadInput) {
-  const fs::path d = make_scene("depth-bad");
+  const fs::path d = louvre_frames_folder("depth-bad");
   auto fails = [&](const std::string& depth, const std::string& message, const std::string& extra = "") {
     const fs::path out = d / "never.png";
     const RunResult r = run_omma(stitch(d, depth, out) + extra);

@@ -12,16 +12,6 @@ namespace omma::test {
 namespace {
 namespace fs = std::filesystem;
 
-// DIR with rig.json, cam_XX.png (64 px cameras) and truth.png (vr180 128x128) of louvre.jpg.
-fs::path make_scene(const std::string& tag) {
-  const fs::path dir = temp_dir(tag);
-  const Rig rig = pano::testing::small_rig(64);
-  const cv::Mat tex = pano::testing::photo_texture(data_dir() + "/louvre.jpg", 360);
-  const PanoGrid grid{Projection::kVr180, 128, 128};
-  pano::testing::write_frames_folder(dir, rig, pano::testing::render_frames(rig, tex),
-                                     pano::testing::render_truth(grid, tex));
-  return dir;
-}
 
 std::string stitch_args(const fs::path& d, const std::string& method, const fs::path& out,
                         const std::string& size = "128x128") {
@@ -30,7 +20,7 @@ std::string stitch_args(const fs::path& d, const std::string& method, const fs::
 }
 
 TEST(PanoCli, StitchAndEvalEveryMethod) {
-  const fs::path d = make_scene("stitch");
+  const fs::path d = louvre_frames_folder("stitch");
   for (const std::string m : {"nn", "linear", "gaussian", "mrf", "mrf-spherical", "sad"}) {
     const fs::path out = d / ("pano_" + m + ".png");
     const RunResult r = run_omma(stitch_args(d, m, out) + " --single-camera " + (d / "single.png").string() +
@@ -71,7 +61,7 @@ TEST(PanoCli, StitchAndEvalEveryMethod) {
 }
 
 TEST(PanoCli, StitchRejectsBadInput) {
-  const fs::path d = make_scene("badstitch");
+  const fs::path d = louvre_frames_folder("badstitch");
   const fs::path out = d / "out.png";
   auto expect_fail = [&](const std::string& args, const std::string& needle) {
     const RunResult r = run_omma(args);
