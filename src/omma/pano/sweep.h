@@ -5,10 +5,12 @@
 // confidence, and a smooth fallback to a prior distance where nothing can be measured.
 //
 // Grid. The sweep runs on a coarse grid of the output's projection, `factor` times smaller in each
-// axis (by default the factor that gives a pitch of about pitch_deg, so that the estimate does not
-// depend on the output size; measured on the colon, vr180 270x270: a 1.33 deg pitch beats 0.67 and
-// 2.7 deg by 0.4-0.6 dB) (coarse pixel (c, r) looks at the direction of output pixel area ((c + 1/2) f, (r + 1/2) f)).
-// The depth is upsampled to the output grid at the end (bilinear in inverse depth).
+// axis: by default the factor that gives a pitch of about pitch_deg, so that the estimate does not
+// depend on the output size (measured on the colon, vr180 270x270: a 1.33 deg pitch beats 0.67 and
+// 2.7 deg by 0.4-0.6 dB). It is the same projection at a lower resolution, so its pixel (c, r) looks
+// at the centre of the output's f x f block there. The depth is upsampled to the output grid at the
+// end (bilinear in inverse depth). Then a 5x5 median filter of the winners removes isolated wrong
+// minima (+0.3 dB on the colon).
 //
 // Candidates. D_k, k = 0 .. steps-1, uniform in inverse depth s = 1/D between 1/near and 1/far
 // (the parallax of a camera at baseline b is b * s, so equal steps in s are equal steps in pixels).
@@ -50,8 +52,8 @@
 // the prior distance (prior_mm, or the median of the confident estimates).
 //
 // Temporal (the engine): a previous inverse-depth map (coarse grid) adds
-// temporal_weight * min(|s_k - s_prev(u)| / (s_0 - s_{K-1}) * K, 1) to C, which keeps the depth of
-// static wall from flickering with the sensor noise.
+// temporal_weight * min(|s_k - s_prev(u)| / (s_0 - s_{K-1}) * (K - 1), 1) to C, which keeps the
+// depth of static wall from flickering with the sensor noise.
 #pragma once
 
 #include <limits>
