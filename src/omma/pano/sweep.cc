@@ -344,9 +344,31 @@ DepthEstimate DepthSweep::estimate(const std::vector<cv::Mat>& frames_in, const 
       if (d >= kEvidence) best = std::min(best, num[size_t(k) * N + u] / d);
     }
     const float fill = best == std::numeric_limits<float>::max() ? neutral : std::min(neutral, best + unknown);
+    // An unknown candidate next to candidates with evidence takes the cost of the nearest of them (in
+    // candidate index), at most `fill`: the cost curve is continued flat, so that neither end of the
+    // overlap (nearer: overlaps shrink; farther: at infinity the footprints of a far-field scene's
+    // cameras part at the edge of the coverage) pulls the winner towards it.
+    std::vector<float> ext(K, fill);
+    if (best != std::numeric_limits<float>::max()) {
+      int below = -1;
+      std::vector<int> nearest(K, -1);
+      for (int k = 0; k < K; ++k) {
+        if (den[size_t(k) * N + u] >= kEvidence) below = k;
+        nearest[k] = below;
+      }
+      int above = -1;
+      for (int k = K - 1; k >= 0; --k) {
+        if (den[size_t(k) * N + u] >= kEvidence) above = k;
+        if (above >= 0 && (nearest[k] < 0 || above - k < k - nearest[k])) nearest[k] = above;
+        if (nearest[k] >= 0) {
+          const size_t j = size_t(nearest[k]) * N + u;
+          ext[k] = std::min(fill, (num[j] + w0 * neutral) / (den[j] + w0));
+        }
+      }
+    }
     for (int k = 0; k < K; ++k) {
       const float d = den[size_t(k) * N + u];
-      float c = d >= kEvidence ? (num[size_t(k) * N + u] + w0 * neutral) / (d + w0) : fill;
+      float c = d >= kEvidence ? (num[size_t(k) * N + u] + w0 * neutral) / (d + w0) : ext[k];
       if (o.temporal_weight > 0 && sp > 0)
         c += float(o.temporal_weight *
                    std::min(1.0, std::abs(m.inv[k] - sp) / srange * (K - 1)));
