@@ -222,11 +222,16 @@ DepthFrameStats DepthRenderer::render(const FrameStore& store, const std::vector
     const uint32_t* first = m.first.data();
     const uint32_t* ffirst = m.ffirst.data();
     const DCam* cams = m.cams.data();
-    tbb::parallel_for(tbb::blocked_range<int>(0, g.height, 4), [&](const tbb::blocked_range<int>& rows) {
-      for (int row = rows.begin(); row < rows.end(); ++row) {
+    // Tile by tile (compiled_map.h's kTileW x kTileH): the camera pixels a tile gathers stay in the
+    // cache (row by row was 1.6x slower, bound by the gathers).
+    const int tiles_x = (g.width + kTileW - 1) / kTileW, tiles_y = (g.height + kTileH - 1) / kTileH;
+    tbb::parallel_for(0, tiles_x * tiles_y, [&](int tile) {
+      const int c0 = (tile % tiles_x) * kTileW, r0 = (tile / tiles_x) * kTileH;
+      const int c1 = std::min(g.width, c0 + kTileW), r1 = std::min(g.height, r0 + kTileH);
+      for (int row = r0; row < r1; ++row) {
         const float* srow = m.inverse_full.ptr<float>(row);
         uint8_t* o = out.ptr<uint8_t>(row);
-        for (int col = 0; col < g.width; ++col) {
+        for (int col = c0; col < c1; ++col) {
           const size_t p = size_t(row) * g.width + col;
           const float s = srow[col];
           float acc0 = 0, acc1 = 0, acc2 = 0, wsum = 0;
