@@ -191,9 +191,8 @@ class CameraThreads {
         if (const auto own = sources_[k.c]->next_capture(); own != Clock::time_point{}) k.due = own;
       auto it = std::min_element(cams.begin(), cams.end(), [](const Cam& a, const Cam& b) { return a.due < b.due; });
       const auto wait = it->due - Clock::now();
-      if (wait > Clock::duration::zero()) {
-        std::unique_lock<std::mutex> lock(mutex_);
-        cv_.wait_for(lock, std::min<Clock::duration>(wait, std::chrono::milliseconds(20)), [&] { return stopping(); });
+      if (wait > Clock::duration::zero()) {  // (at most 20 ms: then look at `stop` again)
+        std::this_thread::sleep_for(std::min<Clock::duration>(wait, std::chrono::milliseconds(20)));
         continue;
       }
       if (!read_one(it->c)) {

@@ -46,6 +46,12 @@ struct CaptureSink : Sink {
   std::string describe() const override { return "capture"; }
 };
 
+std::vector<std::unique_ptr<CameraSource>> stills(const std::vector<cv::Mat>& frames, double fps) {
+  std::vector<std::unique_ptr<CameraSource>> sources;
+  for (const auto& f : frames) sources.push_back(still_source(f, fps));
+  return sources;
+}
+
 std::vector<cv::Mat> scene_frames(const Rig& rig) {
   cv::Mat pano = cv::imread(std::string(OMMA_DATA_DIR) + "/lake.jpg", cv::IMREAD_COLOR);
   cv::resize(pano, pano, cv::Size(1440, 720), 0, 0, cv::INTER_AREA);
@@ -125,13 +131,11 @@ TEST(EngineRun, LiveViewServesPageAndMjpegStreamAndRefusesABusyPort) {
   std::vector<std::unique_ptr<Sink>> sinks;
   sinks.push_back(open_sink("http:" + std::to_string(port), rig, cv::Size(128, 128)));
   EXPECT_THROW(open_sink("http://127.0.0.1:" + std::to_string(port), rig, cv::Size(128, 128)), SinkError);
-  std::vector<std::unique_ptr<CameraSource>> sources;
-  for (const auto& f : frames) sources.push_back(still_source(f, 50));
   EngineOptions opt;
   opt.map.grid = PanoGrid{Projection::kVr180, 128, 128};
   opt.fps = 25;
   opt.duration_s = 2.0;
-  std::thread engine([&] { run_engine(rig, std::move(sources), sinks, opt); });
+  std::thread engine([&] { run_engine(rig, stills(frames, 50), sinks, opt); });
   httplib::Client cli("127.0.0.1", port);
   cli.set_read_timeout(3, 0);
   auto page = cli.Get("/");
@@ -252,13 +256,11 @@ TEST(EngineSinks, StreamViewersNeverStarveThePageAndTheStats) {
   const int limit = SinkOptions{}.max_streams, viewers = limit + 3;
   std::vector<std::unique_ptr<Sink>> sinks;
   sinks.push_back(open_sink("http:" + std::to_string(port), rig, cv::Size(96, 96)));
-  std::vector<std::unique_ptr<CameraSource>> sources;
-  for (const auto& f : frames) sources.push_back(still_source(f, 30));
   EngineOptions opt;
   opt.map.grid = PanoGrid{Projection::kVr180, 96, 96};
   opt.fps = 20;
   opt.duration_s = 8;
-  std::thread engine([&] { run_engine(rig, std::move(sources), sinks, opt); });
+  std::thread engine([&] { run_engine(rig, stills(frames, 30), sinks, opt); });
   struct Join {  // also when an assertion returns early
     std::thread& t;
     ~Join() {

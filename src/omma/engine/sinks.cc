@@ -242,16 +242,22 @@ class HttpSink : public Sink {
         spdlog::error("live view on 127.0.0.1:{} stopped: {}", port_, e.what());
       }
     });
+    try {
+      encoder_ = std::thread([this] { encode(); });
+    } catch (...) {
+      stop();
+      throw;
+    }
     spdlog::info("live view: http://127.0.0.1:{}/", port);
   }
   ~HttpSink() override { stop(); }
+  // The panorama is JPEG-encoded in the sink's own thread, so that encoding never slows the render
+  // loop; if the encoder is still busy with the previous panorama, the newer one replaces it.
   void write(const cv::Mat& pano, const FrameStore&) override {
-    std::vector<uchar> buf;
-    cv::imencode(".jpg", pano, buf, {cv::IMWRITE_JPEG_QUALITY, quality_});
     {
       std::lock_guard<std::mutex> lock(mutex_);
-      jpeg_.swap(buf);
-      ++seq_;
+      pano.copyTo(pending_);
+      has_pending_ = true;
     }
     cv_.notify_all();
   }
@@ -275,6 +281,26 @@ class HttpSink : public Sink {
     }
     res.set_content(std::string(a->data), std::string(a->type));
   }
+  void encode() {
+    cv::Mat pano;
+    std::vector<uchar> buf;
+    for (;;) {
+      {
+        std::unique_lock<std::mutex> lock(mutex_);
+        cv_.wait(lock, [&] { return has_pending_ || stopping_; });
+        if (stopping_) return;
+        cv::swap(pano, pending_);
+        has_pending_ = false;
+      }
+      cv::imencode(".jpg", pano, buf, {cv::IMWRITE_JPEG_QUALITY, quality_});
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        jpeg_.swap(buf);
+        ++seq_;
+      }
+      cv_.notify_all();
+    }
+  }
   void stop() {
     {
       std::lock_guard<std::mutex> lock(mutex_);
@@ -284,14 +310,17 @@ class HttpSink : public Sink {
     cv_.notify_all();
     server_.stop();
     if (thread_.joinable()) thread_.join();
+    if (encoder_.joinable()) encoder_.join();
   }
   int port_, quality_, max_streams_;
   std::string config_;
   httplib::Server server_;
-  std::thread thread_;
+  std::thread thread_, encoder_;
   std::mutex mutex_;
   std::condition_variable cv_;
-  std::vector<uchar> jpeg_;
+  cv::Mat pending_;          // the newest panorama, not encoded yet
+  bool has_pending_ = false;
+  std::vector<uchar> jpeg_;  // the newest encoded one, number seq_
   long seq_ = 0;
   bool stopping_ = false;
   std::atomic<int> streams_{0};
