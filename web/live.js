@@ -11,6 +11,7 @@ window.omma = omma;
 // Pause: the image stays as it is (the view can still be turned); the 'p' key or the stats line.
 omma.setPaused = (on) => { omma.paused = on; };
 document.addEventListener('keydown', (e) => { if (e.key === 'p') omma.setPaused(!omma.paused); });
+document.getElementById('s').addEventListener('click', () => omma.setPaused(!omma.paused));
 
 // Pannellum's view of each of omma's projections (core/grid.h): the image spans haov x vaov degrees,
 // its centre at pitch vOffset.

@@ -78,22 +78,30 @@ class SimLoopCamera : public CameraSource {
   Clock::time_point start_{}, last_{};
 };
 
-SimLoop::SimLoop(const Rig& rig, const std::string& scene, std::optional<double> speed,
-                 const SimCameraOptions& opt_in)
-    : spec_(scene) {
-  SimCameraOptions opt = opt_in;
-  std::string why;
-  if (!opt.IsValid(&why)) throw SourceError("source 'sim:" + scene + "': " + why);
-  const bool colon = scene.rfind("colon", 0) == 0;
-  motion_.translate = colon;
-  motion_.speed = speed.value_or(colon ? 5.0 : 10.0);
-  if (!std::isfinite(motion_.speed) || motion_.speed < 0)
-    throw SourceError("source 'sim:" + scene + "': the speed must be >= 0");
+namespace {
+std::shared_ptr<const sim::Scene> make_named_scene(const std::string& scene) {
   try {
-    scene_ = sim::make_scene(scene);
+    return sim::make_scene(scene);
   } catch (const std::exception& e) {
     throw SourceError("source 'sim:" + scene + "': " + e.what());
   }
+}
+}  // namespace
+
+SimLoop::SimLoop(const Rig& rig, const std::string& scene, std::optional<double> speed, const SimCameraOptions& opt)
+    : SimLoop(rig, make_named_scene(scene), scene.rfind("colon", 0) == 0, speed, opt) {}
+
+SimLoop::SimLoop(const Rig& rig, std::shared_ptr<const sim::Scene> scene, bool translate,
+                 std::optional<double> speed, const SimCameraOptions& opt_in)
+    : scene_(std::move(scene)), spec_(scene_ ? scene_->spec() : "") {
+  if (!scene_) throw SourceError("sim: no scene");
+  SimCameraOptions opt = opt_in;
+  std::string why;
+  if (!opt.IsValid(&why)) throw SourceError("source 'sim:" + spec_ + "': " + why);
+  motion_.translate = translate;
+  motion_.speed = speed.value_or(translate ? 5.0 : 10.0);
+  if (!std::isfinite(motion_.speed) || motion_.speed < 0)
+    throw SourceError("source 'sim:" + spec_ + "': the speed must be >= 0");
   // Memory: one 8-bit BGR frame per camera per frame period; shorten the loop to fit.
   double bytes_per_s = 0;
   for (const auto& c : rig.cameras) bytes_per_s += 3.0 * c.in.width * c.in.height * opt.fps_max;
@@ -103,7 +111,7 @@ SimLoop::SimLoop(const Rig& rig, const std::string& scene, std::optional<double>
     if (fit < 2.0 / opt.fps_min)
       throw SourceError(fmt::format("source 'sim:{}': {} cameras need {:.0f} MB per second of loop; the bound "
                                     "of {:.0f} MB holds less than two frames",
-                                    scene, rig.cameras.size(), bytes_per_s / 1e6, opt.max_memory_mb));
+                                    spec_, rig.cameras.size(), bytes_per_s / 1e6, opt.max_memory_mb));
     spdlog::warn("sim: a {:.2f} s loop of {} cameras needs {:.0f} MB; shortened to {:.2f} s to fit {:.0f} MB",
                  opt.loop_s, rig.cameras.size(), bytes_per_s * opt.loop_s / 1e6, fit, opt.max_memory_mb);
     opt.loop_s = fit;

@@ -56,6 +56,9 @@ class SimLoop : public std::enable_shared_from_this<SimLoop> {
   // and renders the loop (in parallel, progress on stderr). Throws SourceError for a bad scene or
   // options.
   SimLoop(const Rig& rig, const std::string& scene, std::optional<double> speed, const SimCameraOptions& opt);
+  // Any scene; `translate`: the dome moves along the scene's z axis (mm/s) instead of turning (deg/s).
+  SimLoop(const Rig& rig, std::shared_ptr<const sim::Scene> scene, bool translate, std::optional<double> speed,
+          const SimCameraOptions& opt);
 
   // One source per rig camera, in rig order, playing the loop back on its own clock. The clocks
   // start (S) when the first of them is asked for its first capture instant.
@@ -78,7 +81,7 @@ class SimLoop : public std::enable_shared_from_this<SimLoop> {
  private:
   friend class SimLoopCamera;
   Clock::time_point start_now();  // sets S on the first call
-  std::shared_ptr<sim::Scene> scene_;
+  std::shared_ptr<const sim::Scene> scene_;
   SimMotion motion_;
   std::string spec_;
   std::vector<std::vector<cv::Mat>> frames_;   // [camera][k]
