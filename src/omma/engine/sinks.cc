@@ -172,6 +172,7 @@ class HttpSink : public Sink {
     server_.Get(R"(/viewer/([A-Za-z0-9_.-]+))", [](const httplib::Request& req, httplib::Response& res) {
       serve_asset(fmt::format("/{}", std::string(req.matches[1])), res);  // (fmt: GCC 12 -Wrestrict)
     });
+    server_.Get("/favicon.ico", [](const httplib::Request&, httplib::Response& res) { res.status = 204; });
     server_.Get("/config.json", [this](const httplib::Request&, httplib::Response& res) {
       res.set_content(config_, "application/json");
     });
