@@ -1,0 +1,181 @@
+// Per contributing camera (one per cycle): B3's distance (eq. 5.19-5.20), B4's projection with
+// distortion (eq. 5.21-5.26) and the frame addresses of the bilinear tap (eq. 5.27 with the camera
+// on top). Bit-exact with hw::distance_unit, hw::project and hw::tap_address (docs/hw-model.md §4):
+//   s = c . omega (sQ.(Pp+W)), sD = align(s -> D), r_k = rs(sD w_k, W) - (c_k << (D-Pp)),
+//   d = clamp(isqrt(sum r_k^2), 1, 2^18-1)                                       (uQ.D)
+//   x = sat(div_round(dot_u 2^P, dot_t)), y likewise (restoring divider, round half away from 0)
+//   xx, yy, xy, R2, R4, R6, p, x', y' (rs at P or K fraction bits), col/row = align(f x') + align(c)
+//   quad: xs = col - 2^(F-1), x0 = xs >>> F, fx = xs mod 2^F, X clamped to the frame; likewise y.
+// Contributors whose point is not on the frame (or behind the camera) leave with tap = 0.
+// One register stage (the combinational depth is the divider's: a pipelined version would cut it).
+module contrib_unit
+  import omma_hw_pkg::*;
+  import omma_arith_pkg::*;
+(
+    input  logic                      clk,
+    input  logic                      rst,
+    input  logic                      in_valid,
+    input  logic [CAMB-1:0]           in_cam,
+    input  logic signed [DOT_B-1:0]   in_dot,
+    input  logic signed [OMEGA_B-1:0] in_w0,
+    input  logic signed [OMEGA_B-1:0] in_w1,
+    input  logic signed [OMEGA_B-1:0] in_w2,
+    input  logic [31:0]               in_tag,
+    input  logic                      in_last,
+    input  logic                      in_empty,
+    // the registers of camera in_cam (Table 6.7 arrays), 16 bits each
+    input  logic [16*3-1:0]           u_r,
+    input  logic [16*3-1:0]           v_r,
+    input  logic [16*3-1:0]           c_r,
+    input  logic [16*5-1:0]           k_r,        // k1..k5
+    input  logic [15:0]               fu,
+    input  logic [15:0]               fv,
+    input  logic [15:0]               cu,
+    input  logic [15:0]               cv,
+    input  logic [15:0]               frame_w,
+    input  logic [15:0]               frame_h,
+    output logic                      out_valid,
+    output logic                      out_tap,    // a valid tap (projection on the frame)
+    output logic [CAMB+FAB-1:0]       out_addr0,
+    output logic [CAMB+FAB-1:0]       out_addr1,
+    output logic [CAMB+FAB-1:0]       out_addr2,
+    output logic [CAMB+FAB-1:0]       out_addr3,
+    output logic [F-1:0]              out_fx,
+    output logic [F-1:0]              out_fy,
+    output logic [17:0]               out_dist,
+    output logic [31:0]               out_tag,
+    output logic                      out_last
+);
+  function automatic logic signed [63:0] w16(input logic [127:0] f, input integer k);
+    w16 = $signed(64'($signed(f[16*k+:16])));
+  endfunction
+
+  logic signed [63:0] w[3];
+  logic signed [63:0] du, dv, dt;
+  logic signed [63:0] x, y, xd, yd, col, row;
+  logic signed [63:0] s, sd, r2, rk;
+  logic [63:0] d;
+  logic tap;
+  logic [CAMB+FAB-1:0] a0, a1, a2, a3;
+  logic [F-1:0] fx, fy;
+
+  // sign-magnitude restoring divider, round half away from zero, saturated to PB bits
+  function automatic logic signed [63:0] div_round_sat(input logic signed [63:0] n, input logic signed [63:0] dd);
+    logic [63:0] a, q;
+    logic ovf;
+    logic signed [63:0] lim;
+    lim = ($signed(64'(1)) <<< (PB - 1)) - 1;
+    a = n < 0 ? $unsigned(64'(-n)) : $unsigned(64'(n));
+    {ovf, q} = udiv(2 * a + $unsigned(64'(dd)), 2 * $unsigned(64'(dd)), PB);  // floor((2|n| + d) / 2d)
+    if (ovf || $signed(64'(q)) > lim + 1) div_round_sat = n < 0 ? -lim - 1 : lim;
+    else if (n < 0) div_round_sat = -$signed(64'(q));
+    else div_round_sat = smin($signed(64'(q)), lim);
+  endfunction
+
+  always_comb begin
+    w[0] = $signed(64'(in_w0));
+    w[1] = $signed(64'(in_w1));
+    w[2] = $signed(64'(in_w2));
+    dt = $signed(64'(in_dot));
+    du = w[0] * w16(128'(u_r), 0) + w[1] * w16(128'(u_r), 1) + w[2] * w16(128'(u_r), 2);  // omega . u, sQ3.(W+V)
+    dv = w[0] * w16(128'(v_r), 0) + w[1] * w16(128'(v_r), 1) + w[2] * w16(128'(v_r), 2);
+
+    // distance (q = 0): r = (c . omega) omega - c
+    s = w[0] * w16(128'(c_r), 0) + w[1] * w16(128'(c_r), 1) + w[2] * w16(128'(c_r), 2);  // sQ.(Pp+W)
+    sd = align(s, PP + W, D);                                          // sQ.D
+    r2 = '0;
+    for (int k = 0; k < 3; k++) begin
+      rk = rs(sd * w[k], W) - (w16(128'(c_r), k) <<< (D - PP));
+      r2 = r2 + rk * rk;                                               // uQ.2D
+    end
+    d = isqrt($unsigned(64'(r2)));
+    if (d < 1) d = 1;
+    if (d > $unsigned(64'((1 << 18) - 1))) d = $unsigned(64'((1 << 18) - 1));
+
+    // projection (eq. 5.21-5.26 on normalised coordinates)
+    begin
+      logic signed [63:0] lim, xx, yy, xy, rr2, rr4, rr6, p, k1, k2, k3, k4, k5;
+      lim = ($signed(64'(1)) <<< (PB - 1)) - 1;
+      k1 = w16(128'(k_r), 0);
+      k2 = w16(128'(k_r), 1);
+      k3 = w16(128'(k_r), 2);
+      k4 = w16(128'(k_r), 3);
+      k5 = w16(128'(k_r), 4);
+      x = (dt > 0) ? div_round_sat(du <<< P, dt) : '0;
+      y = (dt > 0) ? div_round_sat(dv <<< P, dt) : '0;
+      xx = rs(x * x, P);
+      yy = rs(y * y, P);
+      xy = rs(x * y, P);
+      rr2 = xx + yy;                                                   // (5.23)
+      rr4 = rs(rr2 * rr2, P);
+      rr6 = rs(rr4 * rr2, P);
+      p = ($signed(64'(1)) <<< P) + rs(k1 * rr2 + k2 * rr4 + k5 * rr6, K);     // (5.24)
+      xd = rs(p * x, P) + rs(k4 * 2 * xy + k3 * (rr2 + 2 * xx), K);    // (5.25)
+      yd = rs(p * y, P) + rs(k3 * 2 * xy + k4 * (rr2 + 2 * yy), K);    // (5.26)
+      xd = smax(smin(xd, lim), -lim - 1);
+      yd = smax(smin(yd, lim), -lim - 1);
+      col = align($signed(64'(fu)) * xd, FF + P, F) + align($signed(64'(cu)), FC, F);
+      row = align($signed(64'(fv)) * yd, FF + P, F) + align($signed(64'(cv)), FC, F);
+      tap = !in_empty && dt > 0 && col >= 0 && row >= 0 && col < ($signed(64'(frame_w)) <<< F) &&
+            row < ($signed(64'(frame_h)) <<< F);
+    end
+
+    // tap address (eq. 5.27, camera on top)
+    begin
+      logic signed [63:0] xs, ys, x0, y0, X0, X1, Y0, Y1, lw, base;
+      lw = $signed(64'(frame_w));
+      base = $signed(64'(in_cam)) <<< FAB;
+      if (BILINEAR != 0) begin
+        xs = col - ($signed(64'(1)) <<< (F - 1));
+        ys = row - ($signed(64'(1)) <<< (F - 1));
+        x0 = xs >>> F;
+        y0 = ys >>> F;
+        fx = xs[F-1:0];
+        fy = ys[F-1:0];
+        X0 = smax(smin(x0, lw - 1), 0);
+        X1 = smax(smin(x0 + 1, lw - 1), 0);
+        Y0 = smax(smin(y0, $signed(64'(frame_h)) - 1), 0);
+        Y1 = smax(smin(y0 + 1, $signed(64'(frame_h)) - 1), 0);
+      end else begin
+        fx = '0;
+        fy = '0;
+        X0 = col >>> F;
+        X1 = X0;
+        Y0 = row >>> F;
+        Y1 = Y0;
+      end
+      a0 = (CAMB + FAB)'(base + Y0 * lw + X0);
+      a1 = (CAMB + FAB)'(base + Y0 * lw + X1);
+      a2 = (CAMB + FAB)'(base + Y1 * lw + X0);
+      a3 = (CAMB + FAB)'(base + Y1 * lw + X1);
+    end
+  end
+
+  always_ff @(posedge clk) begin
+    if (rst) begin
+      out_valid <= 1'b0;
+      out_tap <= 1'b0;
+      out_addr0 <= '0;
+      out_addr1 <= '0;
+      out_addr2 <= '0;
+      out_addr3 <= '0;
+      out_fx <= '0;
+      out_fy <= '0;
+      out_dist <= '0;
+      out_tag <= '0;
+      out_last <= 1'b0;
+    end else begin
+      out_valid <= in_valid;
+      out_tap <= in_valid && tap;
+      out_addr0 <= a0;
+      out_addr1 <= a1;
+      out_addr2 <= a2;
+      out_addr3 <= a3;
+      out_fx <= fx;
+      out_fy <= fy;
+      out_dist <= d[17:0];
+      out_tag <= in_tag;
+      out_last <= in_last;
+    end
+  end
+endmodule
