@@ -7,7 +7,8 @@
 module cam_search
   import omma_hw_pkg::*;
 #(
-    parameter int NCAM = 24
+    parameter int NCAM = 24,
+    parameter int AUXW = 1  // payload passed along with the direction (the MRF neighbours)
 ) (
     input  logic                      clk,
     input  logic                      rst,
@@ -16,6 +17,7 @@ module cam_search
     input  logic signed [OMEGA_B-1:0] in_w1,
     input  logic signed [OMEGA_B-1:0] in_w2,
     input  logic [31:0]               in_tag,
+    input  logic [AUXW-1:0]           in_aux,
     output logic                      in_ready,
     input  logic [16*3*NCAM-1:0]      t_flat,     // t_i (sQ1.V x 3) of every camera
     input  logic [16*NCAM-1:0]        cos_flat,   // cos(aov/2)_i (sQ1.V)
@@ -26,6 +28,7 @@ module cam_search
     output logic signed [OMEGA_B-1:0] out_w1,
     output logic signed [OMEGA_B-1:0] out_w2,
     output logic [31:0]               out_tag,
+    output logic [AUXW-1:0]           out_aux,
     output logic                      out_last,   // last item of this direction
     output logic                      out_empty,  // no camera sees this direction
     output logic [5:0]                out_cone    // cameras that passed (statistics)
@@ -47,6 +50,7 @@ module cam_search
   logic signed [DOT_B-1:0] dots[NCAM];
   logic signed [OMEGA_B-1:0] w0, w1, w2;
   logic [31:0] tag;
+  logic [AUXW-1:0] aux;
   logic [3:0] sent;
   logic [5:0] cone;
 
@@ -86,6 +90,8 @@ module cam_search
       w1 <= '0;
       w2 <= '0;
       tag <= '0;
+      aux <= '0;
+      out_aux <= '0;
       for (int i = 0; i < NCAM; i++) dots[i] <= '0;
       out_cam <= '0;
       out_dot <= '0;
@@ -105,6 +111,7 @@ module cam_search
         out_w1 <= w1;
         out_w2 <= w2;
         out_tag <= tag;
+        out_aux <= aux;
         out_last <= is_last;
         out_empty <= !found;
         out_cone <= cone;
@@ -122,6 +129,7 @@ module cam_search
         w1 <= in_w1;
         w2 <= in_w2;
         tag <= in_tag;
+        aux <= in_aux;
       end
     end
   end

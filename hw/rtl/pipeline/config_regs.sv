@@ -25,9 +25,7 @@ module config_regs
     input  logic                            cs_valid,
     input  logic [31:0]                     cs_word,
     input  logic                            pv_valid,
-    /* verilator lint_off UNUSEDSIGNAL */
-    input  logic [31:0]                     pv_word,  // data: the vignetting memory is not built
-    /* verilator lint_on UNUSEDSIGNAL */
+    input  logic [31:0]                     pv_word,
     // globals (Table 6.7)
     output logic [15:0]                     row_cnt,
     output logic [15:0]                     col_cnt,
@@ -41,6 +39,13 @@ module config_regs
     output logic                            pano_cs,
     output logic [1:0]                      method,
     output logic [8:0]                      boundary_ctrl,
+    output logic [4:0]                      vig_shift,
+    output logic                            vig_mem_select, // 0: power-up ROM (unit gains), 1: SRAM
+    // vignetting memory: radial tables (SRAM write port) and the channel gains (registers)
+    output logic                            vig_we,
+    output logic [CAMB+VIGA-1:0]            vig_waddr,
+    output logic [15:0]                     vig_wdata,
+    output logic [16*3*NCAM-1:0]            vig_channel,
     // register arrays, camera-major: camera i's words at [16*WORDS*i +: 16*WORDS]
     output logic [16*PIX_POS_WORDS*NCAM-1:0]    pp_flat,
     output logic [16*CAM_SEARCH_WORDS*NCAM-1:0] cs_flat,
@@ -133,8 +138,12 @@ module config_regs
   endtask
 
   always_ff @(posedge clk) begin
+    vig_we <= 1'b0;
     if (rst) begin
       for (int i = 0; i < NG; i++) g[i] <= '0;
+      vig_waddr <= '0;
+      vig_wdata <= '0;
+      vig_channel <= '0;
       pp_flat <= '0;
       cs_flat <= '0;
       cfg_err <= 1'b0;
@@ -182,7 +191,18 @@ module config_regs
         n_pv <= n_pv + 1;
         if (!pv_word[31]) flag(4'd1, 2'd3, n_pv);
         else if (32'(pv_word[30:16]) >= VIG_WORDS) flag(4'd8, 2'd3, n_pv);
-        else words_taken <= words_taken + 1;  // the vignetting memory itself is not built
+        else begin
+          words_taken <= words_taken + 1;
+          if (32'(pv_word[30:16]) < (1 << (CAMB + VIGA))) begin
+            vig_we <= 1'b1;  // radial entry (camera << VIGA) + i
+            vig_waddr <= pv_word[16+:CAMB+VIGA];
+            vig_wdata <= pv_word[15:0];
+          end else if (32'(pv_word[30:18]) - (1 << (CAMB + VIGA - 2)) < NCAM && pv_word[17:16] != 2'd3) begin
+            // channel gain at (1 << (CAMB+VIGA)) + 4 camera + channel
+            vig_channel[16*(3*(32'(pv_word[30:18]) - (1 << (CAMB + VIGA - 2))) + 32'(pv_word[17:16]))+:16] <=
+                pv_word[15:0];
+          end
+        end
       end
     end
   end
@@ -199,4 +219,6 @@ module config_regs
   assign pano_cs = g[11][0];
   assign method = g[14][1:0];
   assign boundary_ctrl = g[15][8:0];
+  assign vig_shift = g[12][4:0];
+  assign vig_mem_select = g[17][0];
 endmodule

@@ -6,7 +6,8 @@
 //   x = sat(div_round(dot_u 2^P, dot_t)), y likewise (restoring divider, round half away from 0)
 //   xx, yy, xy, R2, R4, R6, p, x', y' (rs at P or K fraction bits), col/row = align(f x') + align(c)
 //   quad: xs = col - 2^(F-1), x0 = xs >>> F, fx = xs mod 2^F, X clamped to the frame; likewise y.
-// Contributors whose point is not on the frame (or behind the camera) leave with tap = 0.
+// Contributors whose point is not on the frame (or behind the camera) leave with tap = 0. Also the
+// address of the radial vignetting entry: i = min(2^VIGA - 1, (dx^2 + dy^2) >> vig_shift).
 // One register stage (the combinational depth is the divider's: a pipelined version would cut it).
 module contrib_unit
   import omma_hw_pkg::*;
@@ -27,6 +28,11 @@ module contrib_unit
     input  logic [16*3-1:0]           u_r,
     input  logic [16*3-1:0]           v_r,
     input  logic [16*3-1:0]           c_r,
+    input  logic [16*3-1:0]           t_r,        // optical axis and cos(aov/2): the MRF's cone tests
+    input  logic [15:0]               cos_r,
+    // MRF (§5.4.2): the four neighbour directions (left, right, up, down) and whether they exist
+    input  logic [4*3*OMEGA_B-1:0]    in_nb,
+    input  logic [3:0]                in_nb_exists,
     input  logic [16*5-1:0]           k_r,        // k1..k5
     input  logic [15:0]               fu,
     input  logic [15:0]               fv,
@@ -34,6 +40,7 @@ module contrib_unit
     input  logic [15:0]               cv,
     input  logic [15:0]               frame_w,
     input  logic [15:0]               frame_h,
+    input  logic [4:0]                vig_shift,
     output logic                      out_valid,
     output logic                      out_tap,    // a valid tap (projection on the frame)
     output logic [CAMB+FAB-1:0]       out_addr0,
@@ -43,6 +50,11 @@ module contrib_unit
     output logic [F-1:0]              out_fx,
     output logic [F-1:0]              out_fy,
     output logic [17:0]               out_dist,
+    output logic [CAMB+VIGA-1:0]      out_vig_addr,  // radial vignetting entry of this camera
+    output logic [CAMB-1:0]           out_cam,
+    output logic [MW-1:0]             out_ev_m,      // MRF evidence d(u) prod d(v), block floating
+    output logic signed [7:0]         out_ev_e,
+    output logic                      out_ev_complete, // passes the cone test at every neighbour
     output logic [31:0]               out_tag,
     output logic                      out_last
 );
@@ -53,11 +65,13 @@ module contrib_unit
   logic signed [63:0] w[3];
   logic signed [63:0] du, dv, dt;
   logic signed [63:0] x, y, xd, yd, col, row;
-  logic signed [63:0] s, sd, r2, rk;
   logic [63:0] d;
   logic tap;
   logic [CAMB+FAB-1:0] a0, a1, a2, a3;
   logic [F-1:0] fx, fy;
+  logic [CAMB+VIGA-1:0] vaddr;
+  logic [MW+8-1:0] ev;
+  logic ev_ok;
 
   // sign-magnitude restoring divider, round half away from zero, saturated to PB bits
   function automatic logic signed [63:0] div_round_sat(input logic signed [63:0] n, input logic signed [63:0] dd);
@@ -72,7 +86,52 @@ module contrib_unit
     else div_round_sat = smin($signed(64'(q)), lim);
   endfunction
 
+  // eq. 5.19-5.20 with q = 0 (hw::distance_unit): uQ.D, clamped to [1, 2^18 - 1]
+  function automatic logic [63:0] dist_of(input logic signed [OMEGA_B-1:0] a, input logic signed [OMEGA_B-1:0] b,
+                                          input logic signed [OMEGA_B-1:0] c);
+    logic signed [63:0] ww[3];
+    logic signed [63:0] sc, sdd, r2s, rks;
+    logic [63:0] q;
+    ww[0] = $signed(64'(a));
+    ww[1] = $signed(64'(b));
+    ww[2] = $signed(64'(c));
+    sc = ww[0] * w16(128'(c_r), 0) + ww[1] * w16(128'(c_r), 1) + ww[2] * w16(128'(c_r), 2);  // sQ.(Pp+W)
+    sdd = align(sc, PP + W, D);                                                           // sQ.D
+    r2s = '0;
+    for (int k = 0; k < 3; k++) begin
+      rks = rs(sdd * ww[k], W) - (w16(128'(c_r), k) <<< (D - PP));
+      r2s = r2s + rks * rks;                                                              // uQ.2D
+    end
+    q = isqrt($unsigned(64'(r2s)));
+    if (q < 1) q = 1;
+    if (q > $unsigned(64'((1 << 18) - 1))) q = $unsigned(64'((1 << 18) - 1));
+    dist_of = q;
+  endfunction
+
+  // block-floating normalisation: the leading one to bit MW-1 (truncation), exponent += shift
+  function automatic logic [MW+8-1:0] norm(input logic [63:0] p, input logic signed [7:0] e);
+    integer bl;
+    logic [MW-1:0] m;
+    bl = bitlen(p);
+    if (bl >= MW) m = MW'(p >> (bl - MW));
+    else m = MW'(p << (MW - bl));
+    norm = {m, 8'(e + 8'(bl - MW))};
+  endfunction
+
+  // temporaries of the combinational block below (all assigned before use)
+  logic signed [OMEGA_B-1:0] nw[3];
+  logic signed [63:0] ndot, lim, xx, yy, xy, rr2, rr4, rr6, p, k1, k2, k3, k4, k5;
+  logic signed [63:0] xs, ys, x0, y0, X0, X1, Y0, Y1, lw, base, dx, dy, vi;
+  logic [63:0] dk;
+
   always_comb begin
+    for (int j = 0; j < 3; j++) nw[j] = '0;
+    ndot = '0;
+    dk = '0;
+    xs = '0;
+    ys = '0;
+    x0 = '0;
+    y0 = '0;
     w[0] = $signed(64'(in_w0));
     w[1] = $signed(64'(in_w1));
     w[2] = $signed(64'(in_w2));
@@ -81,20 +140,29 @@ module contrib_unit
     dv = w[0] * w16(128'(v_r), 0) + w[1] * w16(128'(v_r), 1) + w[2] * w16(128'(v_r), 2);
 
     // distance (q = 0): r = (c . omega) omega - c
-    s = w[0] * w16(128'(c_r), 0) + w[1] * w16(128'(c_r), 1) + w[2] * w16(128'(c_r), 2);  // sQ.(Pp+W)
-    sd = align(s, PP + W, D);                                          // sQ.D
-    r2 = '0;
-    for (int k = 0; k < 3; k++) begin
-      rk = rs(sd * w[k], W) - (w16(128'(c_r), k) <<< (D - PP));
-      r2 = r2 + rk * rk;                                               // uQ.2D
+    d = dist_of(in_w0, in_w1, in_w2);
+
+    // MRF evidence (hw pipeline.cc, docs/hw-model.md B6 mrf): complete if the camera sees every
+    // existing neighbour; D = d(u) d(left) d(right) d(up) d(down), renormalised after each product
+    begin
+      ev = norm(d, 8'sd0);
+      ev_ok = 1'b1;
+      for (int k = 0; k < 4; k++)
+        if (in_nb_exists[k] && ev_ok) begin
+          for (int j = 0; j < 3; j++) nw[j] = in_nb[OMEGA_B*(3*k+j)+:OMEGA_B];
+          ndot = $signed(64'(nw[0])) * w16(128'(t_r), 0) + $signed(64'(nw[1])) * w16(128'(t_r), 1) +
+                 $signed(64'(nw[2])) * w16(128'(t_r), 2);
+          if (ndot < ($signed(64'($signed(cos_r))) <<< W)) begin
+            ev_ok = 1'b0;
+          end else begin
+            dk = dist_of(nw[0], nw[1], nw[2]);
+            ev = norm($unsigned(64'(ev[MW+8-1:8])) * dk, $signed(ev[7:0]));
+          end
+        end
     end
-    d = isqrt($unsigned(64'(r2)));
-    if (d < 1) d = 1;
-    if (d > $unsigned(64'((1 << 18) - 1))) d = $unsigned(64'((1 << 18) - 1));
 
     // projection (eq. 5.21-5.26 on normalised coordinates)
     begin
-      logic signed [63:0] lim, xx, yy, xy, rr2, rr4, rr6, p, k1, k2, k3, k4, k5;
       lim = ($signed(64'(1)) <<< (PB - 1)) - 1;
       k1 = w16(128'(k_r), 0);
       k2 = w16(128'(k_r), 1);
@@ -122,7 +190,6 @@ module contrib_unit
 
     // tap address (eq. 5.27, camera on top)
     begin
-      logic signed [63:0] xs, ys, x0, y0, X0, X1, Y0, Y1, lw, base;
       lw = $signed(64'(frame_w));
       base = $signed(64'(in_cam)) <<< FAB;
       if (BILINEAR != 0) begin
@@ -144,6 +211,15 @@ module contrib_unit
         Y0 = row >>> F;
         Y1 = Y0;
       end
+      // vignetting (hw::vignetting_gain): the pixel containing the point, its squared distance to
+      // the principal point's pixel, >> vig_shift, clamped to the table
+      begin
+        dx = (col >>> F) - ($signed(64'(cu)) >>> FC);
+        dy = (row >>> F) - ($signed(64'(cv)) >>> FC);
+        vi = (dx * dx + dy * dy) >>> vig_shift;
+        if (vi > (1 << VIGA) - 1) vi = (1 << VIGA) - 1;
+        vaddr = {in_cam, vi[VIGA-1:0]};
+      end
       a0 = (CAMB + FAB)'(base + Y0 * lw + X0);
       a1 = (CAMB + FAB)'(base + Y0 * lw + X1);
       a2 = (CAMB + FAB)'(base + Y1 * lw + X0);
@@ -162,6 +238,11 @@ module contrib_unit
       out_fx <= '0;
       out_fy <= '0;
       out_dist <= '0;
+      out_vig_addr <= '0;
+      out_cam <= '0;
+      out_ev_m <= '0;
+      out_ev_e <= '0;
+      out_ev_complete <= 1'b0;
       out_tag <= '0;
       out_last <= 1'b0;
     end else begin
@@ -174,6 +255,11 @@ module contrib_unit
       out_fx <= fx;
       out_fy <= fy;
       out_dist <= d[17:0];
+      out_vig_addr <= vaddr;
+      out_cam <= in_cam;
+      out_ev_m <= ev[MW+8-1:8];
+      out_ev_e <= $signed(ev[7:0]);
+      out_ev_complete <= ev_ok;
       out_tag <= in_tag;
       out_last <= in_last;
     end

@@ -9,20 +9,26 @@
 //           >> (e_i - e_min) (the reciprocal, a restoring divider), out = round(sum w s / sum w)
 //   boundary (enabled, >= 2 contributors): gray Y = rs(77 R + 150 G + 29 B, 8) of the nearest and
 //           the farthest camera's samples; |dY| > th 2^S -> pure green (the marker of §5.4.5).
-// The vignetting gains are not applied (the model's default unit tables make them a no-op).
-// method 2 (mrf) is not built: `unsupported` rises and the pixel is made as linear.
+// Vignetting (hw::vignetting_gain): each sample is multiplied by rs(radial * channel, 14) unless that
+// is exactly 1.0, and saturated at the channel's maximum.
+//   mrf:    as linear on the MRF evidence D_i = d(u) prod d(v) of the cameras that see all four
+//           neighbours (contrib_unit; weight 0 for the others; the prior alone if none does)
+// method 3 does not exist: `unsupported` rises.
 module pixel_value
   import omma_hw_pkg::*;
   import omma_arith_pkg::*;
 (
     input  logic         clk,
     input  logic         rst,
-    input  logic [1:0]   method,      // 0 nn, 1 linear
+    input  logic [1:0]   method,      // 0 nn, 1 linear, 2 mrf
     input  logic         boundary_en,
     input  logic [7:0]   boundary_th,
     input  logic         in_valid,
     input  logic         in_tap,
     input  logic [17:0]  in_dist,
+    input  logic [MW-1:0] in_ev_m,     // MRF evidence (contrib_unit), block floating
+    input  logic signed [7:0] in_ev_e,
+    input  logic         in_ev_complete,
     input  logic [F-1:0] in_fx,
     input  logic [F-1:0] in_fy,
     input  logic [31:0]  in_tag,
@@ -31,6 +37,8 @@ module pixel_value
     input  logic [15:0]  q1,
     input  logic [15:0]  q2,
     input  logic [15:0]  q3,
+    input  logic [15:0]  vig_radial,  // uQ2.14 radial gain of this contributor's pixel
+    input  logic [47:0]  vig_channel, // uQ2.14 R, G, B gains of its camera ([15:0] R)
     output logic         out_valid,
     output logic [31:0]  out_tag,
     output logic [7:0]   out_r,
@@ -38,6 +46,7 @@ module pixel_value
     output logic [7:0]   out_b,
     output logic [3:0]   out_n,       // valid contributors of this pixel
     output logic         out_boundary,
+    output logic         out_mrf_fallback,  // mrf: no camera complete, the prior alone
     output logic         unsupported
 );
   localparam int NS = MAXC;
@@ -61,24 +70,34 @@ module pixel_value
   // bilinear sample of the current contributor (uQ8.S)
   logic signed [63:0] smp[3];
   always_comb begin
-    logic signed [63:0] one, v;
+    logic signed [63:0] one, v, g;
     one = $signed(64'(1)) <<< F;
     for (int ch = 0; ch < 3; ch++) begin
       v = $signed(64'(chan(q0, ch))) * (one - $signed(64'(in_fx))) * (one - $signed(64'(in_fy))) +
           $signed(64'(chan(q1, ch))) * $signed(64'(in_fx)) * (one - $signed(64'(in_fy))) +
           $signed(64'(chan(q2, ch))) * (one - $signed(64'(in_fx))) * $signed(64'(in_fy)) + $signed(64'(chan(q3, ch))) * $signed(64'(in_fx)) * $signed(64'(in_fy));
       smp[ch] = rs(v, 2 * F - S);
+      // vignetting: g = rs(radial * channel, 14); the sample is scaled unless g is exactly 1.0
+      g = rs($signed(64'(vig_radial)) * $signed(64'(vig_channel[16*ch+:16])), VIGF);
+      if (g != (1 << VIGF)) smp[ch] = smin(rs(smp[ch] * g, VIGF), max_of(ch) <<< S);
     end
   end
 
   // contributors of the direction so far
   logic [3:0] n;
   logic [17:0] sdist[NS];
+  logic [MW-1:0] sev_m[NS];
+  logic signed [7:0] sev_e[NS];
+  logic [NS-1:0] sev_c;
   logic signed [63:0] ssmp[NS][3];
 
   // the pixel, from the stored contributors plus the current one
   logic [3:0] cn;
   logic [17:0] cd[NS];
+  logic [MW-1:0] cev_m[NS];
+  logic signed [7:0] cev_e[NS];
+  logic [NS-1:0] cev_c;
+  logic pfallback;
   logic signed [63:0] cs[NS][3];
   logic [7:0] pr, pg, pb;
   logic pbound;
@@ -90,10 +109,12 @@ module pixel_value
     logic [IW-1:0] best, nearest, farthest;
     logic ovf;
     logic [63:0] qw;
+    logic first;
     logic signed [63:0] px[3], gray[NS], diff;
     bl = 0;
     ovf = 1'b0;
     qw = '0;
+    first = 1'b1;
     num = 0;
     den = 0;
     diff = 0;
@@ -102,10 +123,16 @@ module pixel_value
     cn = n;
     for (int i = 0; i < NS; i++) begin
       cd[i] = sdist[i];
+      cev_m[i] = sev_m[i];
+      cev_e[i] = sev_e[i];
+      cev_c[i] = sev_c[i];
       for (int ch = 0; ch < 3; ch++) cs[i][ch] = ssmp[i][ch];
     end
     if (in_tap && 32'(n) < NS) begin
       cd[IW'(n)] = in_dist;
+      cev_m[IW'(n)] = in_ev_m;
+      cev_e[IW'(n)] = in_ev_e;
+      cev_c[IW'(n)] = in_ev_complete;
       for (int ch = 0; ch < 3; ch++) cs[IW'(n)][ch] = smp[ch];
       cn = n + 1'b1;
     end
@@ -119,16 +146,36 @@ module pixel_value
     for (int i = 1; i < NS; i++)
       if (i < 32'(cn) && cd[i] < cd[best]) best = IW'(i);
     emin = 0;
+    pfallback = 1'b0;
     if (method == 2'd0) begin
       wt[best] = 1;
     end else begin
+      // D_i: the MRF evidence of the complete cameras (weight 0 for the others), or, for linear and
+      // when no camera is complete, d_i normalised (hw::block_float)
       for (int i = 0; i < NS; i++)
         if (i < 32'(cn)) begin
           bl = bitlen($unsigned(64'(cd[i])));
           if (bl >= MW) m[i] = $unsigned(64'(cd[i])) >> (bl - MW);
           else m[i] = $unsigned(64'(cd[i])) << (MW - bl);
           e[i] = $signed(64'(bl)) - $signed(64'(MW));
-          if (i == 0 || e[i] < emin) emin = e[i];
+        end
+      if (method == 2'd2) begin
+        if ((cev_c & ((NS)'(1) << cn) - 1'b1) != '0) begin
+          for (int i = 0; i < NS; i++)
+            if (i < 32'(cn)) begin
+              m[i] = cev_c[i] ? $unsigned(64'(cev_m[i])) : '0;
+              e[i] = $signed(64'(cev_e[i]));
+            end
+        end else begin
+          pfallback = 1'b1;
+        end
+      end
+      // the reciprocal unit: e_min over the non-zero mantissas, w = floor(2^(R+MW-2) / m) >> (e - e_min)
+      first = 1'b1;
+      for (int i = 0; i < NS; i++)
+        if (i < 32'(cn) && m[i] != 0 && (first || e[i] < emin)) begin
+          emin = e[i];
+          first = 1'b0;
         end
       for (int i = 0; i < NS; i++)
         if (i < 32'(cn) && m[i] != 0) begin
@@ -199,9 +246,15 @@ module pixel_value
       out_b <= '0;
       out_n <= '0;
       out_boundary <= 1'b0;
+      out_mrf_fallback <= 1'b0;
       unsupported <= 1'b0;
+      for (int i = 0; i < NS; i++) begin
+        sev_m[i] <= '0;
+        sev_e[i] <= '0;
+      end
+      sev_c <= '0;
     end else begin
-      if (method == 2'd2 || method == 2'd3) unsupported <= 1'b1;
+      if (method == 2'd3) unsupported <= 1'b1;
       if (in_valid) begin
         if (in_last) begin
           out_valid <= 1'b1;
@@ -211,9 +264,13 @@ module pixel_value
           out_b <= pb;
           out_n <= cn;
           out_boundary <= pbound;
+          out_mrf_fallback <= pfallback && 32'(cn) != 0;
           n <= '0;
         end else if (in_tap && 32'(n) < NS) begin
           sdist[IW'(n)] <= in_dist;
+          sev_m[IW'(n)] <= in_ev_m;
+          sev_e[IW'(n)] <= in_ev_e;
+          sev_c[IW'(n)] <= in_ev_complete;
           for (int ch = 0; ch < 3; ch++) ssmp[IW'(n)][ch] <= smp[ch];
           n <= n + 1'b1;
         end

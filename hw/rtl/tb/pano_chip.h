@@ -1,0 +1,174 @@
+// The panorama RTL (Verilated pano_top) behind a small C++ harness: clock, reset, the four Table
+// 6.6 configuration channels, the frame-memory load port and one panorama run; shared by the
+// co-simulation test and the 1080x1080 benchmark.
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "Vpano.h"
+#include "omma/core/frames.h"
+#include "omma/design/prototype.h"
+#include "omma/hw/pipeline.h"
+#include "omma/hw/regmap.h"
+#include "omma/pano/test_scene.h"
+#include "omma/sim/scene.h"
+#include "omma/sim/simulate.h"
+#include "verilated.h"
+
+namespace omma::hw::rtl {
+
+inline const Rig& rig24() {
+  static const Rig rig = design::thesis_prototype_rig();
+  return rig;
+}
+
+inline const std::vector<cv::Mat>& colon_frames() {
+  static const std::vector<cv::Mat> frames = [] {
+    sim::SimulateOptions opt;
+    opt.truth = false;
+    opt.progress = false;
+    const auto scene = sim::make_colon_scene();
+    std::vector<cv::Mat> out;
+    for (const auto& f : sim::simulate(rig24(), *scene, opt).frames) out.push_back(f.image);
+    return out;
+  }();
+  return frames;
+}
+
+inline const std::vector<cv::Mat>& louvre_frames() {
+  static const std::vector<cv::Mat> frames = [] {
+    const cv::Mat tex = pano::testing::photo_texture(std::string(OMMA_DATA_DIR) + "/louvre.jpg", 1440);
+    std::vector<cv::Mat> out;
+    for (const cv::Mat& f : pano::testing::render_frames(rig24(), tex)) out.push_back(to_u8(f));
+    return out;
+  }();
+  return frames;
+}
+
+// The RTL with its clock, reset and the four configuration channels.
+class Chip {
+ public:
+  Chip() : top_(std::make_unique<Vpano>(&ctx_)) { reset(); }
+  Vpano& top() { return *top_; }
+  uint64_t cycles = 0;
+
+  void tick() {
+    top_->clk = 0;
+    top_->eval();
+    top_->clk = 1;
+    top_->eval();
+    ++cycles;
+  }
+  void reset() {
+    top_->rst = 1;
+    top_->reg_valid = top_->pp_valid = top_->cs_valid = top_->pv_valid = 0;
+    top_->load_we = 0;
+    top_->start = 0;
+    tick();
+    tick();
+    top_->rst = 0;
+  }
+  // One word per channel per cycle, the four channels side by side.
+  void configure(const WordStreams& s) {
+    const size_t n = std::max({s.reg.size(), s.pix_pos.size(), s.cam_search.size(), s.pix_val.size()});
+    for (size_t i = 0; i < n; ++i) {
+      top_->reg_valid = i < s.reg.size();
+      top_->reg_word = i < s.reg.size() ? s.reg[i] : 0;
+      top_->pp_valid = i < s.pix_pos.size();
+      top_->pp_word = i < s.pix_pos.size() ? s.pix_pos[i] : 0;
+      top_->cs_valid = i < s.cam_search.size();
+      top_->cs_word = i < s.cam_search.size() ? s.cam_search[i] : 0;
+      top_->pv_valid = i < s.pix_val.size();
+      top_->pv_word = i < s.pix_val.size() ? s.pix_val[i] : 0;
+      tick();
+    }
+    top_->reg_valid = top_->pp_valid = top_->cs_valid = top_->pv_valid = 0;
+  }
+  void load(const HwConfig& cfg, const std::vector<cv::Mat>& frames) {
+    for (size_t cam = 0; cam < frames.size(); ++cam) {
+      const std::vector<uint16_t> words = frame_to_rgb565(frames[cam]);
+      for (size_t a = 0; a < words.size(); ++a) {
+        top_->load_we = 1;
+        top_->load_addr = uint32_t(cam << cfg.frame_addr_bits) | uint32_t(a);
+        top_->load_data = words[a];
+        tick();
+      }
+    }
+    top_->load_we = 0;
+  }
+
+  struct Run {
+    cv::Mat pano;  // CV_8UC3 BGR
+    uint64_t cycles = 0, pixels = 0, out_of_order = 0, raster_errors = 0;
+    std::array<uint64_t, 9> contributors{};
+  };
+  // Starts a panorama and collects it; checks the raster signals on the way.
+  Run run(int cols, int rows) {
+    Run r;
+    r.pano = cv::Mat(rows, cols, CV_8UC3, cv::Scalar::all(0));
+    top_->start = 1;
+    tick();
+    top_->start = 0;
+    const uint64_t t0 = cycles;
+    uint64_t expect = 0;
+    bool in_frame = false;
+    while (top_->busy && cycles - t0 < 200ull * cols * rows + 1000) {
+      tick();
+      if (top_->pix_valid) {
+        const int c = top_->pix_col, w = top_->pix_row;
+        if (uint64_t(w) * cols + c != expect) ++r.out_of_order;
+        ++expect;
+        r.pano.at<cv::Vec3b>(w, c) = cv::Vec3b(top_->pix_b, top_->pix_g, top_->pix_r);
+        ++r.contributors[std::min<int>(top_->pix_n, 8)];
+        ++r.pixels;
+      }
+      // §6.3: one clock_out per pixel (one cycle after it leaves the pixel value unit), hblank high
+      // only between lines, vblank low only inside the frame
+      if (top_->clock_out) {
+        in_frame = true;
+        if (top_->hblank_out || top_->vblank_out || !top_->de_out) ++r.raster_errors;
+      }
+    }
+    r.cycles = cycles - t0;
+    tick();
+    tick();
+    if (!in_frame || !top_->vblank_out || !top_->hblank_out) ++r.raster_errors;
+    return r;
+  }
+
+ private:
+  VerilatedContext ctx_;
+  std::unique_ptr<Vpano> top_;
+};
+
+inline ChipConfig chip_config(const Pipeline& p, pano::Method m, bool boundary) {
+  ChipConfig c;
+  c.angles = p.angle_registers();
+  c.frame_width = p.cameras()[0].width;
+  c.frame_height = p.cameras()[0].height;
+  c.method = m;
+  c.boundary = boundary;
+  c.boundary_threshold = p.config().boundary_threshold;
+  c.cameras = p.cameras();
+  c.vignetting = p.vignetting();
+  c.vig_shift = p.vignetting().vig_shift;
+  return c;
+}
+
+inline int differing_pixels(const cv::Mat& a, const cv::Mat& b) {
+  cv::Mat d;
+  cv::compare(a.reshape(1), b.reshape(1), d, cv::CMP_NE);
+  d = d.reshape(3);
+  int n = 0;
+  for (int y = 0; y < d.rows; ++y)
+    for (int x = 0; x < d.cols; ++x) n += d.at<cv::Vec3b>(y, x) != cv::Vec3b(0, 0, 0);
+  return n;
+}
+
+}  // namespace omma::hw::rtl
