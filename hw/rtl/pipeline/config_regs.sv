@@ -128,6 +128,20 @@ module config_regs
     end
   end
 
+  // an array-channel word (pix_pos, cam_search): 0 if the chip takes it, else the error code
+  function automatic logic [3:0] array_code(input logic [31:16] w, input int words);
+    if (w[31:25] != '0) array_code = 4'd4;
+    else if (32'(w[24:21]) >= words) array_code = 4'd5;
+    else if (32'(w[20:16]) >= NCAM) array_code = 4'd6;
+    else array_code = 4'd0;
+  endfunction
+  wire [3:0] pp_code = array_code(pp_word[31:16], PIX_POS_WORDS);
+  wire [3:0] cs_code = array_code(cs_word[31:16], CAM_SEARCH_WORDS);
+  wire reg_ok = reg_word[31] && r_hit && r_fits;
+  wire pv_ok = pv_word[31] && 32'(pv_word[30:16]) < VIG_WORDS;
+  wire [2:0] taken = 3'(reg_valid && reg_ok) + 3'(pp_valid && pp_code == 0) + 3'(cs_valid && cs_code == 0) +
+                     3'(pv_valid && pv_ok);
+
   task automatic flag(input logic [3:0] code, input logic [1:0] chan, input logic [31:0] index);
     if (!cfg_err) begin
       cfg_err <= 1'b1;
@@ -156,43 +170,30 @@ module config_regs
       n_pv <= '0;
       words_taken <= '0;
     end else begin
+      words_taken <= words_taken + 32'(taken);
       if (reg_valid) begin
         n_reg <= n_reg + 1;
         if (!reg_word[31]) flag(4'd1, 2'd0, n_reg);
         else if (!r_hit) flag(4'd2, 2'd0, n_reg);
         else if (!r_fits) flag(4'd3, 2'd0, n_reg);
-        else begin
-          if (r_hi) g[r_idx][31:16] <= reg_word[15:0];
-          else g[r_idx][15:0] <= reg_word[15:0];
-          words_taken <= words_taken + 1;
-        end
+        else if (r_hi) g[r_idx][31:16] <= reg_word[15:0];
+        else g[r_idx][15:0] <= reg_word[15:0];
       end
       if (pp_valid) begin
         n_pp <= n_pp + 1;
-        if (pp_word[31:25] != '0) flag(4'd4, 2'd1, n_pp);
-        else if (32'(pp_word[24:21]) >= PIX_POS_WORDS) flag(4'd5, 2'd1, n_pp);
-        else if (32'(pp_word[20:16]) >= NCAM) flag(4'd6, 2'd1, n_pp);
-        else begin
-          pp_flat[16*(PIX_POS_WORDS*32'(pp_word[20:16])+32'(pp_word[24:21]))+:16] <= pp_word[15:0];
-          words_taken <= words_taken + 1;
-        end
+        if (pp_code != 0) flag(pp_code, 2'd1, n_pp);
+        else pp_flat[16*(PIX_POS_WORDS*32'(pp_word[20:16])+32'(pp_word[24:21]))+:16] <= pp_word[15:0];
       end
       if (cs_valid) begin
         n_cs <= n_cs + 1;
-        if (cs_word[31:25] != '0) flag(4'd4, 2'd2, n_cs);
-        else if (32'(cs_word[24:21]) >= CAM_SEARCH_WORDS) flag(4'd5, 2'd2, n_cs);
-        else if (32'(cs_word[20:16]) >= NCAM) flag(4'd6, 2'd2, n_cs);
-        else begin
-          cs_flat[16*(CAM_SEARCH_WORDS*32'(cs_word[20:16])+32'(cs_word[24:21]))+:16] <= cs_word[15:0];
-          words_taken <= words_taken + 1;
-        end
+        if (cs_code != 0) flag(cs_code, 2'd2, n_cs);
+        else cs_flat[16*(CAM_SEARCH_WORDS*32'(cs_word[20:16])+32'(cs_word[24:21]))+:16] <= cs_word[15:0];
       end
       if (pv_valid) begin
         n_pv <= n_pv + 1;
         if (!pv_word[31]) flag(4'd1, 2'd3, n_pv);
         else if (32'(pv_word[30:16]) >= VIG_WORDS) flag(4'd8, 2'd3, n_pv);
         else begin
-          words_taken <= words_taken + 1;
           if (32'(pv_word[30:16]) < (1 << (CAMB + VIGA))) begin
             vig_we <= 1'b1;  // radial entry (camera << VIGA) + i
             vig_waddr <= pv_word[16+:CAMB+VIGA];
