@@ -57,7 +57,7 @@ int main(int argc, char** argv) {
     Chip chip;
     t = clk::now();
     chip.load(cfg, frames);
-    chip.configure(encode(cfg, chip_config(model, m, boundary)));
+    chip.configure(exported_streams(rig24(), ExportOptions{cfg, grid, m, boundary, {}}));
     const double load_s = secs(t);
     t = clk::now();
     const Chip::Run run = chip.run(grid.width, grid.height);

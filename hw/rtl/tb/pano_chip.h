@@ -4,6 +4,8 @@
 #pragma once
 
 #include <algorithm>
+#include <atomic>
+#include <filesystem>
 #include <array>
 #include <cstdint>
 #include <memory>
@@ -11,9 +13,13 @@
 #include <string>
 #include <vector>
 
+#include <unistd.h>
+
 #include "Vpano.h"
 #include "omma/core/frames.h"
 #include "omma/design/prototype.h"
+#include "omma/core/io.h"
+#include "omma/hw/export.h"
 #include "omma/hw/pipeline.h"
 #include "omma/hw/regmap.h"
 #include "omma/pano/test_scene.h"
@@ -146,6 +152,23 @@ class Chip {
   VerilatedContext ctx_;
   std::unique_ptr<Vpano> top_;
 };
+
+// The configuration the way a chip gets it: `omma hw export` (hw::export_chip) writes the folder,
+// and its four word-stream files (regs.hex, pix_pos.hex, cam_search.hex, pix_val.hex: $readmemh
+// text) are read back exactly as written.
+inline WordStreams exported_streams(const Rig& rig, const ExportOptions& o) {
+  static std::atomic<int> n{0};
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() /
+                                    ("omma_rtl_export_" + std::to_string(::getpid()) + "_" + std::to_string(n++));
+  export_chip(rig, o, dir);
+  WordStreams s;
+  s.reg = parse_words(read_text_file(dir / "regs.hex"), "regs.hex");
+  s.pix_pos = parse_words(read_text_file(dir / "pix_pos.hex"), "pix_pos.hex");
+  s.cam_search = parse_words(read_text_file(dir / "cam_search.hex"), "cam_search.hex");
+  s.pix_val = parse_words(read_text_file(dir / "pix_val.hex"), "pix_val.hex");
+  std::filesystem::remove_all(dir);
+  return s;
+}
 
 inline ChipConfig chip_config(const Pipeline& p, pano::Method m, bool boundary) {
   ChipConfig c;

@@ -1,7 +1,7 @@
 // Verilator co-simulation of the panorama pipeline core (hw/rtl/pipeline) against the bit-accurate
 // model (src/omma/hw Pipeline): the 24-camera prototype, frames of the simulated colon and of a
 // far-field photograph loaded into the frame memories as RGB565, the chip configured only through
-// the Table 6.6 channels with the word streams hw::encode writes (what `omma hw export` writes),
+// the Table 6.6 channels with the word streams `omma hw export` writes (its .hex files, read back),
 // a whole small panorama run, every output pixel compared: 0 differing pixels for nn, linear and
 // the MRF evidence, with and without the boundary unit. Also: the cycles the simulation counts against the model's
 // throughput (hw::pixel_cycles), the §6.3 raster signals, and corrupt configuration streams.
@@ -20,16 +20,17 @@ namespace omma::hw::rtl {
 namespace {
 
 void cosim(const std::vector<cv::Mat>& frames, const PanoGrid& grid, const char* scene, bool near_field,
-           const VignettingTables* vignetting = nullptr) {
+           const VignettingModel& vm = {}) {
   const HwConfig cfg;  // the widths omma_rtl_gen wrote into omma_hw_pkg.sv
-  Pipeline model(cfg, rig24(), grid, vignetting);
+  const VignettingTables vt = make_vignetting_tables(cfg, rig24(), vm);
+  Pipeline model(cfg, rig24(), grid, &vt);
   model.load_frames(frames);
   Chip chip;
   chip.load(cfg, frames);
   for (const auto& [m, boundary] : {std::pair{pano::Method::kNearest, false}, std::pair{pano::Method::kLinear, false},
                                     std::pair{pano::Method::kMrf, false}, std::pair{pano::Method::kLinear, true}}) {
     SCOPED_TRACE(std::string(scene) + " " + pano::to_string(m) + (boundary ? " +boundary" : ""));
-    chip.configure(encode(cfg, chip_config(model, m, boundary)));
+    chip.configure(exported_streams(rig24(), ExportOptions{cfg, grid, m, boundary, vm}));
     ASSERT_FALSE(chip.top().cfg_err) << "code " << int(chip.top().cfg_err_code);
     const PipelineResult ref = model.render(m, boundary);
     const Chip::Run run = chip.run(grid.width, grid.height);
@@ -70,8 +71,7 @@ TEST(RtlPano, ColonWithVignettingTablesMatchesModelBitForBit) {
   VignettingModel vm;
   vm.radial = [](int cam, double rho) { return 1.0 + (0.4 + 0.01 * cam) * rho * rho; };
   vm.channel_gain = [](int cam) { return std::array<double, 3>{1.0 + 0.02 * (cam % 5), 1.0, 0.93}; };
-  const VignettingTables vt = make_vignetting_tables(cfg, rig24(), vm);
-  cosim(colon_frames(), {Projection::kVr180, 48, 48}, "colon vignetting", true, &vt);
+  cosim(colon_frames(), {Projection::kVr180, 48, 48}, "colon vignetting", true, vm);
 }
 
 // Bad configuration streams: the chip flags the first word it cannot take (and hw::decode
@@ -79,7 +79,8 @@ TEST(RtlPano, ColonWithVignettingTablesMatchesModelBitForBit) {
 TEST(RtlPano, CorruptConfigurationStreamsAreFlagged) {
   const HwConfig cfg;
   Pipeline model(cfg, rig24(), {Projection::kVr180, 16, 16});
-  const WordStreams good = encode(cfg, chip_config(model, pano::Method::kLinear, false));
+  const WordStreams good = exported_streams(rig24(), ExportOptions{cfg, {Projection::kVr180, 16, 16}, pano::Method::kLinear, false, {}});
+  EXPECT_EQ(good.reg, encode(cfg, chip_config(model, pano::Method::kLinear, false)).reg);
   struct Case {
     const char* what;
     int code, chan;
