@@ -3,7 +3,8 @@
 // selects the camera (the 5-to-24 decoder of Fig. 5.15), frame_addr[FAB-1:0] the word. The four
 // words of a bilinear quad are read in the same cycle (four read ports: the ASIC's frame memory is
 // also four SRAM macros per camera, Table 6.10 frame_mem_2 x 96); the data arrive one cycle later.
-// The load port writes one word per cycle (the single-camera front ends, or the testbench).
+// Each camera's memory has its own write port (its front end, system_top); the load port writes any
+// camera's word (the testbench).
 module frame_mem
   import omma_hw_pkg::*;
 #(
@@ -14,6 +15,10 @@ module frame_mem
     input  logic                 load_we,
     input  logic [CAMB+FAB-1:0]  load_addr,
     input  logic [15:0]          load_data,
+    // one write port per camera (its front end: single_cam_top's RGB565 pixels)
+    input  logic [NCAM-1:0]      cam_we,
+    input  logic [NCAM*FAB-1:0]  cam_waddr,
+    input  logic [NCAM*16-1:0]   cam_wdata,
     input  logic                 re,
     input  logic [CAMB+FAB-1:0]  addr0,
     input  logic [CAMB+FAB-1:0]  addr1,
@@ -35,6 +40,8 @@ module frame_mem
     else rd = '0;
   endfunction
   always_ff @(posedge clk) begin
+    for (int i = 0; i < NCAM; i++)
+      if (cam_we[i] && 32'(cam_waddr[FAB*i+:FAB]) < NPIX) mem[i][AB'(cam_waddr[FAB*i+:FAB])] <= cam_wdata[16*i+:16];
     if (load_we && 32'(load_addr[CAMB+FAB-1:FAB]) < NCAM && 32'(load_addr[FAB-1:0]) < NPIX)
       mem[load_addr[CAMB+FAB-1:FAB]][AB'(load_addr[FAB-1:0])] <= load_data;
     if (re) begin

@@ -35,6 +35,10 @@ module pano_top
     input  logic                load_we,
     input  logic [CAMB+FAB-1:0] load_addr,
     input  logic [15:0]         load_data,
+    // per-camera write ports of the frame memories (the front ends, system_top)
+    input  logic [NCAM-1:0]     cam_we,
+    input  logic [NCAM*FAB-1:0] cam_waddr,
+    input  logic [NCAM*16-1:0]  cam_wdata,
     // run one panorama (needs pano_cs = 1)
     input  logic                start,
     output logic                busy,
@@ -220,7 +224,7 @@ module pano_top
   // ---- B5 frame memories (read: one cycle) ----
   logic [15:0] q0, q1, q2, q3;
   frame_mem #(.NCAM(NCAM), .NPIX(NPIX)) fm (
-      .clk, .load_we, .load_addr, .load_data, .re(cu_valid), .addr0(cu_a0), .addr1(cu_a1), .addr2(cu_a2),
+      .clk, .load_we, .load_addr, .load_data, .cam_we, .cam_waddr, .cam_wdata, .re(cu_valid), .addr0(cu_a0), .addr1(cu_a1), .addr2(cu_a2),
       .addr3(cu_a3), .q0, .q1, .q2, .q3);
   logic m_valid, m_tap, m_last;
   logic [F-1:0] m_fx, m_fy;

@@ -56,7 +56,7 @@ int main(int argc, char** argv) {
     std::cerr << "RTL: load, configure, run " << grid.width << "x" << grid.height << "...\n";
     Chip chip;
     t = clk::now();
-    chip.load(cfg, frames);
+    chip.load(frames);
     chip.configure(exported_streams(rig24(), ExportOptions{cfg, grid, m, boundary, {}}));
     const double load_s = secs(t);
     t = clk::now();

@@ -15,13 +15,14 @@
 
 #include <unistd.h>
 
-#include "Vpano.h"
+#include "Vsys.h"
 #include "omma/core/frames.h"
 #include "omma/design/prototype.h"
 #include "omma/core/io.h"
 #include "omma/hw/export.h"
 #include "omma/hw/pipeline.h"
 #include "omma/hw/regmap.h"
+#include "omma/isp/link.h"
 #include "omma/pano/test_scene.h"
 #include "omma/sim/scene.h"
 #include "omma/sim/simulate.h"
@@ -60,8 +61,8 @@ inline const std::vector<cv::Mat>& louvre_frames() {
 // The RTL with its clock, reset and the four configuration channels.
 class Chip {
  public:
-  Chip() : top_(std::make_unique<Vpano>(&ctx_)) { reset(); }
-  Vpano& top() { return *top_; }
+  Chip() : top_(std::make_unique<Vsys>(&ctx_)) { reset(); }
+  Vsys& top() { return *top_; }
   uint64_t cycles = 0;
 
   void tick() {
@@ -76,6 +77,9 @@ class Chip {
     top_->reg_valid = top_->pp_valid = top_->cs_valid = top_->pv_valid = 0;
     top_->load_we = 0;
     top_->start = 0;
+    top_->chip_valid = 0;
+    top_->flush = 0;
+    top_->serial_data_in = 0;
     tick();
     tick();
     top_->rst = 0;
@@ -96,17 +100,38 @@ class Chip {
     }
     top_->reg_valid = top_->pp_valid = top_->cs_valid = top_->pv_valid = 0;
   }
-  void load(const HwConfig& cfg, const std::vector<cv::Mat>& frames) {
-    for (size_t cam = 0; cam < frames.size(); ++cam) {
-      const std::vector<uint16_t> words = frame_to_rgb565(frames[cam]);
-      for (size_t a = 0; a < words.size(); ++a) {
-        top_->load_we = 1;
-        top_->load_addr = uint32_t(cam << cfg.frame_addr_bits) | uint32_t(a);
-        top_->load_data = words[a];
-        tick();
-      }
+  // Loads every camera's RGB565 frame, all cameras in parallel (one word each per cycle).
+  void load(const std::vector<cv::Mat>& frames) {
+    std::vector<std::vector<uint16_t>> words;
+    for (const cv::Mat& f : frames) words.push_back(frame_to_rgb565(f));
+    for (size_t a = 0; a < words.at(0).size(); ++a) {
+      top_->load_we = (frames.size() >= 32 ? ~0u : (1u << frames.size()) - 1);
+      top_->load_addr = uint32_t(a);
+      for (size_t cam = 0; cam < words.size(); ++cam) top_->load_data[cam / 2] = 0;
+      for (size_t cam = 0; cam < words.size(); ++cam)
+        top_->load_data[cam / 2] |= uint32_t(words[cam][a]) << (16 * (cam % 2));
+      tick();
     }
     top_->load_we = 0;
+  }
+
+  // Every camera's link, one chip per camera per cycle (all streams of the same length), then the
+  // end of the streams; waits until the front ends have written their frames.
+  void feed_links(const std::vector<isp::ChipStream>& streams) {
+    const size_t n = streams.at(0).bytes.size() * 8;
+    for (size_t i = 0; i < n; ++i) {
+      uint32_t bits = 0;
+      for (size_t c = 0; c < streams.size(); ++c)
+        if ((streams[c].bytes[i >> 3] >> (7 - (i & 7))) & 1) bits |= 1u << c;
+      top_->chip_valid = 1;
+      top_->serial_data_in = bits;
+      tick();
+    }
+    top_->chip_valid = 0;
+    top_->flush = 1;
+    tick();
+    for (int guard = 0; top_->cams_busy && guard < 10000000; ++guard) tick();
+    for (int k = 0; k < 8; ++k) tick();
   }
 
   struct Run {
@@ -150,7 +175,7 @@ class Chip {
 
  private:
   VerilatedContext ctx_;
-  std::unique_ptr<Vpano> top_;
+  std::unique_ptr<Vsys> top_;
 };
 
 // The configuration the way a chip gets it: `omma hw export` (hw::export_chip) writes the folder,

@@ -26,7 +26,7 @@ void cosim(const std::vector<cv::Mat>& frames, const PanoGrid& grid, const char*
   Pipeline model(cfg, rig24(), grid, &vt);
   model.load_frames(frames);
   Chip chip;
-  chip.load(cfg, frames);
+  chip.load(frames);
   for (const auto& [m, boundary] : {std::pair{pano::Method::kNearest, false}, std::pair{pano::Method::kLinear, false},
                                     std::pair{pano::Method::kMrf, false}, std::pair{pano::Method::kLinear, true}}) {
     SCOPED_TRACE(std::string(scene) + " " + pano::to_string(m) + (boundary ? " +boundary" : ""));
