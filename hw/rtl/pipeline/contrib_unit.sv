@@ -58,6 +58,23 @@ module contrib_unit
     output logic [31:0]               out_tag,
     output logic                      out_last
 );
+  // Worst-case widths of the intermediate values (from the register widths; sx() marks them so
+  // that synthesis sees them, the value never changes)
+  localparam int SDB = (PP + W > D) ? DOT_B - (PP + W - D) + 1 : DOT_B + (D - PP - W);  // s at D bits
+  localparam int RK1 = SDB + OMEGA_B - W + 1, RK2 = 16 + D - PP;
+  localparam int RKB = ((RK1 > RK2) ? RK1 : RK2) + 1;                                    // r_k
+  localparam int R2SB = 2 * RKB + 1;                                                     // |r|^2
+  localparam int XXB = 2 * PB - P + 1;                                                   // xx, yy, xy
+  localparam int R2B = XXB + 1, R4B = 2 * R2B - P + 1, R6B = R4B + R2B - P + 1;          // R^2, R^4, R^6
+  localparam int POLYB = 16 + R6B + 2;
+  localparam int PW = ((POLYB - K + 1 > P + 2) ? POLYB - K + 1 : P + 2) + 1;              // p
+  localparam int XD1 = PW + PB - P + 1, XD2 = 16 + XXB + 4 - K + 1;
+  localparam int XDB = ((XD1 > XD2) ? XD1 : XD2) + 1;                                    // x', y' before saturation
+  localparam int CA = (FF + P > F) ? 17 + PB - (FF + P - F) + 1 : 17 + PB + (F - FF - P);
+  localparam int CB = (F > FC) ? 17 + F - FC : 17;
+  localparam int COLB = ((CA > CB) ? CA : CB) + 1;                                       // col, row
+  localparam int NUMB = DOT_B + P + 2;                                                   // 2 |dot_u 2^P| + dot_t
+
   function automatic logic signed [63:0] w16(input logic [127:0] f, input integer k);
     w16 = $signed(64'($signed(f[16*k+:16])));
   endfunction
@@ -80,7 +97,7 @@ module contrib_unit
     logic signed [63:0] lim;
     lim = ($signed(64'(1)) <<< (PB - 1)) - 1;
     a = n < 0 ? $unsigned(64'(-n)) : $unsigned(64'(n));
-    {ovf, q} = udiv(2 * a + $unsigned(64'(dd)), 2 * $unsigned(64'(dd)), PB);  // floor((2|n| + d) / 2d)
+    {ovf, q} = udiv(2 * a + $unsigned(64'(dd)), 2 * $unsigned(64'(dd)), PB, NUMB, DOT_B + 1);  // floor((2|n| + d) / 2d)
     if (ovf || $signed(64'(q)) > lim + 1) div_round_sat = n < 0 ? -lim - 1 : lim;
     else if (n < 0) div_round_sat = -$signed(64'(q));
     else div_round_sat = smin($signed(64'(q)), lim);
@@ -95,14 +112,14 @@ module contrib_unit
     ww[0] = $signed(64'(a));
     ww[1] = $signed(64'(b));
     ww[2] = $signed(64'(c));
-    sc = ww[0] * w16(128'(c_r), 0) + ww[1] * w16(128'(c_r), 1) + ww[2] * w16(128'(c_r), 2);  // sQ.(Pp+W)
-    sdd = align(sc, PP + W, D);                                                           // sQ.D
+    sc = sx(ww[0] * w16(128'(c_r), 0) + ww[1] * w16(128'(c_r), 1) + ww[2] * w16(128'(c_r), 2), DOT_B);  // sQ.(Pp+W)
+    sdd = sx(align(sc, PP + W, D), SDB);                                                  // sQ.D
     r2s = '0;
     for (int k = 0; k < 3; k++) begin
-      rks = rs(sdd * ww[k], W) - (w16(128'(c_r), k) <<< (D - PP));
-      r2s = r2s + rks * rks;                                                              // uQ.2D
+      rks = sx(rs(sdd * ww[k], W) - (w16(128'(c_r), k) <<< (D - PP)), RKB);
+      r2s = sx(r2s + rks * rks, R2SB);                                                    // uQ.2D
     end
-    q = isqrt($unsigned(64'(r2s)));
+    q = isqrt($unsigned(64'(r2s)), R2SB);
     if (q < 1) q = 1;
     if (q > $unsigned(64'((1 << 18) - 1))) q = $unsigned(64'((1 << 18) - 1));
     dist_of = q;
@@ -136,8 +153,8 @@ module contrib_unit
     w[1] = $signed(64'(in_w1));
     w[2] = $signed(64'(in_w2));
     dt = $signed(64'(in_dot));
-    du = w[0] * w16(128'(u_r), 0) + w[1] * w16(128'(u_r), 1) + w[2] * w16(128'(u_r), 2);  // omega . u, sQ3.(W+V)
-    dv = w[0] * w16(128'(v_r), 0) + w[1] * w16(128'(v_r), 1) + w[2] * w16(128'(v_r), 2);
+    du = sx(w[0] * w16(128'(u_r), 0) + w[1] * w16(128'(u_r), 1) + w[2] * w16(128'(u_r), 2), DOT_B);  // omega . u, sQ3.(W+V)
+    dv = sx(w[0] * w16(128'(v_r), 0) + w[1] * w16(128'(v_r), 1) + w[2] * w16(128'(v_r), 2), DOT_B);
 
     // distance (q = 0): r = (c . omega) omega - c
     d = dist_of(in_w0, in_w1, in_w2);
@@ -150,13 +167,13 @@ module contrib_unit
       for (int k = 0; k < 4; k++)
         if (in_nb_exists[k] && ev_ok) begin
           for (int j = 0; j < 3; j++) nw[j] = in_nb[OMEGA_B*(3*k+j)+:OMEGA_B];
-          ndot = $signed(64'(nw[0])) * w16(128'(t_r), 0) + $signed(64'(nw[1])) * w16(128'(t_r), 1) +
-                 $signed(64'(nw[2])) * w16(128'(t_r), 2);
+          ndot = sx($signed(64'(nw[0])) * w16(128'(t_r), 0) + $signed(64'(nw[1])) * w16(128'(t_r), 1) +
+                    $signed(64'(nw[2])) * w16(128'(t_r), 2), DOT_B);
           if (ndot < ($signed(64'($signed(cos_r))) <<< W)) begin
             ev_ok = 1'b0;
           end else begin
             dk = dist_of(nw[0], nw[1], nw[2]);
-            ev = norm($unsigned(64'(ev[MW+8-1:8])) * dk, $signed(ev[7:0]));
+            ev = norm(zx($unsigned(64'(ev[MW+8-1:8])) * dk, MW + 18), $signed(ev[7:0]));
           end
         end
     end
@@ -171,19 +188,21 @@ module contrib_unit
       k5 = w16(128'(k_r), 4);
       x = (dt > 0) ? div_round_sat(du <<< P, dt) : '0;
       y = (dt > 0) ? div_round_sat(dv <<< P, dt) : '0;
-      xx = rs(x * x, P);
-      yy = rs(y * y, P);
-      xy = rs(x * y, P);
-      rr2 = xx + yy;                                                   // (5.23)
-      rr4 = rs(rr2 * rr2, P);
-      rr6 = rs(rr4 * rr2, P);
-      p = ($signed(64'(1)) <<< P) + rs(k1 * rr2 + k2 * rr4 + k5 * rr6, K);     // (5.24)
-      xd = rs(p * x, P) + rs(k4 * 2 * xy + k3 * (rr2 + 2 * xx), K);    // (5.25)
-      yd = rs(p * y, P) + rs(k3 * 2 * xy + k4 * (rr2 + 2 * yy), K);    // (5.26)
-      xd = smax(smin(xd, lim), -lim - 1);
-      yd = smax(smin(yd, lim), -lim - 1);
-      col = align($signed(64'(fu)) * xd, FF + P, F) + align($signed(64'(cu)), FC, F);
-      row = align($signed(64'(fv)) * yd, FF + P, F) + align($signed(64'(cv)), FC, F);
+      x = sx(x, PB);  // saturated to proj_bits
+      y = sx(y, PB);
+      xx = sx(rs(x * x, P), XXB);
+      yy = sx(rs(y * y, P), XXB);
+      xy = sx(rs(x * y, P), XXB);
+      rr2 = sx(xx + yy, R2B);                                                          // (5.23)
+      rr4 = sx(rs(rr2 * rr2, P), R4B);
+      rr6 = sx(rs(rr4 * rr2, P), R6B);
+      p = sx(($signed(64'(1)) <<< P) + rs(sx(k1 * rr2 + k2 * rr4 + k5 * rr6, POLYB), K), PW);  // (5.24)
+      xd = sx(rs(p * x, P) + rs(k4 * 2 * xy + k3 * (rr2 + 2 * xx), K), XDB);           // (5.25)
+      yd = sx(rs(p * y, P) + rs(k3 * 2 * xy + k4 * (rr2 + 2 * yy), K), XDB);           // (5.26)
+      xd = sx(smax(smin(xd, lim), -lim - 1), PB);
+      yd = sx(smax(smin(yd, lim), -lim - 1), PB);
+      col = sx(align($signed(64'(fu)) * xd, FF + P, F) + align($signed(64'(cu)), FC, F), COLB);
+      row = sx(align($signed(64'(fv)) * yd, FF + P, F) + align($signed(64'(cv)), FC, F), COLB);
       tap = !in_empty && dt > 0 && col >= 0 && row >= 0 && col < ($signed(64'(frame_w)) <<< F) &&
             row < ($signed(64'(frame_h)) <<< F);
     end
@@ -216,10 +235,16 @@ module contrib_unit
       begin
         dx = (col >>> F) - ($signed(64'(cu)) >>> FC);
         dy = (row >>> F) - ($signed(64'(cv)) >>> FC);
-        vi = (dx * dx + dy * dy) >>> vig_shift;
+        dx = sx(dx, COLB + 1);
+        dy = sx(dy, COLB + 1);
+        vi = sx(dx * dx + dy * dy, 2 * COLB + 4) >>> vig_shift;
         if (vi > (1 << VIGA) - 1) vi = (1 << VIGA) - 1;
         vaddr = {in_cam, vi[VIGA-1:0]};
       end
+      X0 = sx(X0, 17);  // clamped to the frame
+      X1 = sx(X1, 17);
+      Y0 = sx(Y0, 17);
+      Y1 = sx(Y1, 17);
       a0 = (CAMB + FAB)'(base + Y0 * lw + X0);
       a1 = (CAMB + FAB)'(base + Y0 * lw + X1);
       a2 = (CAMB + FAB)'(base + Y1 * lw + X0);

@@ -51,6 +51,10 @@ module pixel_value
 );
   localparam int NS = MAXC;
   localparam int IW = NS > 1 ? $clog2(NS) : 1;  // slot index bits
+  // worst-case widths (see contrib_unit): a sample, a gain, the weighted sums
+  localparam int SMPB = 8 + S + 2;                 // uQ8.S sample (signed container)
+  localparam int GB = 2 * 16 - VIGF + 2;           // rs(radial * channel, 14)
+  localparam int NB = R + SMPB + 3, DB = R + 3;    // sum of <= 8 products w * s, sum of <= 8 weights
 
   function automatic logic [7:0] chan(input logic [15:0] w, input integer ch);
     logic [7:0] f;
@@ -76,10 +80,10 @@ module pixel_value
       v = $signed(64'(chan(q0, ch))) * (one - $signed(64'(in_fx))) * (one - $signed(64'(in_fy))) +
           $signed(64'(chan(q1, ch))) * $signed(64'(in_fx)) * (one - $signed(64'(in_fy))) +
           $signed(64'(chan(q2, ch))) * (one - $signed(64'(in_fx))) * $signed(64'(in_fy)) + $signed(64'(chan(q3, ch))) * $signed(64'(in_fx)) * $signed(64'(in_fy));
-      smp[ch] = rs(v, 2 * F - S);
+      smp[ch] = sx(rs(zx(v, 8 + 2 * F + 4), 2 * F - S), SMPB);
       // vignetting: g = rs(radial * channel, 14); the sample is scaled unless g is exactly 1.0
-      g = rs($signed(64'(vig_radial)) * $signed(64'(vig_channel[16*ch+:16])), VIGF);
-      if (g != (1 << VIGF)) smp[ch] = smin(rs(smp[ch] * g, VIGF), max_of(ch) <<< S);
+      g = sx(rs($signed(64'(vig_radial)) * $signed(64'(vig_channel[16*ch+:16])), VIGF), GB);
+      if (g != (1 << VIGF)) smp[ch] = sx(smin(rs(sx(smp[ch] * g, SMPB + GB), VIGF), max_of(ch) <<< S), SMPB);
     end
   end
 
@@ -179,8 +183,8 @@ module pixel_value
         end
       for (int i = 0; i < NS; i++)
         if (i < 32'(cn) && m[i] != 0) begin
-          {ovf, qw} = udiv($unsigned(64'(1)) << (R + MW - 2), m[i], R);
-          wt[i] = $signed(qw);
+          {ovf, qw} = udiv($unsigned(64'(1)) << (R + MW - 2), m[i], R, R + MW - 1, MW);
+          wt[i] = sx($signed(qw), R + 1);
           if (e[i] - emin >= 64) wt[i] = 0;
           else wt[i] = wt[i] >>> (e[i] - emin);
         end
@@ -193,13 +197,14 @@ module pixel_value
       den = 0;
       for (int i = 0; i < NS; i++)
         if (i < 32'(cn)) begin
-          num = num + wt[i] * cs[i][ch];
-          den = den + wt[i];
+          num = sx(num + wt[i] * cs[i][ch], NB);
+          den = sx(den + wt[i], DB);
         end
       if (den == 0) begin
         px[ch] = 0;
       end else begin
-        {ovf, q} = udiv($unsigned(64'(2 * num + (den <<< S))), $unsigned(64'(den <<< (S + 1))), 16);
+        {ovf, q} = udiv($unsigned(64'(2 * num + (den <<< S))), $unsigned(64'(den <<< (S + 1))), 10, NB + 2,
+                        DB + S + 1);
         px[ch] = ovf ? max_of(ch) : smin($signed(64'(q)), max_of(ch));
       end
     end
@@ -216,7 +221,7 @@ module pixel_value
     pbound = 1'b0;
     nearest = '0;
     farthest = '0;
-    for (int i = 0; i < NS; i++) gray[i] = rs(77 * cs[i][0] + 150 * cs[i][1] + 29 * cs[i][2], 8);
+    for (int i = 0; i < NS; i++) gray[i] = sx(rs(77 * cs[i][0] + 150 * cs[i][1] + 29 * cs[i][2], 8), SMPB + 2);
     for (int i = 1; i < NS; i++)
       if (i < 32'(cn)) begin
         if (cd[i] < cd[nearest]) nearest = IW'(i);
