@@ -227,25 +227,28 @@ void run_sweep_cmd(const SweepArgs& a) {
   const Rig rig = rig_for(a.rig, a.frames);
   hw::check_rig(o.base, rig);
   const std::vector<cv::Mat> frames = load_frames(a.frames, rig);
-  size_t total = 2;
+  size_t total = 1;
   for (const auto& p : o.params) total += p.values.size();
-  Progress progress("hw sweep", static_cast<int>(total));
+  Progress progress("hw sweep", total);
   o.progress = [&](const std::string& what) {
     spdlog::debug("hw sweep: {}", what);
-    progress.step();
+    if (what.rfind("minimal set", 0) != 0) progress.step();  // the search for the smallest set is not counted
   };
   const hw::SweepResult r = hw::run_sweep(rig, frames, o);
   progress.finish();
   fs::create_directories(a.out);
   write_text_atomically(fs::path(a.out) / "hw_sweep.csv", hw::sweep_csv(r, a.target));
   write_text_atomically(fs::path(a.out) / "hw_sweep.svg", hw::sweep_svg(r, a.target));
+  // The smallest set as a configuration usable with --config.
+  write_text_atomically(fs::path(a.out) / "hw_minimal.json", hw::config_to_json(r.minimal).dump(2) + "\n");
   nlohmann::json pts = nlohmann::json::array();
   for (const auto& p : r.points)
     pts.push_back({{"param", p.param}, {"value", p.value}, {"psnr_db", p.valid ? nlohmann::json(p.psnr_db) : nlohmann::json()}});
   nlohmann::json j = {{"base_psnr_db", r.base_psnr_db}, {"target_db", a.target}, {"points", pts},
                       {"minimal", hw::config_to_json(r.minimal)}, {"minimal_psnr_db", r.minimal_psnr_db},
                       {"minimal_steps", r.minimal_steps}, {"csv", (fs::path(a.out) / "hw_sweep.csv").string()},
-                      {"svg", (fs::path(a.out) / "hw_sweep.svg").string()}};
+                      {"svg", (fs::path(a.out) / "hw_sweep.svg").string()},
+                      {"minimal_config", (fs::path(a.out) / "hw_minimal.json").string()}};
   if (a.json) {
     print_json(j);
     return;
@@ -432,16 +435,22 @@ void add_hw_command(CLI::App& root) {
     c->add_option("--config", config, "Hardware widths: JSON object of HwConfig fields (e.g. an export's config.json)");
     c->add_option("--set", sets, "Override one width, name=value (repeatable), e.g. --set angle_bits=20");
   };
+  // Options shared by simulate and sweep: the rig, its frames, the method and the output grid.
+  auto add_scene = [](CLI::App* c, std::string& rig, std::string& frames, std::string& method, std::string& projection,
+                      std::string& size, const char* size_help) {
+    c->add_option("--rig", rig, "Rig (JSON); default FRAMES/rig.json");
+    c->add_option("--frames", frames, "Frames folder (cam_XX.png)")->required();
+    c->add_option("--method", method, "Pixel value unit: nn, linear (default) or mrf");
+    c->add_option("--projection", projection, "vr180 (default), equirect or equirect-full");
+    c->add_option("--size", size, size_help);
+  };
 
   static SimArgs sa;
   auto* sim = cmd->add_subcommand("simulate", "Render a panorama with the bit-accurate pipeline; compare with the float "
                                               "stitch of the same RGB565 frames; count cycles");
-  sim->add_option("--rig", sa.rig, "Rig (JSON); default FRAMES/rig.json");
-  sim->add_option("--frames", sa.frames, "Frames folder (cam_XX.png)")->required();
-  sim->add_option("--method", sa.method, "Pixel value unit: nn, linear or mrf (default linear)");
+  add_scene(sim, sa.rig, sa.frames, sa.method, sa.projection, sa.size,
+            "Panorama WxH (default 1080x1080 vr180, 1920x512 equirect)");
   sim->add_flag("--boundary", sa.boundary, "Object boundary unit on (§5.4.5): boundary pixels painted green");
-  sim->add_option("--projection", sa.projection, "vr180 (default), equirect or equirect-full");
-  sim->add_option("--size", sa.size, "Panorama WxH (default 1080x1080 vr180, 1920x512 equirect)");
   sim->add_option("--out", sa.out, "Panorama image to write (PNG, atomic)");
   sim->add_option("--clock-mhz", sa.clock_mhz, "Clock for the frame rate the counted cycles give (default 120)");
   sim->add_option("--dump-hex", sa.dump_hex, "Also write the RTL testbench files: frame_XX.hex, expected_rgb888.hex "
@@ -454,11 +463,7 @@ void add_hw_command(CLI::App& root) {
   static SweepArgs sw;
   auto* swp = cmd->add_subcommand("sweep", "PSNR against the float stitch as each width varies; the smallest widths "
                                            "that keep the target (CSV + SVG)");
-  swp->add_option("--rig", sw.rig, "Rig (JSON); default FRAMES/rig.json");
-  swp->add_option("--frames", sw.frames, "Frames folder")->required();
-  swp->add_option("--method", sw.method, "nn, linear (default) or mrf");
-  swp->add_option("--projection", sw.projection, "vr180 (default), equirect, equirect-full");
-  swp->add_option("--size", sw.size, "Panorama WxH (default 540x540)");
+  add_scene(swp, sw.rig, sw.frames, sw.method, sw.projection, sw.size, "Panorama WxH (default 540x540)");
   swp->add_option("--target", sw.target, "PSNR target in dB (default 45)");
   swp->add_option("--param", sw.params, "Sweep only these widths (repeatable)");
   swp->add_option("--out", sw.out, "Output folder for hw_sweep.csv and hw_sweep.svg")->required();

@@ -9,6 +9,7 @@
 // A word the chip cannot take is flagged: `cfg_err` latches with the first error's code and the
 // channel and index of the word (the register keeps its value):
 //   1 write enable clear, 2 unknown register address, 3 value wider than the register,
+//   9 write to a read-only register (hw_version: the chip's own value, V_HW_VERSION),
 //   4 array word with bits [31:25] set, 5 array select beyond the channel's arrays,
 //   6 camera select beyond the cameras built (NCAM), 8 vignetting address beyond the memory.
 module config_regs
@@ -137,7 +138,7 @@ module config_regs
   endfunction
   wire [3:0] pp_code = array_code(pp_word[31:16], PIX_POS_WORDS);
   wire [3:0] cs_code = array_code(cs_word[31:16], CAM_SEARCH_WORDS);
-  wire reg_ok = reg_word[31] && r_hit && r_fits;
+  wire reg_ok = reg_word[31] && r_hit && r_fits && 32'(reg_word[30:16]) != A_HW_VERSION;
   wire pv_ok = pv_word[31] && 32'(pv_word[30:16]) < VIG_WORDS;
   wire [2:0] taken = 3'(reg_valid && reg_ok) + 3'(pp_valid && pp_code == 0) + 3'(cs_valid && cs_code == 0) +
                      3'(pv_valid && pv_ok);
@@ -174,6 +175,7 @@ module config_regs
       if (reg_valid) begin
         n_reg <= n_reg + 1;
         if (!reg_word[31]) flag(4'd1, 2'd0, n_reg);
+        else if (32'(reg_word[30:16]) == A_HW_VERSION) flag(4'd9, 2'd0, n_reg);
         else if (!r_hit) flag(4'd2, 2'd0, n_reg);
         else if (!r_fits) flag(4'd3, 2'd0, n_reg);
         else if (r_hi) g[r_idx][31:16] <= reg_word[15:0];

@@ -80,17 +80,21 @@ def main():
     only = args[args.index("--only") + 1:] if "--only" in args else None
     jobs = int(args[args.index("--jobs") + 1]) if "--jobs" in args else 1
     blocks = [b for b in BLOCKS if not only or b[1] in only]
-    with concurrent.futures.ThreadPoolExecutor(jobs) as ex:
-        results = list(ex.map(lambda b: synth(b, gen), blocks))
     print("| block | top | LUTs | FFs | DSP48 | BRAM36 | yosys s |")
-    print("|---|---|---:|---:|---:|---:|---:|")
-    for r in results:
+    print("|---|---|---:|---:|---:|---:|---:|", flush=True)
+
+    def one(b):
+        r = synth(b, gen)
         if "error" in r:
-            print(f"| {r['block']} | {r['top']} | error | | | | |")
+            print(f"| {r['block']} | {r['top']} | error | | | | |", flush=True)
             print(r["error"], file=sys.stderr)
         else:
             print(f"| {r['block']} | {r['top']} | {r['lut']} | {r['ff']} | {r['dsp48']} | {r['bram36']:g} | "
-                  f"{r['seconds']} |")
+                  f"{r['seconds']} |", flush=True)
+        return r
+
+    with concurrent.futures.ThreadPoolExecutor(jobs) as ex:
+        results = list(ex.map(one, blocks))
     if jfile:
         with open(jfile + ".tmp", "w") as fh:
             json.dump(results, fh, indent=1)

@@ -89,6 +89,8 @@ TEST(RtlPano, CorruptConfigurationStreamsAreFlagged) {
   const std::vector<Case> cases = {
       {"write enable clear", 1, 0, [](WordStreams& s) { s.reg[3] &= 0x7FFFFFFFu; }},
       {"unknown register address", 2, 0, [](WordStreams& s) { s.reg[3] = 0x80000000u | (0x0123u << 16) | 5u; }},
+      {"write to the read-only hw_version", 9, 0,
+       [](WordStreams& s) { s.reg.insert(s.reg.begin() + 2, 0x80000000u | (0x7E00u << 16) | 1u); }},
       {"value wider than its register", 3, 0,
        [](WordStreams& s) { s.reg[0] = 0x80000000u | (0x1800u << 16) | 0xFFFFu; }},  // 11-bit row count
       {"array word with bits [31:25] set", 4, 1, [](WordStreams& s) { s.pix_pos[5] |= 1u << 27; }},

@@ -89,6 +89,11 @@ int main(int argc, char** argv) {
       std::snprintf(buf, sizeof buf, "  localparam int A_%s = 'h%04X;  // %s\n  localparam int B_%s = %d;\n",
                     n.c_str(), g.address, g.description, n.c_str(), bits);
       s += buf;
+      if (g.read_only) {  // the chip's own value: a write is flagged (config_regs)
+        std::snprintf(buf, sizeof buf, "  localparam int RO_%s = 1;\n  localparam int V_%s = 'h%X;\n", n.c_str(),
+                      n.c_str(), g.thesis_default);
+        s += buf;
+      }
     }
     int words[2] = {0, 0};
     for (const auto& f : omma::hw::array_fields()) words[f.channel] = std::max(words[f.channel], f.word + 1);

@@ -9,6 +9,7 @@
 #include "omma/core/camera.h"
 #include "omma/design/prototype.h"
 #include "omma/hw/fixed.h"
+#include "omma/hw/pipeline.h"
 #include "omma/hw/tables.h"
 #include "omma/isp/color.h"
 #include "omma/pano/contributors.h"
@@ -59,6 +60,15 @@ TEST(Rgb565, SameRuleAsTheIsp) {
       EXPECT_EQ(cv::Vec3b(rgb[2], rgb[1], rgb[0]), back.at<cv::Vec3b>(r, c));
     }
   EXPECT_EQ(rgb565_to_rgb888(0xFFFF), (std::array<uint32_t, 3>{255, 255, 255}));
+}
+
+TEST(Rgb565, SixteenBitFramesKeepTheirEightMostSignificantBits) {
+  cv::Mat f(1, 2, CV_16UC3);
+  f.at<cv::Vec3w>(0, 0) = cv::Vec3w(0x01FF, 0x04FF, 0xFFFF);  // B, G, R: MSBs 1, 4, 255 (no rounding)
+  f.at<cv::Vec3w>(0, 1) = cv::Vec3w(0x0800, 0x0000, 0x07FF);
+  const std::vector<uint16_t> w = frame_to_rgb565(f);
+  EXPECT_EQ(w[0], rgb888_to_rgb565(255, 4, 1));
+  EXPECT_EQ(w[1], rgb888_to_rgb565(7, 0, 8));
 }
 
 // Max component error of the Cartesian unit over many angles, against eq. 5.15 in double.

@@ -62,6 +62,30 @@ TEST(Throughput, ThesisFigures) {
   EXPECT_NE(err.find("table_sets"), std::string::npos);
 }
 
+TEST(ThesisTables, WhereThePrintedNumbersDisagree) {
+  // Table 5.7 repeats Table 5.6's utilisation row (77 % slices, 3 % DSP) although its totals grew:
+  // 59,849 of 75,900 slices is 78.9 %, 185 of 2,800 DSPs 6.6 %.
+  EXPECT_NEAR(100.0 * 58568 / 75900, 77.2, 0.05);  // Table 5.6: consistent
+  EXPECT_NEAR(100.0 * 59849 / 75900, 78.85, 0.01);
+  EXPECT_NEAR(100.0 * 185 / 2800, 6.61, 0.01);
+  // §5.4.2: the probabilistic (MRF) hardware is "4x the hardware resources shown in Table 5.5"
+  // (dot product 5 + vector magnitude 296 + pipeline registers 78 slices) = 1,516 slices, which is
+  // 2.6 % of the 58,568-slice system, not "less than 1 %".
+  const int table55_slices = 5 + 296 + 78, table55_regs = 18 + 528 + 352, table55_luts = 16 + 960 + 0, table55_dsp = 3 + 3;
+  EXPECT_EQ(4 * table55_slices, 1516);
+  EXPECT_EQ(4 * table55_regs, 3592);   // "3600 Slice registers"
+  EXPECT_EQ(4 * table55_luts, 3904);   // "roughly 4000 LUTs"
+  EXPECT_EQ(4 * table55_dsp, 24);      // "24 DSP blocks"
+  EXPECT_NEAR(100.0 * 4 * table55_slices / 58568, 2.59, 0.01);
+  // Table 5.6/5.7 DSP totals are the row sums; slices and LUTs exceed them by 202 / 369.
+  EXPECT_EQ(0 + 0 + 43 + 27 + 16, 86);
+  EXPECT_EQ(0 + 0 + 136 + 27 + 16, 179);
+  EXPECT_EQ(2448 - (62 + 85 + 1496 + 371 + 232), 202);
+  EXPECT_EQ(3614 - (62 + 85 + 2662 + 371 + 232), 202);
+  EXPECT_EQ(6928 - (167 + 177 + 4510 + 1038 + 667), 369);
+  EXPECT_EQ(10586 - (167 + 177 + 8168 + 1038 + 667), 369);
+}
+
 TEST(Memory, Table64ReproducedFromTheConfiguration) {
   const MemoryReport r = memory_report({});
   EXPECT_NEAR(r.total_kbytes, 3415.552, 1e-9);
@@ -232,6 +256,7 @@ TEST(Export, CorruptStreamsNameTheField) {
   expect_error("regs.hex", "00001800\n", "write enable");
   expect_error("regs.hex", read_text_file(dir / "regs.hex") + "87FF0000\n", "unknown register address");
   expect_error("pix_val.hex", "FFFF0000\n", "beyond the vignetting memory");
+  expect_error("regs.hex", read_text_file(dir / "regs.hex") + "FE000002\n", "read-only");
   EXPECT_NO_THROW(import_chip(dir));
   std::filesystem::remove_all(dir);
 }

@@ -16,7 +16,15 @@ namespace omma::hw {
 
 std::vector<uint16_t> frame_to_rgb565(const cv::Mat& frame) {
   cv::Mat f = frame;
-  if (f.depth() == CV_16U) f.convertTo(f, CV_8U, 1.0 / 256);  // the 8 MSBs (§5.2)
+  if (f.depth() == CV_16U) {  // the 8 most significant bits (§5.2): v >> 8, truncation
+    const cv::Mat src = f.isContinuous() ? f : f.clone();
+    cv::Mat out(f.size(), CV_8UC(f.channels()));
+    const size_t n = src.total() * src.channels();
+    const uint16_t* s = src.ptr<uint16_t>();
+    uint8_t* d = out.ptr<uint8_t>();
+    for (size_t i = 0; i < n; ++i) d[i] = static_cast<uint8_t>(s[i] >> 8);
+    f = out;
+  }
   if (f.depth() != CV_8U) throw std::invalid_argument("frames must be 8- or 16-bit");
   if (f.channels() == 1) cv::cvtColor(f, f, cv::COLOR_GRAY2BGR);
   if (f.channels() != 3) throw std::invalid_argument("frames must have 1 or 3 channels");

@@ -40,7 +40,7 @@ const std::vector<cv::Mat>& colon_frames() {
     sim::SimulateOptions opt;
     opt.truth = false;
     opt.progress = false;
-    opt.effects.supersample = 2;
+    opt.effects.supersample = 1;  // sensor noise, vignetting and gains kept; no optical blur
     const auto scene = sim::make_colon_scene();
     const sim::SimulateResult r = sim::simulate(rig24(), *scene, opt);
     std::vector<cv::Mat> out;
@@ -64,30 +64,18 @@ double hw_vs_float(const std::vector<cv::Mat>& frames, const PanoGrid& grid, pan
   return pano::psnr_db(r.pano, ref);
 }
 
-struct Case {
-  const char* scene;
-  Projection projection;
-  int w, h;
-};
-
-class HwVsFloat : public ::testing::TestWithParam<Case> {};
-
-TEST_P(HwVsFloat, AtLeast45dBForEveryMethod) {
-  const Case c = GetParam();
-  const auto& frames = std::string(c.scene) == "colon" ? colon_frames() : louvre_frames();
-  for (pano::Method m : {pano::Method::kNearest, pano::Method::kLinear, pano::Method::kMrf}) {
-    const double psnr = hw_vs_float(frames, {c.projection, c.w, c.h}, m);
-    EXPECT_GE(psnr, 45.0) << c.scene << " " << to_string(c.projection) << " " << pano::to_string(m);
-    EXPECT_LT(psnr, 200.0);  // not bit-identical to a float pipeline: the test sees the rounding
-    std::printf("%s %s %s: %.2f dB\n", c.scene, to_string(c.projection).c_str(), pano::to_string(m).c_str(), psnr);
-  }
+void expect_45db_everywhere(const std::vector<cv::Mat>& frames, const char* scene) {
+  for (const PanoGrid grid : {PanoGrid{Projection::kVr180, 360, 360}, PanoGrid{Projection::kEquirect, 720, 180}})
+    for (pano::Method m : {pano::Method::kNearest, pano::Method::kLinear, pano::Method::kMrf}) {
+      const double psnr = hw_vs_float(frames, grid, m);
+      EXPECT_GE(psnr, 45.0) << scene << " " << to_string(grid.projection) << " " << pano::to_string(m);
+      EXPECT_LT(psnr, 200.0);  // not bit-identical to a float pipeline: the test sees the rounding
+      std::printf("%s %s %s: %.2f dB\n", scene, to_string(grid.projection).c_str(), pano::to_string(m).c_str(), psnr);
+    }
 }
 
-INSTANTIATE_TEST_SUITE_P(Scenes, HwVsFloat,
-                         ::testing::Values(Case{"colon", Projection::kVr180, 360, 360},
-                                           Case{"colon", Projection::kEquirect, 720, 180},
-                                           Case{"louvre", Projection::kVr180, 360, 360},
-                                           Case{"louvre", Projection::kEquirect, 720, 180}));
+TEST(HwVsFloat, ColonBothProjectionsEveryMethod) { expect_45db_everywhere(colon_frames(), "colon"); }
+TEST(HwVsFloat, LouvreBothProjectionsEveryMethod) { expect_45db_everywhere(louvre_frames(), "louvre"); }
 
 TEST(Pipeline, CoarseWidthsCostPsnr) {
   // The test can fail: the thesis's 13-bit angle with integer steps puts the samples in the wrong

@@ -10,7 +10,7 @@ namespace {
 
 enum GlobalId {
   kRowCnt, kColCnt, kMaxPhi, kKPhi, kMaxTheta, kMinTheta, kKTheta, kMinPhi, kFrameWidth, kFrameHeight,
-  kAxes, kCs, kVigShift, kColorSource, kMethod, kBoundary, kCameraSelect, kVigSelect, kNumGlobals
+  kAxes, kCs, kVigShift, kColorSource, kMethod, kBoundary, kCameraSelect, kVigSelect, kVersion, kNumGlobals
 };
 
 bool is_angle(int id) {
@@ -44,6 +44,7 @@ const std::vector<GlobalRegister>& global_registers() {
       {"boundary_ctrl", 0x7600, 9, 0, true, "bit 8: boundary unit enable; [7:0] threshold th_ob (8-bit gray)"},
       {"camera_select", 0x7800, 5, 0x1, false, "single camera output select"},
       {"vig_mem_select", 0x7C00, 1, 0x0, false, "vignetting memory: 0 ROM (power-up defaults), 1 SP SRAM"},
+      {"hw_version", 0x7E00, 16, kHwVersion, true, "read-only: version of the model's contract (docs/hw-model.md)", true},
   };
   return regs;
 }
@@ -133,7 +134,7 @@ WordStreams encode(const HwConfig& cfg, const ChipConfig& chip) {
   const auto& g = global_registers();
   auto put = [&](uint32_t addr, uint32_t data) { s.reg.push_back(0x80000000u | (addr << 16) | (data & 0xFFFF)); };
   for (int id = 0; id < kNumGlobals; ++id) {
-    if (id == kCs) continue;  // enable last
+    if (id == kCs || g[id].read_only) continue;  // enable last; read-only registers are never written
     const int bits = reg_bits(cfg, id);
     if (bits < 32 && v[id] >= (uint32_t{1} << bits))
       throw std::invalid_argument(fmt::format("register {} = {} does not fit {} bits", g[id].name, v[id], bits));
@@ -169,6 +170,12 @@ ChipConfig decode(const HwConfig& cfg, const WordStreams& s) {
   std::array<uint32_t, kNumGlobals> v{};
   for (int id = 0; id < kNumGlobals; ++id) {
     const int bits = reg_bits(cfg, id);
+    if (g[id].read_only) {
+      if (regs.count(g[id].address))
+        throw std::invalid_argument(fmt::format("reg stream: register {} (0x{:04X}) is read-only", g[id].name,
+                                                g[id].address));
+      continue;
+    }
     auto it = regs.find(g[id].address);
     if (it == regs.end())
       throw std::invalid_argument(fmt::format("reg stream: register {} (0x{:04X}) is never written", g[id].name,

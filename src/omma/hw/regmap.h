@@ -28,7 +28,10 @@ struct GlobalRegister {
   uint32_t thesis_default;  // Table 6.7 default (0 where the thesis gives none / ext registers)
   bool extension;        // not in Table 6.7
   const char* description;
+  bool read_only = false;  // the chip's own value; a write is an error (decode refuses it)
 };
+// Value of the read-only hw_version register: the version of docs/hw-model.md's contract.
+inline constexpr uint32_t kHwVersion = 1;
 
 // The global registers, in address order. Angle registers have `bits` = 13 here (Table 6.7); the
 // export uses cfg.angle_bits.

@@ -103,20 +103,25 @@ SweepResult run_sweep(const Rig& rig, const std::vector<cv::Mat>& frames, const 
       r.points.push_back(pt);
     }
   }
-  // Smallest set: each parameter at its smallest value meeting the target alone, then raise the
-  // parameter with the largest single-step gain until the combination meets it too.
+  // Smallest set. Errors of independent widths add as noise powers: with MSE_base the base
+  // configuration's and MSE_target the target's, each of the n parameters may add at most
+  // (MSE_target - MSE_base) / n. Take each parameter's smallest value within its share, then raise
+  // the parameter with the largest single-step gain until the combination meets the target.
+  auto mse = [](double db) { return std::pow(10.0, -db / 10); };
+  const double share = (mse(o.target_db) - mse(r.base_psnr_db)) / std::max<size_t>(1, o.params.size());
   HwConfig m = o.base;
   for (const SweepParam& p : o.params) {
-    int best = get_param(o.base, p.name);
-    for (const auto& pt : r.points)
-      if (pt.param == p.name && pt.valid && pt.psnr_db >= o.target_db) {
-        best = std::min(best, pt.value);
-      }
+    int best = get_param(o.base, p.name), alone = best;
+    for (const auto& pt : r.points) {
+      if (pt.param != p.name || !pt.valid) continue;
+      if (pt.psnr_db >= o.target_db) alone = std::min(alone, pt.value);
+      if (mse(pt.psnr_db) - mse(r.base_psnr_db) <= share) best = std::min(best, pt.value);
+    }
     m = with_param(m, p.name, best);
-    r.minimal_steps.push_back(fmt::format("{}: smallest alone {}", p.name, best));
+    r.minimal_steps.push_back(fmt::format("{}: smallest alone {}, within its share {}", p.name, alone, best));
   }
   double psnr = eval(m, "minimal set");
-  for (int iter = 0; iter < 16 && psnr < o.target_db; ++iter) {
+  for (int iter = 0; iter < 32 && psnr < o.target_db; ++iter) {
     double best_gain = -1e9;
     std::string best_name;
     HwConfig best_cfg = m;
@@ -136,6 +141,28 @@ SweepResult run_sweep(const Rig& rig, const std::vector<cv::Mat>& frames, const 
     m = best_cfg;
     psnr += best_gain;
     r.minimal_steps.push_back(fmt::format("raised {} to {}: {:.2f} dB", best_name, get_param(m, best_name), psnr));
+  }
+  // Then lower one width at a time (the one whose step down costs least) while the target holds.
+  for (int iter = 0; iter < 64 && psnr >= o.target_db; ++iter) {
+    double best_q = -1;
+    std::string best_name;
+    HwConfig best_cfg = m;
+    for (const SweepParam& p : o.params) {
+      const int cur = get_param(m, p.name);
+      auto it = std::lower_bound(p.values.begin(), p.values.end(), cur);
+      if (it == p.values.begin()) continue;
+      HwConfig c = with_param(m, p.name, *std::prev(it));
+      try {
+        c.Check();
+        const double q = eval(c, fmt::format("minimal set, {} = {}", p.name, *std::prev(it)));
+        if (q >= o.target_db && q > best_q) best_q = q, best_name = p.name, best_cfg = c;
+      } catch (const std::invalid_argument&) {
+      }
+    }
+    if (best_name.empty()) break;
+    m = best_cfg;
+    psnr = best_q;
+    r.minimal_steps.push_back(fmt::format("lowered {} to {}: {:.2f} dB", best_name, get_param(m, best_name), psnr));
   }
   r.minimal = m;
   r.minimal_psnr_db = psnr;
