@@ -46,7 +46,7 @@ module config_regs
     output logic                            vig_we,
     output logic [CAMB+VIGA-1:0]            vig_waddr,
     output logic [15:0]                     vig_wdata,
-    output logic [16*3*NCAM-1:0]            vig_channel,
+    output logic [16*3*NCAM-1:0]            vig_channel,  // (camera, R/G/B) gains, uQ2.14
     // register arrays, camera-major: camera i's words at [16*WORDS*i +: 16*WORDS]
     output logic [16*PIX_POS_WORDS*NCAM-1:0]    pp_flat,
     output logic [16*CAM_SEARCH_WORDS*NCAM-1:0] cs_flat,
@@ -57,6 +57,8 @@ module config_regs
     output logic [31:0]                     words_taken
 );
   localparam int NG = 18;
+  localparam int CB = (NCAM > 1) ? $clog2(NCAM) : 1;                           // camera select bits used
+  localparam int PWB = $clog2(PIX_POS_WORDS), CWB = $clog2(CAM_SEARCH_WORDS);  // array select bits used
   // the global registers (regmap.cc global_registers order)
   function automatic int gaddr(input int i);
     case (i)
@@ -104,6 +106,24 @@ module config_regs
   endfunction
 
   logic [31:0] g[NG];
+  // the register arrays, one 16-bit word per (camera, array word): a write enables one word
+  logic [15:0] pp_r[NCAM][PIX_POS_WORDS];
+  logic [15:0] cs_r[NCAM][CAM_SEARCH_WORDS];
+  logic [15:0] vg_r[NCAM][3];  // channel gains R, G, B
+  genvar gc, gw;
+  generate
+    for (gc = 0; gc < NCAM; gc++) begin : g_cam
+      for (gw = 0; gw < PIX_POS_WORDS; gw++) begin : g_pp
+        assign pp_flat[16*(PIX_POS_WORDS*gc+gw)+:16] = pp_r[gc][gw];
+      end
+      for (gw = 0; gw < CAM_SEARCH_WORDS; gw++) begin : g_cs
+        assign cs_flat[16*(CAM_SEARCH_WORDS*gc+gw)+:16] = cs_r[gc][gw];
+      end
+      for (gw = 0; gw < 3; gw++) begin : g_vg
+        assign vig_channel[16*(3*gc+gw)+:16] = vg_r[gc][gw];
+      end
+    end
+  endgenerate
   logic [31:0] n_reg, n_pp, n_cs, n_pv;
 
   // decode of a reg-channel word: which register, which half, and whether the value fits
@@ -158,9 +178,12 @@ module config_regs
       for (int i = 0; i < NG; i++) g[i] <= '0;
       vig_waddr <= '0;
       vig_wdata <= '0;
-      vig_channel <= '0;
-      pp_flat <= '0;
-      cs_flat <= '0;
+      for (int c = 0; c < NCAM; c++)
+        for (int k = 0; k < 3; k++) vg_r[c][k] <= '0;
+      for (int c = 0; c < NCAM; c++) begin
+        for (int w = 0; w < PIX_POS_WORDS; w++) pp_r[c][w] <= '0;
+        for (int w = 0; w < CAM_SEARCH_WORDS; w++) cs_r[c][w] <= '0;
+      end
       cfg_err <= 1'b0;
       err_code <= '0;
       err_chan <= '0;
@@ -184,12 +207,12 @@ module config_regs
       if (pp_valid) begin
         n_pp <= n_pp + 1;
         if (pp_code != 0) flag(pp_code, 2'd1, n_pp);
-        else pp_flat[16*(PIX_POS_WORDS*32'(pp_word[20:16])+32'(pp_word[24:21]))+:16] <= pp_word[15:0];
+        else pp_r[pp_word[16+:CB]][pp_word[21+:PWB]] <= pp_word[15:0];
       end
       if (cs_valid) begin
         n_cs <= n_cs + 1;
         if (cs_code != 0) flag(cs_code, 2'd2, n_cs);
-        else cs_flat[16*(CAM_SEARCH_WORDS*32'(cs_word[20:16])+32'(cs_word[24:21]))+:16] <= cs_word[15:0];
+        else cs_r[cs_word[16+:CB]][cs_word[21+:CWB]] <= cs_word[15:0];
       end
       if (pv_valid) begin
         n_pv <= n_pv + 1;
@@ -202,8 +225,7 @@ module config_regs
             vig_wdata <= pv_word[15:0];
           end else if (32'(pv_word[30:18]) - (1 << (CAMB + VIGA - 2)) < NCAM && pv_word[17:16] != 2'd3) begin
             // channel gain at (1 << (CAMB+VIGA)) + 4 camera + channel
-            vig_channel[16*(3*(32'(pv_word[30:18]) - (1 << (CAMB + VIGA - 2))) + 32'(pv_word[17:16]))+:16] <=
-                pv_word[15:0];
+            vg_r[pv_word[18+:CB]][pv_word[17:16]] <= pv_word[15:0];
           end
         end
       end
