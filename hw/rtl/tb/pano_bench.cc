@@ -7,6 +7,7 @@
 //   omma_rtl_pano_bench [--scene colon|louvre] [--projection vr180|equirect] [--size WxH]
 //                       [--method nn|linear] [--boundary]
 #include <chrono>
+#include <ctime>
 #include <cstdio>
 #include <cstring>
 #include <iostream>
@@ -60,20 +61,21 @@ int main(int argc, char** argv) {
     chip.configure(exported_streams(rig24(), ExportOptions{cfg, grid, m, boundary, {}}));
     const double load_s = secs(t);
     t = clk::now();
+    const std::clock_t c0 = std::clock();
     const Chip::Run run = chip.run(grid.width, grid.height);
-    const double run_s = secs(t);
+    const double run_s = secs(t), run_cpu = double(std::clock() - c0) / CLOCKS_PER_SEC;
     const double px = double(grid.width) * grid.height;
     const int diff = differing_pixels(run.pano, ref.pano);
     std::printf(
         "{\"scene\": \"%s\", \"projection\": \"%s\", \"width\": %d, \"height\": %d, \"method\": \"%s\", "
         "\"boundary\": %s, \"pixels_out\": %llu, \"differing_pixels\": %d, \"cycles\": %llu, "
         "\"cycles_per_pixel\": %.4f, \"model_cycles\": %llu, \"model_cycles_per_pixel\": %.4f, "
-        "\"fps_at_120MHz\": %.2f, \"sim_run_seconds\": %.2f, \"sim_load_seconds\": %.2f, "
+        "\"fps_at_120MHz\": %.2f, \"sim_run_seconds\": %.2f, \"sim_run_cpu_seconds\": %.2f, \"sim_load_seconds\": %.2f, "
         "\"sim_cycles_per_second\": %.0f, \"model_seconds\": %.3f, \"config_error\": %s}\n",
         scene.c_str(), to_string(grid.projection).c_str(), grid.width, grid.height, method.c_str(),
         boundary ? "true" : "false", (unsigned long long)run.pixels, diff, (unsigned long long)run.cycles,
         run.cycles / px, (unsigned long long)ref.stats.cycles, ref.stats.cycles / px, 120e6 / run.cycles, run_s,
-        load_s, run.cycles / run_s, model_s, chip.top().cfg_err ? "true" : "false");
+        run_cpu, load_s, run.cycles / run_s, model_s, chip.top().cfg_err ? "true" : "false");
     return diff == 0 && run.pixels == uint64_t(px) ? 0 : 1;
   } catch (const std::exception& e) {
     std::cerr << "omma_rtl_pano_bench: error: " << e.what() << "\n";
