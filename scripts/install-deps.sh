@@ -1,13 +1,14 @@
 #!/usr/bin/env bash
 # Installs the Debian packages omma needs, only those missing. Uses sudo when not root.
-# --test also installs what only the tests use: Chromium, for the live-view test in a headless browser.
+# --test also installs what only the tests use: Chromium, for the live-view test in a headless browser;
+# Verilator, Yosys and Icarus Verilog for the RTL co-simulation and lint (hw/rtl, CMake OMMA_RTL).
 # Then the live view's npm packages (web/package-lock.json: the Pannellum viewer, embedded in the
 # binary at build time, and playwright-core, which drives Chromium in the viewer's test) with npm ci.
 set -euo pipefail
 pkgs=(cmake g++ ninja-build ccache pkg-config libopencv-dev libeigen3-dev libceres-dev libtbb-dev
       libcli11-dev nlohmann-json3-dev libspdlog-dev libfmt-dev libgtest-dev libgmock-dev
       libbenchmark-dev hugin-tools libcpp-httplib-dev)
-[ "${1:-}" = "--test" ] && pkgs+=(chromium)
+[ "${1:-}" = "--test" ] && pkgs+=(chromium verilator yosys iverilog)
 command -v npm >/dev/null || pkgs+=(nodejs npm)
 missing=()
 for p in "${pkgs[@]}"; do
