@@ -54,7 +54,7 @@ void add_run_command(CLI::App& root) {
       ->check(CLI::Range(0.0, 1e6));
   cmd->add_option("--source-fps", o.source_fps,
                   "Rate of image sequences, stills and pano: sources, frames/s (0: as fast as possible; default 30)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(CLI::Range(0.0, 1e6));
   cmd->add_option("--first-frame-timeout", o.first_timeout,
                   "A camera without a first frame after this many seconds is dropped (default 10)")
       ->check(CLI::Range(1e-3, 1e6));

@@ -3,6 +3,7 @@
 // names resolve against a folder that does not exist, so no image is read. Build and run with
 // fuzz/run.sh.
 #include <cstddef>
+#include <cmath>
 #include <cstdint>
 #include <cstdlib>
 #include <string>
@@ -13,10 +14,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string text(reinterpret_cast<const char*>(data), size);
   try {
     const omma::calib::PtoImportResult r = omma::calib::import_pto(text, "/nonexistent-omma-fuzz");
-    r.rig.validate();
-    // What was imported exports again (every converted number stays finite).
-    const omma::calib::PtoExportResult ex = omma::calib::export_pto(r.rig);
-    if (ex.text.empty()) abort();
+    r.rig.validate();  // what was imported is a valid rig
+    if (r.rig.cameras.empty() || !std::isfinite(r.max_fit_px)) abort();
   } catch (const omma::calib::PtoError&) {
   } catch (const omma::RigError&) {
   }

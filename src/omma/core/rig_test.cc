@@ -37,6 +37,14 @@ std::string expect_rig_error(const nlohmann::json& j) {
   return "";
 }
 
+// The RigError message for the two-camera rig's JSON after `edit`.
+template <class F>
+std::string with(F edit) {
+  nlohmann::json j = rig_to_json(two_camera_rig());
+  edit(j);
+  return expect_rig_error(j);
+}
+
 TEST(Rig, JsonRoundTripIsLossless) {
   const Rig rig = two_camera_rig();
   const Rig back = rig_from_json(rig_to_json(rig));
@@ -61,12 +69,6 @@ TEST(Rig, YawPitchRollInputMatchesVectors) {
 }
 
 TEST(Rig, RejectsBadInputWithClearMessages) {
-  const nlohmann::json good = rig_to_json(two_camera_rig());
-  auto with = [&](auto edit) {
-    nlohmann::json j = good;
-    edit(j);
-    return expect_rig_error(j);
-  };
   EXPECT_NE(with([](auto& j) { j["cameras"][0]["t"] = {0, 0, 2}; }).find("unit"), std::string::npos);
   EXPECT_NE(with([](auto& j) { j["cameras"][0]["u"] = j["cameras"][0]["t"]; }).find("orthogonal"),
             std::string::npos);
@@ -91,12 +93,6 @@ TEST(Rig, RejectsBadInputWithClearMessages) {
 // Issue 21, findings 2, 6, 9, 11: integers that wrap, tiny focal lengths, wrong types and versions,
 // camera counts. Each of these loaded before.
 TEST(Rig, RejectsOutOfRangeNumbersWrongTypesAndVersions) {
-  const nlohmann::json good = rig_to_json(two_camera_rig());
-  auto with = [&](auto edit) {
-    nlohmann::json j = good;
-    edit(j);
-    return expect_rig_error(j);
-  };
   auto has = [](const std::string& msg, const char* part) { return msg.find(part) != std::string::npos; };
   // 4294967546 = 2^32 + 250 used to become 250, 4294967297 -> 1, 4294967296 -> 0.
   EXPECT_TRUE(has(with([](auto& j) { j["cameras"][0]["intrinsics"]["width"] = 4294967546ull; }), "out of range"));
@@ -123,7 +119,7 @@ TEST(Rig, RejectsOutOfRangeNumbersWrongTypesAndVersions) {
   EXPECT_TRUE(has(with([](auto& j) { j["version"] = 99; }), "version 99 is not supported"));
   EXPECT_TRUE(has(with([](auto& j) { j["version"] = "1"; }), "'version' must be an integer"));
   // The accepted extremes still load.
-  nlohmann::json edge = good;
+  nlohmann::json edge = rig_to_json(two_camera_rig());
   edge["cameras"][0]["intrinsics"]["fu"] = 1.0;  // >= 1e-3 x 250 px
   edge.erase("version");
   EXPECT_NO_THROW(rig_from_json(edge));
