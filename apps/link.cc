@@ -75,11 +75,7 @@ void run_decode(const LinkArgs& a) {
   set_json_mode(a.json);
   a.cfg.validate();
   namespace fs = std::filesystem;
-  if (!fs::exists(a.in)) throw IoError("link file '" + a.in + "' does not exist");
-  if (fs::is_directory(a.in)) throw IoError("'" + a.in + "' is a folder, not a link file");
-  std::ifstream in(a.in, std::ios::binary);
-  if (!in) throw IoError("cannot open '" + a.in + "'");
-  const std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::vector<uint8_t> bytes = read_file(a.in, kMaxDataFileBytes, "link file");
   if (bytes.empty()) throw std::invalid_argument("link file '" + a.in + "' is empty");
   const fs::path prefix(a.out);
   if (prefix.has_parent_path() && !fs::is_directory(prefix.parent_path()))
@@ -122,7 +118,9 @@ void add_link_command(CLI::App& root) {
   e->add_option("IN", enc->in, "Raw frame PNG")->required();
   e->add_option("OUT", enc->out, "Bit stream file (.bin, written atomically)")->required();
   add_config_options(e, enc->cfg);
-  e->add_option("--frames", enc->repeat, "Send the frame this many times")->capture_default_str();
+  e->add_option("--frames", enc->repeat, "Send the frame this many times (1..100000)")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 100000));
   e->add_option("--flip-rate", enc->flip_rate, "Probability of flipping each line sample (channel errors)")
       ->capture_default_str();
   e->add_option("--drop-rate", enc->drop_rate, "Probability of losing each line sample")

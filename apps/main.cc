@@ -48,7 +48,12 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    // --help and --version (exit code 0) print as CLI11 does; every parse error (unknown or missing
+    // option, a value out of range or of the wrong type) is an error like any other: one
+    // "omma: error:" line and exit status 1, not CLI11's own codes (105, 106, 114, ...).
+    if (e.get_exit_code() == static_cast<int>(CLI::ExitCodes::Success)) return app.exit(e);
+    std::fprintf(stderr, "omma: error: %s\nRun with --help for more information.\n", e.what());
+    return 1;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "omma: error: %s\n", e.what());
     return 1;

@@ -55,7 +55,7 @@ void add_pto_command(CLI::App& root) {
   im->add_flag("--json", json_im, "Print one JSON object on stdout");
   im->callback([] {
     set_json_mode(json_im);
-    const std::string text = read_text_file(in_path);
+    const std::string text = read_text_file(in_path, kMaxTextFileBytes, "PTO file");
     const calib::PtoImportResult r = calib::import_pto(text, std::filesystem::path(in_path).parent_path());
     for (const auto& w : r.warnings) spdlog::warn("pto import: {}", w);
     save_rig(r.rig, out_rig);

@@ -72,16 +72,16 @@ void add_run_command(CLI::App& root) {
                   "(faster, smaller map; 0 = keep all; default 1/20 = 0.05)")
       ->check(CLI::Range(0.0, 0.49));
   cmd->add_option("--duration", o.duration, "Stop after S seconds (default: when every source has ended)")
-      ->check(CLI::NonNegativeNumber);
-  cmd->add_option("--frames", o.frames, "Stop after N panoramas (default: no limit)")->check(CLI::NonNegativeNumber);
+      ->check(CLI::Range(0.0, 1e7));
+  cmd->add_option("--frames", o.frames, "Stop after N panoramas (default: no limit)")->check(CLI::Range(0, INT32_MAX));
   cmd->add_option("--fps", o.fps, "Panorama rate, frames/s (0: whenever a camera has a new frame; default 30)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(CLI::Range(0.0, 1e6));
   cmd->add_option("--source-fps", o.source_fps,
                   "Rate of image sequences, stills and pano: sources, frames/s (0: as fast as possible; default 30)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(CLI::Range(0.0, 1e6));
   cmd->add_option("--first-frame-timeout", o.first_timeout,
                   "A camera without a first frame after this many seconds is dropped (default 10)")
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::Range(1e-3, 1e6));
   cmd->add_flag("--depth", o.depth,
                 "Depth-adaptive rendering (issue 14): the scene's depth estimated from the overlaps every\n"
                 "panorama on a coarse grid (sphere sweep, ZNCC, semi-global, temporal), each pixel's taps moved\n"
@@ -104,7 +104,7 @@ void add_run_command(CLI::App& root) {
                   "503 (default 8)")
       ->check(CLI::Range(1, 256));
   cmd->add_flag("--loop", o.loop, "Restart image sequences and video files at their end");
-  cmd->add_option("--threads", o.threads, "Renderer threads (0: all; default 0)")->check(CLI::NonNegativeNumber);
+  cmd->add_option("--threads", o.threads, "Renderer threads (0: all; default 0)")->check(CLI::Range(0, 1024));
   cmd->add_option("--cache", o.cache, "Map cache folder (default $OMMA_CACHE_DIR or ~/.cache/omma)");
   cmd->add_flag("--no-cache", o.no_cache, "Do not read or write the map cache");
   cmd->add_flag("--json", o.json, "Print only the JSON summary on stdout (no progress line)");

@@ -141,8 +141,6 @@ void run_stitch(const StitchArgs& a) {
     grid.width = s.width;
     grid.height = s.height;
   }
-  if (grid.width <= 0 || grid.height <= 0 || grid.width > 16384 || grid.height > 16384)
-    throw std::invalid_argument(fmt::format("--size {}x{} out of range (1..16384)", grid.width, grid.height));
   if (a.threshold < 0 || a.threshold > 1) throw std::invalid_argument("--threshold must be in [0, 1]");
   const Rig rig = load_rig(a.rig);
   if (rig.cameras.empty()) throw std::invalid_argument("rig " + a.rig + " has no cameras");

@@ -1,8 +1,12 @@
 #!/usr/bin/env bash
-# Install what is missing, build everything, run the whole test suite with CTest.
+# Install what is missing, build everything, run the whole test suite with CTest; then the
+# sanitizer stage: a second build (./build-asan, AddressSanitizer + UndefinedBehaviorSanitizer,
+# every report fatal) of the library stages and the tests listed in scripts/asan-tests.txt, run
+# with CTest. OMMA_SANITIZE=0 skips the sanitizer stage. Extra arguments go to the first ctest.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/install-deps.sh --test
 scripts/build.sh
-cd build
-ctest --output-on-failure -j"$(nproc)" --timeout 600 "$@"
+(cd build && ctest --output-on-failure -j"$(nproc)" --timeout 600 "$@")
+[ "${OMMA_SANITIZE:-1}" = 0 ] && exit 0
+scripts/test-asan.sh

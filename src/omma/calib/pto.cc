@@ -1,6 +1,8 @@
 #include "omma/calib/pto.h"
 
+#include <charconv>
 #include <cmath>
+#include <cstdint>
 #include <map>
 #include <sstream>
 
@@ -9,6 +11,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "omma/core/frames.h"
+#include "omma/core/limits.h"
 
 namespace omma::calib {
 namespace fs = std::filesystem;
@@ -86,6 +89,24 @@ double pt_rho(double fpt, double r0, double a, double b, double c, double rr) {
 }
 
 std::string fmt_num(double x) { return fmt::format("{:.12g}", x); }
+
+// The one reader of numbers in PTO text: the whole token must be a finite number ("12abc", "nan",
+// "inf", "" and 1e999 are errors).
+double parse_number(const std::string& s, const std::string& where) {
+  double v = 0;
+  const char* end = s.data() + s.size();
+  const auto r = std::from_chars(s.data(), end, v);
+  if (s.empty() || r.ec != std::errc() || r.ptr != end || !std::isfinite(v))
+    throw PtoError(fmt::format("{}: '{}' is not a finite number", where, s));
+  return v;
+}
+// An integral number in [lo, hi] (also written as 250.0).
+int parse_int(const std::string& s, const std::string& where, int lo, int hi) {
+  const double v = parse_number(s, where);
+  if (v != std::floor(v) || v < lo || v > hi)
+    throw PtoError(fmt::format("{}: '{}' is not an integer in [{}, {}]", where, s, lo, hi));
+  return static_cast<int>(v);
+}
 
 }  // namespace
 
@@ -213,7 +234,7 @@ PtoExportResult export_pto(const Rig& rig, const PtoExportOptions& opt) {
   const int pw = opt.pano_width, ph = opt.pano_width / 2;
   os << "# hugin project file written by omma (pto.h documents the convention mapping)\n";
   os << "#-omma rig name " << std::quoted(rig.name) << " radius_mm " << fmt_num(rig.dome.radius_mm)
-     << " sphere " << (rig.dome.sphere ? 1 : 0) << "\n";
+     << " sphere " << (rig.dome.sphere ? 1 : 0) << " cameras " << rig.cameras.size() << "\n";
   os << "p f2 w" << pw << " h" << ph << " v360 E0 R0";
   if (opt.crop_to_dome && !rig.dome.sphere) os << " S0," << pw << ",0," << ph / 2;
   os << " n\"PNG\"\n";
@@ -258,6 +279,7 @@ std::map<std::string, std::string> parse_tokens(const std::string& line) {
     if (line[i] == 'n' && i + 1 < line.size() && line[i + 1] == '"') {
       const size_t end = line.find('"', i + 2);
       kv["n"] = line.substr(i + 2, end == std::string::npos ? std::string::npos : end - i - 2);
+      if (end == std::string::npos) kv["_unterminated"] = "1";
       i = end == std::string::npos ? line.size() : end + 1;
       continue;
     }
@@ -266,6 +288,7 @@ std::map<std::string, std::string> parse_tokens(const std::string& line) {
     size_t k = j;
     while (k < line.size() && !std::isspace(static_cast<unsigned char>(line[k]))) ++k;
     kv[line.substr(i, j - i)] = line.substr(j, k - j);
+    if (line.compare(i, j - i, "n") == 0) kv["_unterminated"] = "1";  // n without its quoted name
     i = k;
   }
   return kv;
@@ -281,19 +304,23 @@ PtoImportResult import_pto(const std::string& text, const fs::path& base_dir) {
   std::vector<std::map<std::string, std::string>> images;
   std::vector<std::map<std::string, std::string>> extras;  // #-omma camera lines, by position
   std::map<std::string, std::string> pending;
-  int line_no = 0;
+  int line_no = 0, expected_images = 0;
   while (std::getline(is, line)) {
     ++line_no;
     if (!line.empty() && line.back() == '\r') line.pop_back();
+    const std::string where = fmt::format("PTO line {}", line_no);
     if (line.rfind("#-omma rig", 0) == 0) {
       std::istringstream ls(line.substr(10));
-      std::string key;
+      std::string key, v;
       while (ls >> key) {
         if (key == "name") ls >> std::quoted(res.rig.name);
-        else if (key == "radius_mm") ls >> res.rig.dome.radius_mm;
-        else if (key == "sphere") { int s; ls >> s; res.rig.dome.sphere = s != 0; }
+        else if (key == "radius_mm" && ls >> v) res.rig.dome.radius_mm = parse_number(v, where + " radius_mm");
+        else if (key == "sphere" && ls >> v) res.rig.dome.sphere = parse_int(v, where + " sphere", 0, 1) != 0;
+        else if (key == "cameras" && ls >> v) expected_images = parse_int(v, where + " cameras", 1, kMaxCameras);
       }
     } else if (line.rfind("#-omma camera", 0) == 0) {
+      if (pending.count("_valid"))
+        throw PtoError(where + ": two '#-omma camera' lines without an image line between them");
       std::istringstream ls(line.substr(13));
       std::string key, val;
       pending.clear();
@@ -304,37 +331,51 @@ PtoImportResult import_pto(const std::string& text, const fs::path& base_dir) {
         pending[key] = rest;
       }
       pending["_valid"] = "1";
-    } else if (!line.empty() && (line[0] == 'i' || line[0] == 'o') && line.size() > 1 && line[1] == ' ') {
+    } else if (!line.empty() && (line[0] == 'i' || line[0] == 'o') &&
+               (line.size() == 1 || std::isspace(static_cast<unsigned char>(line[1])))) {
       auto kv = parse_tokens(line);
       kv["_line"] = std::to_string(line_no);
+      // Hugin writes every parameter; a line without these is cut short or not a project.
+      for (const char* key : {"f", "v", "y", "p", "r", "n"})
+        if (!kv.count(key))
+          throw PtoError(fmt::format("{}: image line without its '{}' parameter (a truncated or damaged project?)",
+                                     where, key));
+      if (kv.count("_unterminated"))
+        throw PtoError(where + ": image name n\"... is not terminated (a truncated or damaged project?)");
+      if (images.size() >= size_t(kMaxCameras))
+        throw PtoError(fmt::format("PTO file has more than {} images (the rig limit)", kMaxCameras));
       images.push_back(kv);
       extras.push_back(pending);
       pending.clear();
     }
   }
   if (images.empty()) throw PtoError("PTO file has no image lines ('i ...'): nothing to import");
+  if (pending.count("_valid"))
+    throw PtoError("PTO file ends after an '#-omma camera' line without its image line (truncated?)");
+  if (expected_images > 0 && size_t(expected_images) != images.size())
+    throw PtoError(fmt::format("PTO file has {} image lines, its '#-omma rig' line says {} (truncated?)",
+                               images.size(), expected_images));
   auto value = [&](size_t idx, const std::string& key, double def) -> double {
     for (int depth = 0; depth < 64; ++depth) {
       auto it = images[idx].find(key);
-      if (it == images[idx].end() || it->second.empty()) return def;
+      if (it == images[idx].end()) return def;
       const std::string& s = it->second;
+      if (s.empty())
+        throw PtoError(fmt::format("PTO image {} (line {}): parameter {} has no value", idx, images[idx]["_line"], key));
       if (s[0] == '=') {  // linked to another image's value
-        const size_t ref = std::stoul(s.substr(1));
+        const size_t ref = size_t(parse_int(s.substr(1), fmt::format("PTO image {} parameter {} link", idx, key), 0,
+                                            kMaxCameras));
         if (ref >= images.size())
           throw PtoError(fmt::format("PTO image {}: parameter {} links to missing image {}", idx, key, ref));
         idx = ref;
         continue;
       }
-      try {
-        return std::stod(s);
-      } catch (const std::exception&) {
-        throw PtoError(fmt::format("PTO image {} (line {}): bad value '{}' for {}", idx, images[idx]["_line"], s, key));
-      }
+      return parse_number(s, fmt::format("PTO image {} (line {}) parameter {}", idx, images[idx]["_line"], key));
     }
     throw PtoError("PTO: circular parameter links");
   };
   for (size_t i = 0; i < images.size(); ++i) {
-    const int lens = static_cast<int>(value(i, "f", 0));
+    const double lens = value(i, "f", 0);
     if (lens != 0)
       throw PtoError(fmt::format(
           "PTO image {} (line {}): lens type f{} is not supported (only f0, rectilinear, matches omma's pinhole "
@@ -342,8 +383,17 @@ PtoImportResult import_pto(const std::string& text, const fs::path& base_dir) {
           i, images[i]["_line"], lens));
     PtoCamera p;
     p.image = images[i].count("n") ? images[i]["n"] : "";
-    p.width = static_cast<int>(value(i, "w", 0));
-    p.height = static_cast<int>(value(i, "h", 0));
+    const double w = value(i, "w", 0), h = value(i, "h", 0);
+    if (w != 0 || h != 0) {  // 0 or absent: the image file's size
+      if (w != std::floor(w) || h != std::floor(h))
+        throw PtoError(fmt::format("PTO image {} (line {}): size w{} h{} is not whole pixels", i, images[i]["_line"], w, h));
+      try {
+        check_image_size(int64_t(std::clamp(w, -1.0, 1e9)), int64_t(std::clamp(h, -1.0, 1e9)), "image size");
+      } catch (const std::invalid_argument& e) {
+        throw PtoError(fmt::format("PTO image {} (line {}): {}", i, images[i]["_line"], e.what()));
+      }
+      p.width = int(w), p.height = int(h);
+    }
     const fs::path img_path = p.image.empty() ? fs::path() : (fs::path(p.image).is_absolute() ? fs::path(p.image) : base_dir / p.image);
     const bool exists = !p.image.empty() && fs::exists(img_path);
     if (p.width <= 0 || p.height <= 0) {
@@ -374,21 +424,28 @@ PtoImportResult import_pto(const std::string& text, const fs::path& base_dir) {
     const auto& ex = extras[i];
     if (ex.count("_valid")) {
       // omma's own export: restore what PTO does not hold, exactly.
-      if (ex.count("id")) cam.id = std::stoi(ex.at("id"));
-      if (ex.count("position_mm")) {
-        std::istringstream ps(ex.at("position_mm"));
-        ps >> cam.position_mm.x() >> cam.position_mm.y() >> cam.position_mm.z();
+      const std::string ew = fmt::format("PTO image {}: '#-omma camera' field", i);
+      auto numbers = [&](const std::string& key, double* out, int n) {
+        std::istringstream vs(ex.at(key));
+        std::string v;
+        for (int c = 0; c < n; ++c) out[c] = parse_number(vs >> v ? v : std::string(), ew + " " + key);
+      };
+      if (ex.count("id")) cam.id = parse_int(ex.at("id"), ew + " id", 0, INT32_MAX);
+      if (ex.count("position_mm")) numbers("position_mm", cam.position_mm.data(), 3);
+      if (ex.count("aov_deg")) {
+        double aov = 0;
+        numbers("aov_deg", &aov, 1);
+        cam.in.aov = deg2rad(aov);
       }
-      if (ex.count("aov_deg")) cam.in.aov = deg2rad(std::stod(ex.at("aov_deg")));
       // The lens as written, if PTO's lens values are still the ones the export wrote (untouched
       // by Hugin): then k and f come back exactly; otherwise the fitted values stand.
       if (ex.count("k") && ex.count("f")) {
-        std::istringstream ks(ex.at("k"));
         std::array<double, 5> k{};
-        for (double& x : k) ks >> x;
+        numbers("k", k.data(), 5);
         RigCamera orig = cam;
         orig.in.k = k;
-        orig.in.fu = orig.in.fv = std::stod(ex.at("f"));
+        numbers("f", &orig.in.fu, 1);
+        orig.in.fv = orig.in.fu;
         const PtoCamera again = pto_from_camera(orig);
         if (std::abs(again.hfov_deg - p.hfov_deg) < 1e-9 && std::abs(again.a - p.a) < 1e-9 &&
             std::abs(again.b - p.b) < 1e-9 && std::abs(again.c - p.c) < 1e-9) {
@@ -397,7 +454,9 @@ PtoImportResult import_pto(const std::string& text, const fs::path& base_dir) {
         }
       }
       if (ex.count("fv_over_fu")) {
-        const double ratio = std::stod(ex.at("fv_over_fu"));
+        double ratio = 0;
+        numbers("fv_over_fu", &ratio, 1);
+        if (!(ratio > 0)) throw PtoError(ew + " fv_over_fu must be positive");
         const double f = cam.in.fu;
         cam.in.fu = f / std::sqrt(ratio);
         cam.in.fv = f * std::sqrt(ratio);

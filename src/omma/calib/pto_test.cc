@@ -116,6 +116,54 @@ TEST(Pto, UnsupportedLensAndMissingImagesFail) {
   EXPECT_FALSE(warn.warnings.empty());
 }
 
+// Issue 21, finding 7: malformed numbers, bare image lines and truncated projects used to import
+// (y=nan as yaw 0, a bare 'i' line skipped, a cut project as 6 or 12 of 24 cameras).
+TEST(Pto, MalformedAndTruncatedProjectsAreRefused) {
+  const std::string line = "i w250 h250 f0 v60 y10 p20 r0 n\"cam_00.png\"\n";
+  EXPECT_EQ(import_pto(line).rig.cameras.size(), 1u);
+  auto refused = [](const std::string& text) {
+    try {
+      const PtoImportResult r = import_pto(text);
+      ADD_FAILURE() << "imported " << r.rig.cameras.size() << " cameras from:\n" << text;
+    } catch (const PtoError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  for (const char* bad : {"y=nan", "ynan", "yinf", "y1e999", "y12abc", "y", "y=7", "w1e10", "w250.5", "h-3",
+                          "f1e300", "v"}) {
+    std::string text = line;
+    const std::string key(1, bad[0]);
+    const size_t at = text.find(" " + key) + 1;
+    text.replace(at, text.find(' ', at) - at, bad);
+    EXPECT_FALSE(refused(text).empty()) << bad;
+  }
+  EXPECT_NE(refused(line + "i\n").find("line 2"), std::string::npos);
+  EXPECT_NE(refused(line + "i \n" + line).find("line 2"), std::string::npos);
+  // Cut anywhere, our export either imports every camera or is refused.
+  const Rig rig = perturbed_k1_rig();
+  const std::string text = export_pto(rig).text;
+  const size_t last_line = text.rfind('\n', text.size() - 2) + 1;
+  int refusals = 0;
+  for (size_t cut = 1; cut <= text.size(); cut += (cut < last_line ? 7 : 1)) {
+    try {
+      EXPECT_EQ(import_pto(text.substr(0, cut)).rig.cameras.size(), rig.cameras.size()) << "cut at " << cut;
+    } catch (const PtoError&) {
+      ++refusals;
+      EXPECT_LT(cut + 1, text.size()) << "the whole project was refused";
+    }
+  }
+  EXPECT_GT(refusals, 100);
+  // Without omma's comment lines (a project written by Hugin), a cut inside an image line is found;
+  // a cut exactly between two image lines cannot be told from a smaller project.
+  const std::string hugin = strip_omma_comments(text);
+  for (size_t cut = hugin.find("\ni ") + 2; cut + 1 < hugin.size(); cut += 5)
+    if (hugin[cut - 1] != '\n' && hugin.substr(cut - 1, 2) != "\"\n") {
+      const std::string part = hugin.substr(0, cut);
+      EXPECT_THROW(import_pto(part), PtoError) << "cut at " << cut << ": ..." << part.substr(part.size() - 30);
+    }
+}
+
 // The real peer: nona renders our exported project; its panorama (mirrored, see pto.h) agrees
 // with the reference stitcher's nearest-neighbour panorama (omma stitch --method nn) on the
 // covered region. Frames: the calibration stage's small far-field renderer with a perturbed rig

@@ -5,6 +5,8 @@
 #include <cstdio>
 #include <stdexcept>
 
+#include "omma/core/limits.h"
+
 namespace omma {
 
 Projection parse_projection(const std::string& name) {
@@ -79,13 +81,24 @@ double PanoGrid::pixel_solid_angle(int col, int row) const {
 }
 
 Size2 parse_size(const std::string& text) {
-  Size2 s;
-  char x = 0;
-  char extra = 0;
-  if (std::sscanf(text.c_str(), "%d%c%d%c", &s.width, &x, &s.height, &extra) != 3 ||
-      (x != 'x' && x != 'X') || s.width <= 0 || s.height <= 0 || s.width > 65536 || s.height > 65536)
-    throw std::invalid_argument("size '" + text + "' must be WxH with positive integers, e.g. 1080x1080");
-  return s;
+  // W 'x' H, decimal digits only; the values are range-checked as 64-bit integers before narrowing.
+  auto bad = [&] {
+    return std::invalid_argument("size '" + text + "' must be WxH with positive integers, e.g. 1080x1080");
+  };
+  const size_t x = text.find_first_of("xX");
+  if (x == std::string::npos) throw bad();
+  auto number = [&](size_t from, size_t to) {
+    if (from == to || to - from > 9) throw bad();
+    int64_t v = 0;
+    for (size_t i = from; i < to; ++i) {
+      if (text[i] < '0' || text[i] > '9') throw bad();
+      v = v * 10 + (text[i] - '0');
+    }
+    return v;
+  };
+  const int64_t w = number(0, x), h = number(x + 1, text.size());
+  check_image_size(w, h, "size");
+  return Size2{int(w), int(h)};
 }
 
 }  // namespace omma

@@ -51,6 +51,14 @@ TEST(Grid, ParseSize) {
   EXPECT_THROW(parse_size("1920"), std::invalid_argument);
   EXPECT_THROW(parse_size("-3x4"), std::invalid_argument);
   EXPECT_THROW(parse_size("3x4junk"), std::invalid_argument);
+  // Bounded (core/limits.h): 16384 a side and 2^28 pixels; no wrap-around of huge numbers.
+  EXPECT_EQ(parse_size("16384x16384").width, 16384);
+  EXPECT_THROW(parse_size("65536x65536"), std::invalid_argument);
+  EXPECT_THROW(parse_size("16385x2"), std::invalid_argument);
+  EXPECT_THROW(parse_size("4294967546x250"), std::invalid_argument);
+  EXPECT_THROW(parse_size("0x250"), std::invalid_argument);
+  EXPECT_THROW(parse_size("x250"), std::invalid_argument);
+  EXPECT_THROW(parse_size("+3x4"), std::invalid_argument);
   EXPECT_THROW(parse_projection("fisheye"), std::invalid_argument);
 }
 

@@ -2,8 +2,8 @@
 
 #include <fstream>
 #include <random>
-#include <sstream>
 
+#include <fmt/format.h>
 #include <opencv2/imgcodecs.hpp>
 
 namespace omma {
@@ -64,12 +64,51 @@ void write_image(const fs::path& path, const cv::Mat& image) {
   });
 }
 
-std::string read_text_file(const fs::path& path) {
+namespace {
+
+// The checks of read_file; calls `sink(buffer, n)` for every chunk read.
+template <class Sink>
+void read_bounded(const fs::path& path, std::uintmax_t max_bytes, const std::string& what, Sink&& sink) {
+  std::error_code ec;
+  const fs::file_status st = fs::status(path, ec);
+  if (ec || st.type() == fs::file_type::not_found)
+    throw IoError(what + " '" + path.string() + "' does not exist");
+  if (st.type() == fs::file_type::directory) throw IoError("'" + path.string() + "' is a folder, not a " + what);
+  if (st.type() != fs::file_type::regular)
+    throw IoError(what + " '" + path.string() + "' is not a regular file (a device, FIFO or socket)");
+  const std::uintmax_t size = fs::file_size(path, ec);
+  auto too_large = [&](std::uintmax_t n) {
+    return IoError(fmt::format("{} '{}' is too large ({}{} bytes; the limit is {} bytes)", what, path.string(),
+                               n > max_bytes ? "" : "more than ", n, max_bytes));
+  };
+  if (!ec && size > max_bytes) throw too_large(size);
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw IoError("cannot open '" + path.string() + "'");
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
+  if (!in) throw IoError("cannot open " + what + " '" + path.string() + "'");
+  char buf[1 << 16];
+  std::uintmax_t total = 0;
+  while (in) {
+    in.read(buf, sizeof buf);
+    const std::streamsize n = in.gcount();
+    if (n <= 0) break;
+    total += std::uintmax_t(n);
+    if (total > max_bytes) throw too_large(max_bytes);
+    sink(buf, size_t(n));
+  }
+  if (in.bad()) throw IoError("cannot read " + what + " '" + path.string() + "'");
+}
+
+}  // namespace
+
+std::vector<uint8_t> read_file(const fs::path& path, std::uintmax_t max_bytes, const std::string& what) {
+  std::vector<uint8_t> out;
+  read_bounded(path, max_bytes, what, [&](const char* b, size_t n) { out.insert(out.end(), b, b + n); });
+  return out;
+}
+
+std::string read_text_file(const fs::path& path, std::uintmax_t max_bytes, const std::string& what) {
+  std::string out;
+  read_bounded(path, max_bytes, what, [&](const char* b, size_t n) { out.append(b, n); });
+  return out;
 }
 
 }  // namespace omma

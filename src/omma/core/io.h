@@ -1,10 +1,12 @@
 // File helpers: atomic writes (never leave a half-written output), image I/O with clear errors.
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
 #include <functional>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include <opencv2/core.hpp>
 
@@ -27,6 +29,19 @@ cv::Mat read_image(const std::filesystem::path& path, int flags = -1 /*cv::IMREA
 // Writes an image atomically; the format comes from the extension. Throws IoError on failure.
 void write_image(const std::filesystem::path& path, const cv::Mat& image);
 
-std::string read_text_file(const std::filesystem::path& path);
+// Upper bounds on the files omma reads whole (a rig of kMaxCameras cameras is about 3 MB; Hugin
+// projects with 10^5 control points about 8 MB; a compiled map of a 16384 x 16384 panorama a few GB).
+inline constexpr std::uintmax_t kMaxTextFileBytes = std::uintmax_t(64) << 20;  // rig JSON, PTO
+inline constexpr std::uintmax_t kMaxDataFileBytes = std::uintmax_t(8) << 30;   // link streams, maps
+
+// Reads a whole file of at most max_bytes. Refuses, before reading anything, a path that is missing
+// or is not a regular file (a folder, a device such as /dev/zero, a FIFO or socket; symbolic links
+// are followed) and a file larger than max_bytes; a file that grows while it is read is cut off at
+// max_bytes + 1 and refused. Throws IoError naming `what` (e.g. "rig file") and the path.
+std::vector<uint8_t> read_file(const std::filesystem::path& path, std::uintmax_t max_bytes,
+                               const std::string& what = "file");
+// read_file as text.
+std::string read_text_file(const std::filesystem::path& path, std::uintmax_t max_bytes = kMaxTextFileBytes,
+                           const std::string& what = "file");
 
 }  // namespace omma

@@ -1,19 +1,25 @@
 #include "omma/core/rig.h"
 
 #include <cmath>
+#include <cstdint>
+#include <unordered_set>
+
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include "omma/core/io.h"
+#include "omma/core/limits.h"
 
 namespace omma {
 namespace {
 
 using nlohmann::json;
 
+constexpr int kRigFormatVersion = 1;  // "version" of the rig files this omma reads and writes
+
 std::string cam_name(const json& jc, size_t index) {
   if (jc.is_object() && jc.contains("id") && jc["id"].is_number_integer())
-    return fmt::format("camera {} (entry {})", jc["id"].get<int>(), index);
+    return fmt::format("camera {} (entry {})", jc["id"].dump(), index);
   return fmt::format("camera entry {}", index);
 }
 
@@ -30,6 +36,27 @@ double number(const json& obj, const std::string& key, const std::string& where)
   const double d = v.get<double>();
   if (!std::isfinite(d)) throw RigError(where + ": field '" + key + "' is not finite");
   return d;
+}
+
+// The one reader of JSON integers: any integer the file holds (also beyond 64 bits, which nlohmann
+// stores as a double and is_number_integer() refuses) is compared with [lo, hi] before narrowing.
+int64_t integer(const json& obj, const std::string& key, const std::string& where, int64_t lo, int64_t hi) {
+  const json& v = field(obj, key, where);
+  if (!v.is_number_integer()) throw RigError(where + ": field '" + key + "' must be an integer");
+  const bool in_range = v.is_number_unsigned() ? v.get<uint64_t>() <= uint64_t(std::max<int64_t>(hi, 0)) &&
+                                                     int64_t(v.get<uint64_t>()) >= lo
+                                               : v.get<int64_t>() >= lo && v.get<int64_t>() <= hi;
+  if (!in_range)
+    throw RigError(fmt::format("{}: field '{}' = {} is out of range ({}..{})", where, key, v.dump(), lo, hi));
+  return v.is_number_unsigned() ? int64_t(v.get<uint64_t>()) : v.get<int64_t>();
+}
+
+// An optional string field: absent gives `def`, any other type is an error.
+std::string text(const json& obj, const std::string& key, const std::string& where, const std::string& def = "") {
+  if (!obj.contains(key)) return def;
+  const json& v = obj[key];
+  if (!v.is_string()) throw RigError(where + ": field '" + key + "' must be a string");
+  return v.get<std::string>();
 }
 
 Vec3 vec3(const json& obj, const std::string& key, const std::string& where) {
@@ -64,35 +91,51 @@ void validate_camera(const RigCamera& c) {
                                e.max_dot));
   if (e.handedness_error > 10 * tol)
     throw RigError(where + ": frame must be right-handed (u x v = t)");
+  if (c.position_mm.cwiseAbs().maxCoeff() > kMaxPositionMm)
+    throw RigError(fmt::format("{}: position_mm is more than {} mm from the dome centre", where, kMaxPositionMm));
   const Intrinsics& in = c.in;
-  if (in.width <= 0 || in.height <= 0)
-    throw RigError(fmt::format("{}: image size {}x{} must be positive", where, in.width, in.height));
-  if (!std::isfinite(in.fu) || !std::isfinite(in.fv) || in.fu <= 0 || in.fv <= 0)
-    throw RigError(fmt::format("{}: focal length (fu={}, fv={}) must be positive", where, in.fu, in.fv));
-  if (!std::isfinite(in.cu) || !std::isfinite(in.cv))
-    throw RigError(where + ": principal point is not finite");
+  try {
+    check_image_size(in.width, in.height, "image size");
+  } catch (const std::invalid_argument& e) {
+    throw RigError(where + ": " + e.what());
+  }
+  // Focal lengths and principal point relative to the image size (core/limits.h): positive, finite
+  // and far from denormals (a focal length of 1e-320 px made 1/f infinite).
+  const double side = std::max(in.width, in.height);
+  for (const double f : {in.fu, in.fv})
+    if (!(f >= kMinFocalRel * side && f <= kMaxFocalRel * side))
+      throw RigError(fmt::format("{}: focal length (fu={}, fv={}) must be positive, between {} and {} x the larger "
+                                 "image side ({} px)",
+                                 where, in.fu, in.fv, kMinFocalRel, kMaxFocalRel, side));
+  if (!(std::abs(in.cu) <= kMaxCentreRel * side && std::abs(in.cv) <= kMaxCentreRel * side))
+    throw RigError(fmt::format("{}: principal point ({}, {}) is not finite or more than {} image sides away", where,
+                               in.cu, in.cv, kMaxCentreRel));
   for (double k : in.k)
-    if (!std::isfinite(k)) throw RigError(where + ": distortion coefficient is not finite");
+    if (!(std::abs(k) <= kMaxDistortion))
+      throw RigError(fmt::format("{}: distortion coefficient {} is not finite or larger than {} in magnitude", where,
+                                 k, kMaxDistortion));
   if (!std::isfinite(in.aov) || in.aov <= 0 || in.aov >= kPi)
     throw RigError(fmt::format("{}: angle of view {} deg must be in (0, 180)", where, rad2deg(in.aov)));
 }
 
 void Rig::validate() const {
   if (cameras.empty()) throw RigError("rig has no cameras");
-  if (!std::isfinite(dome.radius_mm) || dome.radius_mm < 0)
-    throw RigError("dome radius_mm must be a non-negative number");
-  for (size_t i = 0; i < cameras.size(); ++i) {
-    validate_camera(cameras[i]);
-    for (size_t j = 0; j < i; ++j)
-      if (cameras[j].id == cameras[i].id)
-        throw RigError(fmt::format("camera id {} appears twice", cameras[i].id));
+  if (cameras.size() > size_t(kMaxCameras))
+    throw RigError(fmt::format("rig has {} cameras; the limit is {} (core/limits.h)", cameras.size(), kMaxCameras));
+  if (!(dome.radius_mm >= 0 && dome.radius_mm <= kMaxPositionMm))
+    throw RigError(fmt::format("dome radius_mm must be a number in [0, {}]", kMaxPositionMm));
+  std::unordered_set<int> ids;
+  ids.reserve(cameras.size());
+  for (const RigCamera& c : cameras) {
+    validate_camera(c);
+    if (!ids.insert(c.id).second) throw RigError(fmt::format("camera id {} appears twice", c.id));
   }
 }
 
 json rig_to_json(const Rig& rig) {
   json j;
   j["format"] = "omma-rig";
-  j["version"] = 1;
+  j["version"] = kRigFormatVersion;
   j["name"] = rig.name;
   j["dome"] = {{"radius_mm", rig.dome.radius_mm}, {"sphere", rig.dome.sphere},
                {"method", rig.dome.method}};
@@ -117,27 +160,29 @@ json rig_to_json(const Rig& rig) {
 
 Rig rig_from_json(const json& j) {
   if (!j.is_object()) throw RigError("rig file must hold a JSON object");
-  if (j.contains("format") && j["format"] != "omma-rig")
+  if (text(j, "format", "rig", "omma-rig") != "omma-rig")
     throw RigError("not an omma rig file (format is not 'omma-rig')");
+  if (j.contains("version") && integer(j, "version", "rig", INT64_MIN, INT64_MAX) != kRigFormatVersion)
+    throw RigError(fmt::format("rig file version {} is not supported (this omma reads version {})", j["version"].dump(),
+                               kRigFormatVersion));
   Rig rig;
-  if (j.contains("name") && j["name"].is_string()) rig.name = j["name"].get<std::string>();
+  rig.name = text(j, "name", "rig");
   const json& dome = field(j, "dome", "rig");
   rig.dome.radius_mm = number(dome, "radius_mm", "dome");
   if (dome.contains("sphere")) {
     if (!dome["sphere"].is_boolean()) throw RigError("dome: field 'sphere' must be true or false");
     rig.dome.sphere = dome["sphere"].get<bool>();
   }
-  if (dome.contains("method") && dome["method"].is_string())
-    rig.dome.method = dome["method"].get<std::string>();
+  rig.dome.method = text(dome, "method", "dome");
   const json& cams = field(j, "cameras", "rig");
   if (!cams.is_array()) throw RigError("rig: field 'cameras' must be an array");
+  if (cams.size() > size_t(kMaxCameras))
+    throw RigError(fmt::format("rig has {} cameras; the limit is {} (core/limits.h)", cams.size(), kMaxCameras));
   for (size_t i = 0; i < cams.size(); ++i) {
     const json& jc = cams[i];
     const std::string where = cam_name(jc, i);
     RigCamera c;
-    const json& id = field(jc, "id", where);
-    if (!id.is_number_integer()) throw RigError(where + ": field 'id' must be an integer");
-    c.id = id.get<int>();
+    c.id = int(integer(jc, "id", where, 0, INT32_MAX));
     if (jc.contains("t") || jc.contains("u") || jc.contains("v")) {
       c.frame.t = vec3(jc, "t", where);
       c.frame.u = vec3(jc, "u", where);
@@ -151,13 +196,8 @@ Rig rig_from_json(const json& j) {
     c.position_mm = vec3(jc, "position_mm", where);
     const json& in = field(jc, "intrinsics", where);
     const std::string wi = where + " intrinsics";
-    auto integer = [&](const char* key) {
-      const json& v = field(in, key, wi);
-      if (!v.is_number_integer()) throw RigError(wi + ": field '" + key + "' must be an integer");
-      return v.get<int>();
-    };
-    c.in.width = integer("width");
-    c.in.height = integer("height");
+    c.in.width = int(integer(in, "width", wi, 1, kMaxImageSide));
+    c.in.height = int(integer(in, "height", wi, 1, kMaxImageSide));
     c.in.fu = number(in, "fu", wi);
     c.in.fv = number(in, "fv", wi);
     c.in.cu = number(in, "cu", wi);
@@ -167,7 +207,8 @@ Rig rig_from_json(const json& j) {
       const json& k = in["k"];
       if (!k.is_array() || k.size() > 5) throw RigError(wi + ": 'k' must be an array of up to 5 numbers");
       for (size_t n = 0; n < k.size(); ++n) {
-        if (!k[n].is_number()) throw RigError(wi + ": 'k' must hold numbers");
+        if (!k[n].is_number() || !std::isfinite(k[n].get<double>()))
+          throw RigError(wi + ": 'k' must hold finite numbers");
         c.in.k[n] = k[n].get<double>();
       }
     }
@@ -183,10 +224,9 @@ Rig rig_from_json(const json& j) {
 }
 
 Rig load_rig(const std::filesystem::path& path) {
-  if (!std::filesystem::exists(path)) throw RigError("rig file '" + path.string() + "' does not exist");
   json j;
   try {
-    j = json::parse(read_text_file(path));
+    j = json::parse(read_text_file(path, kMaxTextFileBytes, "rig file"));
   } catch (const json::parse_error& e) {
     throw RigError("rig file '" + path.string() + "' is not valid JSON: " + e.what());
   } catch (const IoError& e) {

@@ -3,7 +3,7 @@
 //
 // Rig file (JSON):
 // {
-//   "format": "omma-rig", "version": 1, "name": "thesis-24",
+//   "format": "omma-rig", "version": 1, "name": "thesis-24",     (other versions are refused)
 //   "dome": {"radius_mm": 5.0, "sphere": false, "method": "max-volume"},
 //   "cameras": [
 //     {"id": 0,
@@ -51,11 +51,13 @@ struct Rig {
   std::vector<RigCamera> cameras;
 
   // Throws RigError if anything is inconsistent (see validate_camera).
+  // Also: at most kMaxCameras cameras, unique ids.
   void validate() const;
 };
 
 // Validates one camera: finite numbers, unit and orthogonal right-handed frame (tolerance 1e-3),
-// positive sizes and focal lengths, aov in (0, 180) degrees.
+// image size, focal lengths, principal point, distortion and position within the bounds of
+// core/limits.h, aov in (0, 180) degrees.
 void validate_camera(const RigCamera& cam);
 
 nlohmann::json rig_to_json(const Rig& rig);

@@ -6,7 +6,6 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
-#include <fstream>
 #include <stdexcept>
 
 #include <nlohmann/json.hpp>
@@ -14,13 +13,12 @@
 #include <tbb/parallel_for.h>
 
 #include "omma/core/io.h"
+#include "omma/core/limits.h"
 #include "omma/core/log.h"
 
 namespace omma::engine {
 namespace {
 
-constexpr uint32_t kMagic = 0x4d4d4f31;  // "1OMM"
-constexpr uint32_t kFormatVersion = 4;      // 3: tiles, runs, delta offsets, row-pair store; 4: 1/128
 
 uint64_t fnv1a(const std::string& s) {
   uint64_t h = 1469598103934665603ull;
@@ -122,7 +120,7 @@ StoreLayout StoreLayout::for_rig(const Rig& rig) {
   }
   l.rows = rows;
   // Offsets are stored in units of 2 bytes in 32 bits.
-  if (double(l.stride_bytes()) * l.rows + kStorePadding >= 8.0 * (1ull << 30))
+  if (double(l.stride_bytes()) * l.rows + kStorePadding >= double(kMaxStoreBytes))
     throw std::invalid_argument("rig too large for the compiled map format: " + std::to_string(l.stride_px) +
                                 " x " + std::to_string(l.rows) + " store pixels (limit 8 GB of frame store)");
   return l;
@@ -209,50 +207,6 @@ double CompiledMap::bytes_per_pixel() const {
   return px > 0 ? double(bytes()) / px : 0;
 }
 
-bool CompiledMap::IsValid(std::string* why) const {
-  auto fail = [&](const std::string& m) {
-    if (why) *why = m;
-    return false;
-  };
-  if (width <= 0 || height <= 0) return fail("empty map");
-  const size_t nt = size_t(tiles());
-  for (const auto* v : {&tile_run, &tile_tap, &tile_base, &tile_line})
-    if (v->size() != nt + 1 || !std::is_sorted(v->begin(), v->end())) return fail("bad tile index");
-  if (tile_run.back() != runs.size() || tile_tap.back() != weight.size() || tile_base.back() != base.size() ||
-      tile_line.back() != lines.size() || delta.size() != weight.size())
-    return fail("tile index does not match the arrays");
-  if (method == pano::Method::kSad ? prior.size() != weight.size() : !prior.empty()) return fail("bad prior array");
-  const size_t store = layout.bytes();
-  for (uint32_t l : lines)
-    if (l >= store) return fail("prefetch line outside the frame store");
-  for (int t = 0; t < int(nt); ++t) {
-    const int w = std::min(width, (t % tiles_x() + 1) * kTileW) - (t % tiles_x()) * kTileW;
-    const int h = std::min(height, (t / tiles_x() + 1) * kTileH) - (t / tiles_x()) * kTileH;
-    size_t r = tile_run[t], k = tile_tap[t], b = tile_base[t];
-    for (int row = 0; row < h; ++row) {
-      int cols = 0;
-      for (;; r += 2) {
-        if (r + 1 >= tile_run[t + 1]) return fail("runs overflow their tile");
-        const int n = runs[r], len = runs[r + 1];
-        if (len == 0) break;
-        if (n > kMaxTaps || b + n > tile_base[t + 1] || k + size_t(n) * len > tile_tap[t + 1])
-          return fail("run overflows its tile");
-        for (int p = 0; p < len; ++p)
-          for (int i = 0; i < n; ++i) {
-            const int64_t off = int64_t(base[b + i]) + delta[k++];
-            if (off < 0 || size_t(off) * 2 + 16 > store) return fail("tap outside the frame store");
-          }
-        b += n;
-        cols += len;
-      }
-      r += 2;
-      if (cols != w) return fail("tile row of the wrong width");
-    }
-    if (r != tile_run[t + 1] || k != tile_tap[t + 1] || b != tile_base[t + 1]) return fail("tile of the wrong size");
-  }
-  return true;
-}
-
 ActiveRig active_cameras(const Rig& rig, const std::vector<bool>& active) {
   ActiveRig a;
   a.rig = rig;
@@ -270,7 +224,11 @@ bool MapOptions::IsValid(std::string* why) const {
     if (why) *why = m;
     return false;
   };
-  if (grid.width <= 0 || grid.height <= 0) return fail("panorama size must be positive");
+  try {
+    check_image_size(grid.width, grid.height, "panorama size");
+  } catch (const std::invalid_argument& e) {
+    return fail(e.what());
+  }
   if (!(min_weight >= 0 && min_weight < 0.5)) return fail("min_weight must be in [0, 0.5)");
   return true;
 }
@@ -499,91 +457,43 @@ std::string map_key(const Rig& rig, const MapOptions& opt) {
   std::string active;
   for (bool a : opt.active) active += a ? '1' : '0';
   j["active"] = active;
-  j["format"] = kFormatVersion;
+  j["format"] = kMapFormatVersion;
   char buf[32];
   std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(fnv1a(j.dump())));
   return buf;
 }
 
-namespace {
-template <class T>
-void put(std::ostream& o, const T& v) { o.write(reinterpret_cast<const char*>(&v), sizeof v); }
-template <class T>
-void put_vec(std::ostream& o, const std::vector<T>& v) {
-  put<uint64_t>(o, v.size());
-  o.write(reinterpret_cast<const char*>(v.data()), std::streamsize(v.size() * sizeof(T)));
-}
-template <class T>
-bool get(std::istream& i, T& v) { return bool(i.read(reinterpret_cast<char*>(&v), sizeof v)); }
-template <class T>
-bool get_vec(std::istream& i, std::vector<T>& v, uint64_t limit) {
-  uint64_t n = 0;
-  if (!get(i, n) || n > limit) return false;
-  v.resize(n);
-  return bool(i.read(reinterpret_cast<char*>(v.data()), std::streamsize(n * sizeof(T))));
-}
-}  // namespace
-
-void save_map(const CompiledMap& map, const std::filesystem::path& path) {
-  write_atomically(path, [&](const std::filesystem::path& tmp) {
-    std::ofstream o(tmp, std::ios::binary);
-    if (!o) throw IoError("cannot write map file " + tmp.string());
-    put(o, kMagic);
-    put(o, kFormatVersion);
-    put<int32_t>(o, map.width);
-    put<int32_t>(o, map.height);
-    put<int32_t>(o, static_cast<int32_t>(map.method));
-    put<float>(o, map.sad_epsilon);
-    put<int32_t>(o, map.layout.stride_px);
-    put<int32_t>(o, map.layout.rows);
-    put<int32_t>(o, static_cast<int32_t>(map.layout.row0.size()));
-    for (size_t c = 0; c < map.layout.row0.size(); ++c) {
-      put<int32_t>(o, map.layout.row0[c]);
-      put<int32_t>(o, map.layout.size[c].width);
-      put<int32_t>(o, map.layout.size[c].height);
-    }
-    put_vec(o, map.tile_run);
-    put_vec(o, map.tile_tap);
-    put_vec(o, map.tile_base);
-    put_vec(o, map.tile_line);
-    put_vec(o, map.runs);
-    put_vec(o, map.base);
-    put_vec(o, map.delta);
-    put_vec(o, map.weight);
-    put_vec(o, map.prior);
-    put_vec(o, map.lines);
-    put(o, kMagic);
-    o.flush();
-    if (!o) throw IoError("cannot write map file " + tmp.string());
-  });
-}
-
-std::optional<CompiledMap> load_map(const std::filesystem::path& path) {
-  std::ifstream i(path, std::ios::binary);
-  if (!i) return std::nullopt;
-  uint32_t magic = 0, version = 0;
-  if (!get(i, magic) || magic != kMagic || !get(i, version) || version != kFormatVersion) return std::nullopt;
-  CompiledMap m;
-  int32_t n = 0, method = 0;
-  if (!get(i, m.width) || !get(i, m.height) || !get(i, method) || !get(i, m.sad_epsilon) ||
-      !get(i, m.layout.stride_px) || !get(i, m.layout.rows) || !get(i, n) || n < 0 || n > 4096 || m.width <= 0 ||
-      m.height <= 0 || m.width > 65536 || m.height > 65536 || method < 0 || method > 16)
+std::optional<CompiledMap> parse_map_for(const uint8_t* data, size_t n, const Rig& rig, const MapOptions& opt,
+                                         std::string* why) {
+  auto fail = [&](const std::string& m) -> std::optional<CompiledMap> {
+    if (why) *why = m;
     return std::nullopt;
-  m.method = static_cast<pano::Method>(method);
-  for (int c = 0; c < n; ++c) {
-    int32_t r0, w, h;
-    if (!get(i, r0) || !get(i, w) || !get(i, h)) return std::nullopt;
-    m.layout.row0.push_back(r0);
-    m.layout.size.emplace_back(w, h);
-  }
-  const uint64_t px = uint64_t(m.width) * m.height, taps = px * kMaxTaps, tiles = uint64_t(m.tiles()) + 1;
-  if (!get_vec(i, m.tile_run, tiles) || !get_vec(i, m.tile_tap, tiles) || !get_vec(i, m.tile_base, tiles) ||
-      !get_vec(i, m.tile_line, tiles) || !get_vec(i, m.runs, 4 * px + 2 * tiles * kTileH) ||
-      !get_vec(i, m.base, taps) || !get_vec(i, m.delta, taps) || !get_vec(i, m.weight, taps) ||
-      !get_vec(i, m.prior, taps) || !get_vec(i, m.lines, 2 * taps))
-    return std::nullopt;
-  if (!get(i, magic) || magic != kMagic || !m.IsValid()) return std::nullopt;
+  };
+  std::string key;
+  std::optional<CompiledMap> m = parse_map(data, n, &key, why);
+  if (!m) return m;
+  // The header against the rig and the options (the file name says the key, the file may not).
+  if (key != map_key(rig, opt)) return fail("written for another rig or other options (key " + key + ")");
+  if (m->width != opt.grid.width || m->height != opt.grid.height || m->method != opt.method ||
+      m->sad_epsilon != static_cast<float>(opt.params.sad_epsilon))
+    return fail("size, method or sad epsilon differ from the options");
+  const StoreLayout want = StoreLayout::for_rig(rig);
+  if (m->layout.stride_px != want.stride_px || m->layout.rows != want.rows || m->layout.row0 != want.row0 ||
+      m->layout.size != want.size)
+    return fail("frame store layout differs from the rig's cameras");
   return m;
+}
+
+std::optional<CompiledMap> load_map(const std::filesystem::path& path, const Rig& rig, const MapOptions& opt,
+                                    std::string* why) {
+  std::vector<uint8_t> bytes;
+  try {
+    bytes = read_file(path, kMaxDataFileBytes, "map file");
+  } catch (const IoError& e) {
+    if (why) *why = e.what();
+    return std::nullopt;
+  }
+  return parse_map_for(bytes.data(), bytes.size(), rig, opt, why);
 }
 
 std::filesystem::path default_cache_dir() {
@@ -596,11 +506,16 @@ std::filesystem::path default_cache_dir() {
 MapLoad compile_map_cached(const Rig& rig, const MapOptions& opt, const std::filesystem::path& cache_dir) {
   const auto t0 = std::chrono::steady_clock::now();
   MapLoad out;
+  std::string key;
   if (!cache_dir.empty()) {
-    out.file = cache_dir / ("omma-map-" + map_key(rig, opt) + ".bin");
-    if (auto m = load_map(out.file)) {
+    key = map_key(rig, opt);
+    out.file = cache_dir / ("omma-map-" + key + ".bin");
+    std::string why;
+    if (auto m = load_map(out.file, rig, opt, &why)) {
       out.map = std::move(*m);
       out.from_cache = true;
+    } else if (std::error_code ec; std::filesystem::exists(out.file, ec)) {
+      spdlog::warn("map cache file {} not used ({}): compiling the map again", out.file.string(), why);
     }
   }
   if (!out.from_cache) {
@@ -608,7 +523,7 @@ MapLoad compile_map_cached(const Rig& rig, const MapOptions& opt, const std::fil
     if (!cache_dir.empty()) {
       try {
         std::filesystem::create_directories(cache_dir);
-        save_map(out.map, out.file);
+        save_map(out.map, out.file, key);
       } catch (const std::exception& e) {
         spdlog::warn("map cache not written ({})", e.what());
       }

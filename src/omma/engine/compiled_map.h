@@ -52,6 +52,9 @@ namespace omma::engine {
 inline constexpr int kTileW = 64, kTileH = 32;  // output tile (pixels)
 inline constexpr size_t kStorePadding = 64;     // bytes after the last store row
 inline constexpr int kMaxTaps = 8;              // taps per output pixel (the strongest are kept)
+// Store offsets are 32-bit in units of 2 bytes: the frame store of a rig holds less than 8 GiB
+// (with core/limits.h's kMaxCameras = 4096 cameras, the limits of the map format and the renderer).
+inline constexpr size_t kMaxStoreBytes = size_t(8) << 30;
 
 // Geometry of the shared frame store of a rig (see the file comment).
 struct StoreLayout {
@@ -66,6 +69,9 @@ struct StoreLayout {
   size_t offset(int c, int x, int y) const { return size_t(row0[c] + y) * stride_bytes() + size_t(x) * 6; }
   // Camera whose rows hold store byte `offset`.
   int camera_at(size_t offset) const;
+  // 1..kMaxCameras cameras of valid frame sizes, each camera's rows right after the previous one's,
+  // rows and stride as for_rig gives them, bytes() < kMaxStoreBytes.
+  bool IsValid(std::string* why = nullptr) const;
 };
 
 // One buffer holding the latest frame of every camera, in the row-pair layout.
@@ -155,7 +161,13 @@ struct CompiledMap {
   // Calls f(col, row, n, taps) for every output pixel (tile by tile), taps[0..n) decoded.
   template <class F>
   void visit(F&& f) const;
-  // Consistency of the arrays (a loaded file): sizes, run lengths, offsets inside the store.
+  // Everything the renderers rely on without checking, over the whole map (a loaded file is
+  // untrusted input): size, method and the store layout (StoreLayout::IsValid); the tile indexes
+  // against the arrays; every tile row's runs (at most kMaxTaps taps, exactly the row's width);
+  // every tap inside the frame store; every weight byte at most 127 and each pixel's weights
+  // summing to 128 (sad: 128 per tap, priors summing to 256); prefetch lines inside the store.
+  // Linear in the size of the map (a few ms at 1080 x 1080); called when a map is loaded, never
+  // while rendering.
   bool IsValid(std::string* why = nullptr) const;
 };
 
@@ -168,9 +180,29 @@ CompiledMap compile_map(const Rig& rig, const MapOptions& opt);
 // and the map format version.
 std::string map_key(const Rig& rig, const MapOptions& opt);
 
-void save_map(const CompiledMap& map, const std::filesystem::path& path);  // atomic
-// nullopt if the file is missing, truncated, inconsistent or of another format version.
-std::optional<CompiledMap> load_map(const std::filesystem::path& path);
+// Map files (map_file.cc), format version kMapFormatVersion, native byte order:
+//   u32 magic, u32 version, char key[16] (map_key), i32 width, height, method, f32 sad_epsilon,
+//   i32 stride_px, rows, cameras, cameras x (i32 row0, width, height), then the arrays tile_run,
+//   tile_tap, tile_base, tile_line, runs, base, delta, weight, prior, lines (each u64 count and the
+//   elements), u32 magic, u32 CRC-32 (core/checksum.h) of every byte before it.
+inline constexpr uint32_t kMapFormatVersion = 5;  // 3: tiles, runs, row pairs; 4: 1/128; 5: key, CRC-32
+inline constexpr size_t kMapKeyBytes = 16;
+std::vector<uint8_t> map_file_bytes(const CompiledMap& map, const std::string& key);
+void save_map(const CompiledMap& map, const std::filesystem::path& path, const std::string& key);  // atomic
+// Parses the bytes of a map file as untrusted input: the checksum over the whole file, every read
+// against the bytes left (an array's length before it is allocated), the header's bounds and
+// CompiledMap::IsValid. Never reads outside [data, data + n). nullopt and *why if anything fails;
+// *key gets the key the file was written with.
+std::optional<CompiledMap> parse_map(const uint8_t* data, size_t n, std::string* key = nullptr,
+                                     std::string* why = nullptr);
+// parse_map, then the header against what the map must be for `rig` and `opt`: key, size, method,
+// sad epsilon and the store layout of every camera.
+std::optional<CompiledMap> parse_map_for(const uint8_t* data, size_t n, const Rig& rig, const MapOptions& opt,
+                                         std::string* why = nullptr);
+// Reads `path` (a regular file of at most kMaxDataFileBytes) and parse_map_for()s it. nullopt and
+// *why if the file is missing, unreadable or any check fails.
+std::optional<CompiledMap> load_map(const std::filesystem::path& path, const Rig& rig, const MapOptions& opt,
+                                    std::string* why = nullptr);
 
 // Default cache folder: $OMMA_CACHE_DIR, else $XDG_CACHE_HOME/omma, else ~/.cache/omma, else
 // /tmp/omma-cache.
@@ -183,6 +215,8 @@ struct MapLoad {
   std::filesystem::path file;
 };
 // Loads the map from `cache_dir`/omma-map-<key>.bin, or compiles and stores it there (atomically).
+// A cached file that fails load_map (damaged, truncated, written for other options) is never used:
+// a warning names the reason, and the map is compiled and the file replaced.
 // An empty cache_dir disables the cache. A cache write failure is logged, not fatal.
 MapLoad compile_map_cached(const Rig& rig, const MapOptions& opt,
                            const std::filesystem::path& cache_dir);

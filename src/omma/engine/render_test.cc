@@ -267,7 +267,7 @@ TEST(EngineMap, CacheRoundTripIsExactAndKeyedByOptions) {
   EXPECT_NE(map_key(rig, opt), map_key(moved, opt));
   // A truncated cache file is not trusted: it is recompiled.
   std::filesystem::resize_file(first.file, std::filesystem::file_size(first.file) / 2);
-  EXPECT_FALSE(load_map(first.file).has_value());
+  EXPECT_FALSE(load_map(first.file, rig, opt).has_value());
   EXPECT_FALSE(compile_map_cached(rig, opt, dir).from_cache);
   std::filesystem::remove_all(dir);
 }

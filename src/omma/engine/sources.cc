@@ -158,9 +158,11 @@ class LinkFile : public CameraSource {
   LinkFile(const fs::path& path, const RigCamera& cam, double fps, bool loop) : path_(path), fps_(fps), loop_(loop) {
     config_.width = cam.in.width;
     config_.height = cam.in.height;
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw SourceError("cannot open sensor-link file " + path.string());
-    bytes_.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+    try {
+      bytes_ = read_file(path, kMaxDataFileBytes, "sensor-link file");
+    } catch (const IoError& e) {
+      throw SourceError(e.what());
+    }
     if (bytes_.empty()) throw SourceError("sensor-link file " + path.string() + " is empty");
     try {
       thread_ = std::thread([this] { decode(); });
