@@ -34,7 +34,7 @@ void add_run_command(CLI::App& root) {
     double duration = 0, fps = 30, source_fps = 30, first_timeout = 10, min_weight = engine::MapOptions{}.min_weight;
     long frames = 0;
     int threads = 0;
-    bool loop = false, json = false, no_cache = false;
+    bool loop = false, json = false, no_cache = false, no_photometric = false;
   };
   static Opts o;
   cmd->add_option("--rig", o.rig, "Rig file (JSON)")->required();
@@ -62,6 +62,9 @@ void add_run_command(CLI::App& root) {
   cmd->add_option("--threads", o.threads, "Renderer threads (0: all; default 0)")->check(CLI::NonNegativeNumber);
   cmd->add_option("--cache", o.cache, "Map cache folder (default $OMMA_CACHE_DIR or ~/.cache/omma)");
   cmd->add_flag("--no-cache", o.no_cache, "Do not read or write the map cache");
+  cmd->add_flag("--no-photometric", o.no_photometric,
+                "Ignore the rig's photometric model (by default each camera's frames are corrected for its "
+                "vignetting and colour gains as they arrive, in the camera's thread)");
   cmd->add_flag("--json", o.json, "Print only the JSON summary on stdout (no progress line)");
   cmd->callback([] {
     set_json_mode(o.json);
@@ -76,6 +79,7 @@ void add_run_command(CLI::App& root) {
     eo.max_frames = o.frames;
     eo.fps = o.fps;
     eo.threads = o.threads;
+    eo.photometric = !o.no_photometric;
     eo.first_frame_timeout_s = o.first_timeout;
     engine::SourceOptions so;
     so.fps = o.source_fps;
@@ -115,6 +119,7 @@ void add_run_command(CLI::App& root) {
     j["min_weight"] = o.min_weight;
     j["projection"] = o.projection;
     j["size"] = o.size;
+    j["photometric"] = eo.photometric && has_photometric(rig);
     nlohmann::json sk_names = nlohmann::json::array();
     for (const auto& s : sinks) sk_names.push_back(s->describe());
     j["sinks"] = sk_names;

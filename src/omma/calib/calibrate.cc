@@ -14,7 +14,9 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/utility.hpp>
 
+#include "omma/calib/photometric.h"
 #include "omma/calib/subpixel.h"
+#include "omma/core/srgb.h"
 #include "omma/core/log.h"
 #include "omma/core/progress.h"
 
@@ -810,6 +812,38 @@ CalibrationResult calibrate_rig(const Rig& nominal, const std::vector<cv::Mat>& 
     res.initial_rms_px = initial_rms;
   }
   return res;
+}
+
+std::vector<cv::Mat> average_frame_sets(const std::vector<std::vector<cv::Mat>>& sets) {
+  if (sets.empty()) throw std::invalid_argument("average_frame_sets: no frame sets");
+  const size_t n = sets[0].size();
+  for (size_t s = 0; s < sets.size(); ++s) {
+    if (sets[s].size() != n)
+      throw std::invalid_argument(fmt::format("shots differ: shot {} has {} frames, shot 0 has {}", s, sets[s].size(), n));
+    for (size_t i = 0; i < n; ++i) {
+      const cv::Mat& f = sets[s][i];
+      if (f.type() != CV_8UC3 && f.type() != CV_16UC3)
+        throw std::invalid_argument(fmt::format("shot {}, camera index {}: not an 8- or 16-bit colour frame", s, i));
+      if (f.size() != sets[0][i].size())
+        throw std::invalid_argument(fmt::format("shots differ: camera index {} is {}x{} in shot {} but {}x{} in shot 0",
+                                                i, f.cols, f.rows, s, sets[0][i].cols, sets[0][i].rows));
+    }
+  }
+  if (sets.size() == 1) return sets[0];
+  std::vector<cv::Mat> out(n);
+  cv::parallel_for_(cv::Range(0, static_cast<int>(n)), [&](const cv::Range& range) {
+    for (int i = range.start; i < range.end; ++i) {
+      cv::Mat sum = decode_linear(sets[0][size_t(i)]);
+      for (size_t s = 1; s < sets.size(); ++s) sum += decode_linear(sets[s][size_t(i)]);
+      sum /= double(sets.size());
+      cv::Mat enc(sum.size(), CV_16UC3);
+      const float* src = sum.ptr<float>();
+      uint16_t* dst = enc.ptr<uint16_t>();
+      for (size_t k = 0; k < sum.total() * 3; ++k) dst[k] = uint16_t(std::lround(65535.0f * linear_to_srgb(src[k])));
+      out[size_t(i)] = enc;
+    }
+  });
+  return out;
 }
 
 CalibrationResult calibrate_from_tracks(const Rig& nominal, std::vector<std::vector<TrackObservation>> tracks,

@@ -209,6 +209,12 @@ struct CalibrationResult {
 CalibrationResult calibrate_rig(const Rig& nominal, const std::vector<cv::Mat>& frames,
                                 const CalibrationOptions& opt = {});
 
+// Several shots of a static scene (issue 13): the frame sets averaged in linear light (sRGB decoded,
+// averaged, encoded again as 16-bit sRGB, CV_16UC3), which divides the sensor noise by sqrt(shots)
+// and keeps one observation per feature. Throws std::invalid_argument if the sets differ in count
+// or in a frame's size or are not 8/16-bit colour images (names the set and camera index).
+std::vector<cv::Mat> average_frame_sets(const std::vector<std::vector<cv::Mat>>& sets);
+
 // One observation of a feature track: camera (rig index) and continuous pixel (centres at
 // integer + 0.5, conventions.h).
 struct TrackObservation {

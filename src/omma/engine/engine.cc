@@ -14,6 +14,8 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include "omma/isp/photometric.h"
+
 namespace omma::engine {
 namespace {
 
@@ -80,6 +82,8 @@ EngineStats run_engine(const Rig& rig, std::vector<std::unique_ptr<CameraSource>
     cv::Mat out;
     render(*map, warm, out, {.threads = opt.threads});
   }
+  // Photometric tables per camera (empty where the rig has no model or it is switched off).
+  const std::vector<isp::PhotometricTable> tables = isp::photometric_tables(rig, opt.photometric);
   std::vector<std::unique_ptr<Latest>> latest;
   for (size_t c = 0; c < n; ++c) latest.push_back(std::make_unique<Latest>());
   std::atomic<bool> stop{false};
@@ -109,9 +113,17 @@ EngineStats run_engine(const Rig& rig, std::vector<std::unique_ptr<CameraSource>
             fatal = true;
             break;
           }
+          cv::Mat ready;
+          if (!tables[c].empty() && !src.photometric_applied()) {
+            // The photometric correction, here in the camera's thread: the frame enters the
+            // frame store corrected and the render loop does nothing more.
+            tables[c].apply(to_bgr8(frame), ready);
+          } else {
+            ready = frame.clone();
+          }
           {
             std::lock_guard<std::mutex> lock(slot.mutex);
-            slot.frame = frame.clone();
+            slot.frame = std::move(ready);
             slot.captured = Clock::now();
             ++slot.seq;
           }

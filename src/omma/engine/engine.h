@@ -28,6 +28,10 @@ struct EngineOptions {
   double fps = 30;                  // panorama rate (0: render whenever a camera has a new frame)
   double first_frame_timeout_s = 5; // a camera without a first frame by then is dropped
   int threads = 0;                  // renderer threads (0: all)
+  // Apply the rig's photometric model (vignetting and colour gains, core/photometric.h) to every
+  // frame as it arrives, in its camera's thread (per-camera tables, isp/photometric.h), so that the
+  // frame store holds corrected frames and the render loop does no extra work.
+  bool photometric = true;
   // Called about twice a second from the render loop with the running statistics.
   std::function<void(const nlohmann::json&)> on_progress;
 };

@@ -42,6 +42,10 @@ class CameraSource {
   // The rate the source runs at, frames per second (0: as fast as it can deliver).
   virtual double fps() const = 0;
   virtual std::string describe() const = 0;
+  // True if the frames already have the rig camera's photometric model applied (the sensor-link
+  // source develops raw frames with the model as the ISP's flat gain, isp/photometric.h), so the
+  // engine must not apply it again.
+  virtual bool photometric_applied() const { return false; }
 };
 
 struct SourceOptions {
