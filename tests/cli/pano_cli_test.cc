@@ -5,7 +5,7 @@
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
 
-#include "omma/pano/test_scene.h"
+#include "omma/sim/test_scenes.h"
 #include "tests/cli/cli_util.h"
 
 namespace omma::test {
@@ -15,11 +15,11 @@ namespace fs = std::filesystem;
 // DIR with rig.json, cam_XX.png (64 px cameras) and truth.png (vr180 128x128) of louvre.jpg.
 fs::path make_scene(const std::string& tag) {
   const fs::path dir = temp_dir(tag);
-  const Rig rig = pano::testing::small_rig(64);
-  const cv::Mat tex = pano::testing::photo_texture(data_dir() + "/louvre.jpg", 360);
+  const Rig rig = sim::testing::small_rig(64);
+  const cv::Mat tex = sim::testing::photo_texture(data_dir() + "/louvre.jpg", 360);
   const PanoGrid grid{Projection::kVr180, 128, 128};
-  pano::testing::write_frames_folder(dir, rig, pano::testing::render_frames(rig, tex),
-                                     pano::testing::render_truth(grid, tex));
+  sim::testing::write_frames_folder(dir, rig, sim::testing::render_frames(rig, tex),
+                                     sim::testing::render_truth(grid, tex));
   return dir;
 }
 

@@ -11,7 +11,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "omma/calib/rig_diff.h"
-#include "omma/calib/test_support.h"
+#include "omma/sim/test_scenes.h"
 #include "omma/design/prototype.h"
 #include "omma/pano/quality.h"
 #include "omma/pano/stitch.h"
@@ -20,6 +20,7 @@
 
 namespace omma::calib {
 namespace {
+namespace testing = ::omma::sim::testing;  // the small exact renderers (sim/test_scenes.h)
 
 const PanoGrid kGrid{Projection::kEquirect, 720, 180};
 const char* kPerturb = "orient=2,focal=0.03,center=5,k1=0.05";  // the manufacturing errors

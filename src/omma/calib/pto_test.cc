@@ -13,7 +13,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "omma/calib/rig_diff.h"
-#include "omma/calib/test_support.h"
+#include "omma/sim/test_scenes.h"
 #include "omma/core/frames.h"
 #include "omma/calib/photometric.h"
 #include "omma/core/srgb.h"
@@ -22,6 +22,7 @@
 
 namespace omma::calib {
 namespace {
+namespace testing = ::omma::sim::testing;  // the small exact renderers (sim/test_scenes.h)
 namespace fs = std::filesystem;
 
 std::string strip_omma_comments(const std::string& text) {
@@ -125,14 +126,14 @@ TEST(Pto, UnsupportedLensAndMissingImagesFail) {
 
 // The real peer: nona renders our exported project; its panorama (mirrored, see pto.h) agrees
 // with the reference stitcher's nearest-neighbour panorama (omma stitch --method nn) on the
-// covered region. Frames: the calibration stage's small far-field renderer with a perturbed rig
+// covered region. Frames: the small far-field renderer of sim/test_scenes.h with a perturbed rig
 // (shifted centres, k1, focal, rotations) so that every converted parameter matters.
 TEST(Pto, NonaRendersOurExportLikeOurNearestNeighbourStitch) {
   if (std::system("which nona >/dev/null 2>&1") != 0) GTEST_SKIP() << "nona (hugin-tools) not installed";
-  const cv::Mat scene = testing::load_scene(std::string(OMMA_DATA_DIR) + "/lake.jpg");
+  const cv::Mat scene = testing::load_photo(std::string(OMMA_DATA_DIR) + "/lake.jpg");
   ASSERT_FALSE(scene.empty());
   const Rig rig = perturbed_k1_rig();
-  const auto frames = testing::render_frames(rig, scene);
+  const auto frames = testing::render_photo_frames(rig, scene);
   const fs::path dir = fs::temp_directory_path() / ("omma-pto-nona-" + std::to_string(::getpid()));
   fs::create_directories(dir);
   for (size_t i = 0; i < frames.size(); ++i) cv::imwrite((dir / frame_filename(rig.cameras[i].id)).string(), frames[i]);
@@ -169,10 +170,10 @@ TEST(Pto, NonaRendersOurExportLikeOurNearestNeighbourStitch) {
   cv::Mat both;
   cv::bitwise_and(mask, nona_mask > 0, both);
   const double covered = cv::countNonZero(both) / double(both.total());
-  const double db = testing::psnr(ours, nona, both);
+  const double db = testing::psnr_masked(ours, nona, both);
   std::printf("nona vs omma stitch nn: PSNR %.2f dB over %.1f %% of the panorama\n", db, 100 * covered);
-  const cv::Mat truth = testing::render_truth(scene, grid);
-  std::printf("vs truth: nona %.2f dB, ours %.2f dB\n", testing::psnr(nona, truth, both), testing::psnr(ours, truth, both));
+  const cv::Mat truth = testing::render_photo_truth(scene, grid);
+  std::printf("vs truth: nona %.2f dB, ours %.2f dB\n", testing::psnr_masked(nona, truth, both), testing::psnr_masked(ours, truth, both));
   EXPECT_GT(covered, 0.5);
   EXPECT_GE(db, 30.0);
   fs::remove_all(dir);
@@ -234,10 +235,10 @@ TEST(Pto, PhotometricModelRoundTripsUnderHuginsNames) {
 // in linear light, we in sRGB).
 TEST(Pto, NonaAppliesOurPhotometricModelLikeWeDo) {
   if (std::system("which nona >/dev/null 2>&1") != 0) GTEST_SKIP() << "nona (hugin-tools) not installed";
-  const cv::Mat scene = testing::load_scene(std::string(OMMA_DATA_DIR) + "/lake.jpg");
+  const cv::Mat scene = testing::load_photo(std::string(OMMA_DATA_DIR) + "/lake.jpg");
   ASSERT_FALSE(scene.empty());
   const Rig rig = with_photometric(perturbed_k1_rig());
-  const auto clean = testing::render_frames(rig, scene);
+  const auto clean = testing::render_photo_frames(rig, scene);
   const fs::path dir = fs::temp_directory_path() / ("omma-pto-nona-ph-" + std::to_string(::getpid()));
   fs::create_directories(dir);
   std::vector<cv::Mat> frames;  // what the cameras give: sRGB 8-bit through their model
@@ -293,8 +294,8 @@ TEST(Pto, NonaAppliesOurPhotometricModelLikeWeDo) {
   mask = mask > 0;
   cv::Mat both;
   cv::bitwise_and(mask, nona_mask > 0, both);
-  const double db = testing::psnr(ours, nona8, both);
-  const double db_uncorrected = testing::psnr(uncorrected, nona8, both);
+  const double db = testing::psnr_masked(ours, nona8, both);
+  const double db_uncorrected = testing::psnr_masked(uncorrected, nona8, both);
   std::printf("nona (photometric, linear response) vs omma corrected nn: %.2f dB (uncorrected frames: %.2f dB) over "
               "%.1f %%\n", db, db_uncorrected, 100.0 * cv::countNonZero(both) / double(both.total()));
   EXPECT_GE(db, 30.0);
