@@ -24,7 +24,7 @@ struct CalibrateArgs {
   std::string rig, out, flat, scene = "auto", focal = "per-camera", center = "per-camera",
                                 distortion = "per-camera", loss = "auto";
   int radial_terms = 1, max_iterations = 50, min_matches = 30, upsample = 2, threads = 2;
-  double loss_scale = 1.0, ransac_px = 5, prior_deg = 5, prior_mean_focal = 0.002;
+  double loss_scale = 1.0, ransac_px = 5, prior_deg = 5, prior_mean_focal = 0.002, tube = 0;
   bool json = false, photometric = false, no_geometric = false;
 };
 
@@ -69,6 +69,10 @@ void add_calibrate_command(CLI::App& root) {
   cmd->add_option("--prior-mean-focal", a.prior_mean_focal,
                   "Near field only: sigma (relative) of the prior holding the cameras' MEAN focal length at the "
                   "nominal one, against the focal/depth ambiguity of small-baseline parallax (default 0.002; 0 = off)");
+  cmd->add_option("--tube", a.tube,
+                  "The frames show the calibration tube of this diameter (mm; the thesis's is 35) around the dome: "
+                  "near field, and scene points on its wall are constrained to it (its axis offset and tilt are "
+                  "estimated); default 0 = a scene of unknown shape");
   cmd->add_option("--max-iterations", a.max_iterations, "Ceres iterations per solve (default 50)");
   cmd->add_option("--threads", a.threads,
                   "Ceres threads (default 2); 1 = reproducible to the last digit (near-field results move by "
@@ -115,6 +119,9 @@ void add_calibrate_command(CLI::App& root) {
     if (a.prior_mean_focal < 0) throw std::invalid_argument("--prior-mean-focal must be >= 0");
     opt.prior_mean_focal = a.prior_mean_focal;
     opt.max_iterations = a.max_iterations;
+    if (a.tube < 0) throw std::invalid_argument("--tube must be a diameter in mm (> 0), or 0 for none");
+    opt.tube_diameter_mm = a.tube;
+    if (a.tube > 0) opt.scene = calib::SceneModel::kNear;
     opt.threads = a.threads;
     opt.min_observations = a.min_matches;
     opt.features.upsample = a.upsample;

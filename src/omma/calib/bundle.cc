@@ -70,6 +70,21 @@ struct NearCost {
   }
 };
 
+// Near field on the calibration tube (CalibrationOptions::tube_diameter_mm): the scene point lies on
+// the tube's wall, a cylinder of radius R about the axis (ox + tx z, oy + ty z, z) (the dome axis,
+// offset and tilted by the estimated axis = (ox, oy, tx, ty); first order in the small tilt), at
+// the surface coordinates (phi, z): P = (ox + tx z + R cos phi, oy + ty z + R sin phi, z).
+struct TubeCost {
+  NearCost near;
+  double radius;
+  template <typename T>
+  bool operator()(const T* delta, const T* fcc, const T* k, const T* uv, const T* axis, T* res) const {
+    const T x[4] = {axis[0] + axis[2] * uv[1] + T(radius) * ceres::cos(uv[0]),
+                    axis[1] + axis[3] * uv[1] + T(radius) * ceres::sin(uv[0]), uv[1], T(1)};
+    return near(delta, fcc, k, x, res);
+  }
+};
+
 struct RotationPrior {
   double inv_sigma;
   template <typename T>
@@ -200,6 +215,31 @@ CalibrationResult solve_tracks(const Rig& nominal, const Rig& start, std::vector
     }
   }
 
+  // The calibration tube: tracks whose point lies near its wall are constrained to it (surface
+  // coordinates (phi, z) in `uv`), the others (its closed ends) stay free.
+  const bool tube = near && opt.tube_diameter_mm > 0;
+  const double tube_r = opt.tube_diameter_mm / 2;
+  std::vector<char> on_tube(tracks.size(), 0);
+  std::vector<std::array<double, 2>> uv(tracks.size(), {0, 0});
+  std::array<double, 4> axis = state && state->tube_axis ? *state->tube_axis : std::array<double, 4>{0, 0, 0, 0};
+  if (tube)
+    for (size_t ti = 0; ti < tracks.size(); ++ti) {
+      const auto& x = points[ti];
+      if (std::abs(x[3]) < 1e-9) continue;
+      const Vec3 p = Vec3(x[0], x[1], x[2]) / x[3];
+      const Vec2 c(p.x() - axis[0] - axis[2] * p.z(), p.y() - axis[1] - axis[3] * p.z());
+      // The first solve starts from the nominal rig (points off by millimetres): a wide band; later
+      // solves start from a solution (points within ~0.1 mm): a narrow one, which keeps the points
+      // of the closed ends near the rim off the wall.
+      const double tol = state && state->tube_axis ? opt.tube_tolerance_refined : opt.tube_tolerance;
+      if (std::abs(c.norm() - tube_r) > tol * tube_r) continue;
+      on_tube[ti] = 1;
+      uv[ti] = {std::atan2(c.y(), c.x()), p.z()};
+    }
+  if (tube)
+    spdlog::info("calibrate: {} of {} tracks on the {} mm tube's wall", std::count(on_tube.begin(), on_tube.end(), 1),
+                 tracks.size(), opt.tube_diameter_mm);
+
   // Squared reprojection errors, in pixels (weighted = false) or whitened (the solver's units).
   auto evaluate = [&](std::vector<double>* err2, bool weighted = false) {
     err2->clear();
@@ -211,7 +251,10 @@ CalibrationResult solve_tracks(const Rig& nominal, const Rig& start, std::vector
         const Vec2 obs = o.px;
         const Eigen::Matrix2d& w = weighted ? o.weight : id;
         bool ok;
-        if (near) ok = NearCost{obs, w, r_nom[i], nominal.cameras[i].position_mm}(delta[i].data(), fcc_block(i), k_block(i), points[ti].data(), r);
+        if (on_tube[ti])
+          ok = TubeCost{{obs, w, r_nom[i], nominal.cameras[i].position_mm}, tube_r}(
+              delta[i].data(), fcc_block(i), k_block(i), uv[ti].data(), axis.data(), r);
+        else if (near) ok = NearCost{obs, w, r_nom[i], nominal.cameras[i].position_mm}(delta[i].data(), fcc_block(i), k_block(i), points[ti].data(), r);
         else ok = FarCost{obs, w, r_nom[i]}(delta[i].data(), fcc_block(i), k_block(i), points[ti].data(), r);
         err2->push_back(ok ? r[0] * r[0] + r[1] * r[1] : 1e6);
       }
@@ -262,7 +305,12 @@ CalibrationResult solve_tracks(const Rig& nominal, const Rig& start, std::vector
         if (!keep[ti][oi]) continue;
         const auto& o = tracks[ti][oi];
         const int i = o.cam;
-        if (near) {
+        if (on_tube[ti]) {
+          auto* cost = new ceres::AutoDiffCostFunction<TubeCost, 2, 3, 4, 5, 2, 4>(
+              new TubeCost{{o.px, o.weight, r_nom[i], nominal.cameras[i].position_mm}, tube_r});
+          problem.AddResidualBlock(cost, make_loss(), delta[i].data(), fcc_block(i), k_block(i), uv[ti].data(),
+                                   axis.data());
+        } else if (near) {
           auto* cost = new ceres::AutoDiffCostFunction<NearCost, 2, 3, 4, 5, 4>(
               new NearCost{o.px, o.weight, r_nom[i], nominal.cameras[i].position_mm});
           problem.AddResidualBlock(cost, make_loss(), delta[i].data(), fcc_block(i), k_block(i), points[ti].data());
@@ -284,7 +332,7 @@ CalibrationResult solve_tracks(const Rig& nominal, const Rig& start, std::vector
                                  nullptr, delta[i].data());
       }
     }
-    if (near && intrinsics_free && opt.prior_mean_focal > 0 && opt.estimate_focal && !(opt.share_focal || opt.share_center)) {
+    if (near && !tube && intrinsics_free && opt.prior_mean_focal > 0 && opt.estimate_focal && !(opt.share_focal || opt.share_center)) {
       auto* prior = new MeanFocalPrior{{}, {}, 1.0 / opt.prior_mean_focal};
       auto* cost = new ceres::DynamicAutoDiffCostFunction<MeanFocalPrior>(prior);
       std::vector<double*> blocks;
@@ -385,9 +433,20 @@ CalibrationResult solve_tracks(const Rig& nominal, const Rig& start, std::vector
     for (int j = 0; j < 5; ++j) c.in.k[j] = k[j];
   }
   res.rig.validate();
+  for (size_t ti = 0; ti < tracks.size(); ++ti) {
+    if (!on_tube[ti]) continue;
+    Eigen::Vector4d x(axis[0] + axis[2] * uv[ti][1] + tube_r * std::cos(uv[ti][0]),
+                      axis[1] + axis[3] * uv[ti][1] + tube_r * std::sin(uv[ti][0]), uv[ti][1], 1.0);
+    x.normalize();
+    points[ti] = {x[0], x[1], x[2], x[3]};
+  }
+  if (tube)
+    spdlog::info("calibrate: tube axis offset ({:.3f}, {:.3f}) mm, tilt ({:.4f}, {:.4f})", axis[0], axis[1], axis[2],
+                 axis[3]);
   if (state) {
     state->tracks = tracks;
     state->points = points;
+    if (tube) state->tube_axis = axis;
   }
   spdlog::info("calibrate: reprojection RMS {:.3f} px (nominal rig {:.3f} px), {} tracks, {} observations, {} rejected",
                res.rms_px, res.initial_rms_px, res.tracks, res.observations, res.rejected);

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <array>
+#include <optional>
 #include <vector>
 
 #include "omma/calib/calibrate.h"
@@ -16,6 +17,8 @@ namespace omma::calib {
 struct SolveState {
   std::vector<std::vector<TrackObservation>> tracks;
   std::vector<std::array<double, 4>> points;
+  std::optional<std::array<double, 4>> tube_axis;  // the calibration tube's axis (ox, oy, tx, ty), if used;
+                                                   // also the start of the next solve's
 };
 
 // Steps 4-6 of calibrate_rig on given tracks: cameras with too few observations, bundle

@@ -71,12 +71,13 @@ CalibrationResult calibrate_rig(const Rig& nominal, const std::vector<cv::Mat>& 
     for (auto& pm : pms) pm.choose(scene, opt.match.min_inliers);
   }
   res.scene = scene;
-  if (scene == SceneModel::kNear) {
+  if (scene == SceneModel::kNear && opt.tube_diameter_mm <= 0) {
     res.warnings.push_back(
         "near-field scene (parallax): scene points with camera positions fixed at nominal; the mean focal length "
         "is held at the nominal one (prior, the focal/depth ambiguity) and principal point trades against "
         "rotation (on the simulated colon: ~0.5 deg, ~0.7-1.1 % focal, ~2 px centre errors, panorama as good as "
-        "with the true rig); prefer a far-field calibration scene for accurate intrinsics");
+        "with the true rig); calibrate from several shots of the calibration tube (--tube) or a far-field scene "
+        "for accurate intrinsics");
     spdlog::warn("calibrate: {}", res.warnings.back());
   }
   for (const auto& pm : pms) res.inliers += static_cast<int>(pm.inliers.size());

@@ -138,6 +138,15 @@ struct CalibrationOptions {
   bool dense_weighting = true;    // whiten by the alignment covariance (AlignInfo)
   double dense_weight_floor = 0.5;  // sigma floor, relative to the median sigma
   double dense_reference_weight = 1;  // weight of the reference observation (the patch centre)
+  // The calibration tube (thesis §3.6, Fig. 3.12a; the simulator's tube scene): its known diameter.
+  // Near field only: scene points within tube_tolerance (relative) of its wall, a cylinder about an
+  // axis near the dome's z axis whose offset and tilt are estimated with the rig, are constrained
+  // to it (two surface coordinates instead of a free 3D point), which fixes the depth scale (no
+  // mean-focal prior is then needed or used) and removes the near field's flat directions (see
+  // "Near-field focal ambiguity" and docs/near_field_calibration.md). 0 = off (free points).
+  double tube_diameter_mm = 0;
+  double tube_tolerance = 0.15;          // first solve (from the nominal rig)
+  double tube_tolerance_refined = 0.03;  // solves after the first
   int max_iterations = 50;        // Ceres iterations per solve
   int min_observations = 30;      // a camera with fewer keeps its nominal values (warning)
   int threads = 2;                // Ceres threads; near-field results vary with the summation order
