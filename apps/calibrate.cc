@@ -128,7 +128,13 @@ void add_calibrate_command(CLI::App& root) {
     const auto t0 = std::chrono::steady_clock::now();
     calib::CalibrationResult r;
     r.rig = nominal;
-    if (!a.no_geometric) r = calib::calibrate_rig(nominal, calib::average_frame_sets(sets), opt);
+    if (!a.no_geometric) {
+      // With a flat field the frames are flat-fielded first: the patch alignment is then free of
+      // the vignetting ramp (calib/photometric.h flat_field_frames).
+      std::vector<cv::Mat> frames = calib::average_frame_sets(sets);
+      if (!flats.empty()) frames = calib::flat_field_frames(frames, flats);
+      r = calib::calibrate_rig(nominal, frames, opt);
+    }
     const double geometric_s = seconds_since(t0);
     Rig out = r.rig;
     nlohmann::json pj = nullptr;

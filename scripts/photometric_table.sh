@@ -28,6 +28,7 @@ for name in $PHOTOS; do
   for proj in equirect vr180; do
     size=$EQ_SIZE; [ "$proj" = vr180 ] && size=$VR_SIZE
     dir="$OUT/$name-$proj"
+    mkdir -p "$dir"
     "$OMMA" simulate --scene "photo:$DATA/$name.jpg" --out "$dir/real" --projection "$proj" --truth-size "$size" >&2
     "$OMMA" simulate --scene "photo:$DATA/$name.jpg" --out "$dir/ideal" --projection "$proj" --truth-size "$size" \
       --vignetting 0 --color-gain 0 --no-truth >&2

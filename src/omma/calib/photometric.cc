@@ -192,6 +192,36 @@ cv::Mat decode_linear(const cv::Mat& srgb) {
   return out;
 }
 
+std::vector<cv::Mat> flat_field_frames(const std::vector<cv::Mat>& frames,
+                                       const std::vector<std::vector<cv::Mat>>& flat_sets, double sigma_px) {
+  for (const auto& set : flat_sets) {
+    if (set.size() != frames.size())
+      throw std::invalid_argument(fmt::format("flat field: {} flat frames for {} frames", set.size(), frames.size()));
+    for (size_t i = 0; i < frames.size(); ++i)
+      if (set[i].size() != frames[i].size())
+        throw std::invalid_argument(fmt::format("flat field: flat frame {} is {}x{}, the frame is {}x{}", i, set[i].cols,
+                                                set[i].rows, frames[i].cols, frames[i].rows));
+  }
+  if (flat_sets.empty()) return frames;
+  std::vector<cv::Mat> out(frames.size());
+  tbb::parallel_for(size_t{0}, frames.size(), [&](size_t i) {
+    cv::Mat flat = decode_linear(flat_sets[0][i]);
+    for (size_t s = 1; s < flat_sets.size(); ++s) flat += decode_linear(flat_sets[s][i]);
+    cv::GaussianBlur(flat, flat, cv::Size(), sigma_px, sigma_px, cv::BORDER_REPLICATE);
+    double hi = 0;
+    cv::minMaxLoc(flat.reshape(1), nullptr, &hi);
+    flat = cv::max(flat / hi, 1e-3);
+    cv::Mat lin = decode_linear(frames[i]) / flat, enc(lin.size(), CV_16UC3);
+    for (int r = 0; r < lin.rows; ++r) {
+      const float* src = lin.ptr<float>(r);
+      uint16_t* dst = enc.ptr<uint16_t>(r);
+      for (int k = 0; k < lin.cols * 3; ++k) dst[k] = uint16_t(std::lround(65535.0f * linear_to_srgb(src[k])));
+    }
+    out[i] = enc;
+  });
+  return out;
+}
+
 Photometric photometric_from_lens(const RigCamera& camera, const Lens& beta,
                                   const std::array<double, 3>& gains, double* max_error) {
   Photometric p;
@@ -310,9 +340,10 @@ PhotometricSummary calibrate_photometric(const Rig& rig, const std::vector<std::
   auto rms = [&]() {
     double s2 = 0;
     for (const Sample& s : samples) {
-      double r[3];
-      OverlapCost{{s.la[0], s.la[1], s.la[2]}, {s.lb[0], s.lb[1], s.lb[2]}, s.qa, s.qb, 1.0}(
-          lg[s.a].data(), lg[s.b].data(), beta.data(), r);
+      double r[3] = {1, 1, 1};  // a falloff <= 0 (rejected by the solver) counts as a unit error
+      if (!OverlapCost{{s.la[0], s.la[1], s.la[2]}, {s.lb[0], s.lb[1], s.lb[2]}, s.qa, s.qb, 1.0}(
+              lg[s.a].data(), lg[s.b].data(), beta.data(), r))
+        r[0] = r[1] = r[2] = 1;
       s2 += r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
     }
     return samples.empty() ? 0.0 : std::sqrt(s2 / (3.0 * samples.size()));

@@ -102,6 +102,15 @@ PhotometricSummary calibrate_flat_field(const Rig& rig, const std::vector<std::v
 Photometric photometric_from_lens(const RigCamera& camera, const std::array<double, PhotometricSummary::kLensTerms>& beta,
                                   const std::array<double, 3>& gains, double* max_error = nullptr);
 
+// Classic flat-fielding, no model and no geometry needed: each frame (sRGB 8/16-bit) divided in
+// linear light by its camera's flat field (the flat sets averaged, smoothed by a Gaussian of
+// sigma_px against noise, normalised to 1 at its brightest), encoded again as 16-bit sRGB.
+// Removes vignetting and colour gains before the geometric calibration, whose patch alignment a
+// brightness ramp across a patch biases (docs/near_field_calibration.md). Throws
+// std::invalid_argument on mismatched counts or sizes.
+std::vector<cv::Mat> flat_field_frames(const std::vector<cv::Mat>& frames,
+                                       const std::vector<std::vector<cv::Mat>>& flat_sets, double sigma_px = 3);
+
 // Linear frames: sRGB 8- or 16-bit -> CV_32FC3 linear light in [0, 1].
 cv::Mat decode_linear(const cv::Mat& srgb);
 
