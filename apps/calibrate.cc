@@ -1,10 +1,13 @@
 // omma calibrate: calibrate a rig from one set of camera frames (thesis §3.6): SIFT features,
 // matching between cameras whose nominal views overlap, RANSAC, Ceres bundle adjustment.
+#include <chrono>
+#include <filesystem>
 #include <iostream>
 #include <fmt/format.h>
 
 #include "apps/command.h"
 #include "omma/calib/calibrate.h"
+#include "omma/calib/photometric.h"
 #include "omma/core/frames.h"
 #include "omma/core/log.h"
 #include "omma/core/rig.h"
@@ -12,12 +15,17 @@
 namespace omma::app {
 
 namespace {
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
 struct CalibrateArgs {
-  std::string rig, frames, out, scene = "auto", focal = "per-camera", center = "per-camera",
+  std::vector<std::string> frames;
+  std::string rig, out, flat, scene = "auto", focal = "per-camera", center = "per-camera",
                                 distortion = "per-camera", loss = "auto";
   int radial_terms = 1, max_iterations = 50, min_matches = 30, upsample = 2, threads = 2;
-  double loss_scale = 1.0, ransac_px = 5, prior_deg = 5, prior_mean_focal = 0.002;
-  bool json = false;
+  double loss_scale = 1.0, ransac_px = 5, prior_deg = 5, prior_mean_focal = 0.002, tube = 0;
+  bool json = false, photometric = false, no_geometric = false;
 };
 
 // "per-camera" | "shared" | "fixed" -> (estimate, share)
@@ -36,9 +44,16 @@ void add_calibrate_command(CLI::App& root) {
       "Calibrate a rig from camera frames (thesis §3.6): SIFT features in every camera, matching between\n"
       "cameras whose nominal cones of view intersect, RANSAC (rotation-only model for a far scene, essential\n"
       "matrix with parallax), then a Ceres bundle adjustment of each camera's rotation, fu, fv, cu, cv and\n"
-      "radial distortion with a robust loss. Cameras with too few matches keep their nominal values (warning).");
+      "radial distortion with a robust loss. Cameras with too few matches keep their nominal values (warning).\n"
+      "Several shots of a static scene (--frames repeated, or a shots folder) are averaged. --photometric adds\n"
+      "each camera's vignetting and colour gains (from the overlaps, or --flat DIR), applied from then on by\n"
+      "stitch, run and the engine.");
   cmd->add_option("--rig", a.rig, "Nominal rig (JSON)")->required();
-  cmd->add_option("--frames", a.frames, "Frames folder: DIR/cam_XX.png per camera (omma/core/frames.h)")->required();
+  cmd->add_option("--frames", a.frames,
+                  "Frames folder (DIR/cam_XX.png per camera, omma/core/frames.h) or shots folder (DIR/shot_XX/, "
+                  "`omma simulate --shots`); repeat for several shots of a static scene: the geometric calibration "
+                  "averages them in linear light (noise / sqrt(shots)), the photometric one pools their overlaps")
+      ->required();
   cmd->add_option("--out", a.out, "Calibrated rig to write (JSON, atomic)")->required();
   cmd->add_option("--scene", a.scene, "Scene model: far (rotation only), near (parallax: scene points, camera "
                                       "positions fixed at nominal) or auto (default: from the RANSAC consensus)");
@@ -54,6 +69,10 @@ void add_calibrate_command(CLI::App& root) {
   cmd->add_option("--prior-mean-focal", a.prior_mean_focal,
                   "Near field only: sigma (relative) of the prior holding the cameras' MEAN focal length at the "
                   "nominal one, against the focal/depth ambiguity of small-baseline parallax (default 0.002; 0 = off)");
+  cmd->add_option("--tube", a.tube,
+                  "The frames show the calibration tube of this diameter (mm; the thesis's is 35) around the dome: "
+                  "near field, and scene points on its wall are constrained to it (its axis offset and tilt are "
+                  "estimated); default 0 = a scene of unknown shape");
   cmd->add_option("--max-iterations", a.max_iterations, "Ceres iterations per solve (default 50)");
   cmd->add_option("--threads", a.threads,
                   "Ceres threads (default 2); 1 = reproducible to the last digit (near-field results move by "
@@ -62,11 +81,25 @@ void add_calibrate_command(CLI::App& root) {
   cmd->add_option("--min-matches", a.min_matches, "Matched observations a camera needs to be calibrated "
                                                   "(default 30)");
   cmd->add_option("--upsample", a.upsample, "Run SIFT on frames upsampled this much (default 2; 1 = off)");
+  cmd->add_flag("--photometric", a.photometric,
+                "Also calibrate each camera's vignetting and colour gains (calib/photometric.h) from the overlaps "
+                "of the frames (after the geometric calibration, on its rig), and store them in the rig file");
+  cmd->add_option("--flat", a.flat,
+                  "Calibrate vignetting and gains from this flat-field frames (or shots) folder instead: a uniformly "
+                  "lit white target (implies --photometric)");
+  cmd->add_flag("--no-geometric", a.no_geometric,
+                "Keep the rig's geometry as given (already calibrated); only the photometric calibration runs");
   cmd->add_flag("--json", a.json, "Print one JSON object on stdout");
   cmd->callback([] {
     set_json_mode(a.json);
     const Rig nominal = load_rig(a.rig);
-    const auto frames = load_frames(a.frames, nominal);
+    const bool photometric = a.photometric || !a.flat.empty();
+    if (a.no_geometric && !photometric)
+      throw std::invalid_argument("--no-geometric leaves nothing to do: add --photometric or --flat DIR");
+    std::vector<std::filesystem::path> paths(a.frames.begin(), a.frames.end());
+    const auto sets = load_frame_sets(paths, nominal);
+    std::vector<std::vector<cv::Mat>> flats;
+    if (!a.flat.empty()) flats = load_frame_sets({a.flat}, nominal);
     calib::CalibrationOptions opt;
     opt.scene = calib::parse_scene_model(a.scene);
     bool share = false;
@@ -86,25 +119,65 @@ void add_calibrate_command(CLI::App& root) {
     if (a.prior_mean_focal < 0) throw std::invalid_argument("--prior-mean-focal must be >= 0");
     opt.prior_mean_focal = a.prior_mean_focal;
     opt.max_iterations = a.max_iterations;
+    if (a.tube < 0) throw std::invalid_argument("--tube must be a diameter in mm (> 0), or 0 for none");
+    opt.tube_diameter_mm = a.tube;
+    if (a.tube > 0) opt.scene = calib::SceneModel::kNear;
     opt.threads = a.threads;
     opt.min_observations = a.min_matches;
     opt.features.upsample = a.upsample;
-    const calib::CalibrationResult r = calib::calibrate_rig(nominal, frames, opt);
-    save_rig(r.rig, a.out);
+    const auto t0 = std::chrono::steady_clock::now();
+    calib::CalibrationResult r;
+    r.rig = nominal;
+    if (!a.no_geometric) {
+      // With a flat field the frames are flat-fielded first: the patch alignment is then free of
+      // the vignetting ramp (calib/photometric.h flat_field_frames).
+      std::vector<cv::Mat> frames = calib::average_frame_sets(sets);
+      if (!flats.empty()) frames = calib::flat_field_frames(frames, flats);
+      r = calib::calibrate_rig(nominal, frames, opt);
+    }
+    const double geometric_s = seconds_since(t0);
+    Rig out = r.rig;
+    nlohmann::json pj = nullptr;
+    std::vector<std::string> warnings = r.warnings;
+    if (photometric) {
+      calib::PhotometricOptions po;
+      po.threads = a.threads;
+      const auto t1 = std::chrono::steady_clock::now();
+      const calib::PhotometricSummary ps =
+          a.flat.empty() ? calib::calibrate_photometric(out, sets, po) : calib::calibrate_flat_field(out, flats, po);
+      out = ps.rig;
+      warnings.insert(warnings.end(), ps.warnings.begin(), ps.warnings.end());
+      pj = {{"source", a.flat.empty() ? "overlaps" : "flat-field"},
+            {"pairs", ps.pairs},
+            {"samples", ps.samples},
+            {"rms_log", ps.rms_log},
+            {"initial_rms_log", ps.initial_rms_log},
+            {"lens", ps.lens},
+            {"max_fit_error", ps.max_fit_error},
+            {"uncalibrated", ps.uncalibrated_ids},
+            {"seconds", seconds_since(t1)}};
+    }
+    save_rig(out, a.out);
     if (a.json) {
       nlohmann::json per = nlohmann::json::array();
       for (const auto& c : r.per_camera)
         per.push_back({{"id", c.id}, {"rms_px", c.rms_px}, {"matches", c.matches}, {"calibrated", c.calibrated}});
-      print_json({{"cameras", r.rig.cameras.size()}, {"matches", r.matches}, {"inliers", r.inliers},
+      print_json({{"cameras", out.cameras.size()}, {"shots", sets.size()}, {"geometric", !a.no_geometric},
+                  {"matches", r.matches}, {"inliers", r.inliers},
                   {"rms_px", r.rms_px}, {"initial_rms_px", r.initial_rms_px}, {"scene", calib::to_string(r.scene)},
                   {"pairs", r.pairs}, {"tracks", r.tracks}, {"observations", r.observations},
-                  {"rejected", r.rejected}, {"uncalibrated", r.uncalibrated_ids}, {"warnings", r.warnings},
-                  {"per_camera", per}, {"out", a.out}});
+                  {"rejected", r.rejected}, {"uncalibrated", r.uncalibrated_ids}, {"warnings", warnings},
+                  {"per_camera", per}, {"geometric_seconds", geometric_s}, {"photometric", pj}, {"out", a.out}});
     } else {
-      std::cout << fmt::format("{}: {} cameras ({} uncalibrated), {} matches, {} inliers, {} scene, reprojection RMS "
-                               "{:.3f} px (nominal rig {:.3f} px)\n",
-                               a.out, r.rig.cameras.size(), r.uncalibrated_ids.size(), r.matches, r.inliers,
-                               calib::to_string(r.scene), r.rms_px, r.initial_rms_px);
+      if (!a.no_geometric)
+        std::cout << fmt::format("{}: {} cameras ({} uncalibrated) from {} shot(s), {} matches, {} inliers, {} scene, "
+                                 "reprojection RMS {:.3f} px (nominal rig {:.3f} px)\n",
+                                 a.out, out.cameras.size(), r.uncalibrated_ids.size(), sets.size(), r.matches,
+                                 r.inliers, calib::to_string(r.scene), r.rms_px, r.initial_rms_px);
+      if (!pj.is_null())
+        std::cout << fmt::format("{}: photometric model from {} ({} samples), RMS {:.4f} -> {:.4f} (log)\n", a.out,
+                                 pj["source"].get<std::string>(), pj["samples"].get<int>(),
+                                 pj["initial_rms_log"].get<double>(), pj["rms_log"].get<double>());
     }
   });
 }

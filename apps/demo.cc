@@ -11,6 +11,7 @@
 
 #include "apps/command.h"
 #include "apps/demo_depth.h"
+#include "omma/calib/photometric.h"
 #include "omma/core/frames.h"
 #include "omma/core/io.h"
 #include "omma/core/log.h"
@@ -20,6 +21,7 @@
 #include "omma/engine/bench.h"
 #include "omma/engine/compiled_map.h"
 #include "omma/engine/render.h"
+#include "omma/isp/photometric.h"
 #include "omma/pano/maps.h"
 #include "omma/pano/quality.h"
 #include "omma/pano/stitch.h"
@@ -97,8 +99,98 @@ struct MethodRow {
   double ms = 0;
 };
 
+// ---- Photometric calibration (issue 13): its own section, before / after --------------------------
+// The vignetting and colour gains estimated from the demo's own frames (the overlaps between
+// cameras, calib/photometric.h), compared with the simulator's truth, and every method stitched
+// again from the corrected frames (isp/photometric.h), against the same ground truth.
+struct PhotometricDemo {
+  calib::PhotometricSummary summary;
+  double seconds = 0;
+  double gain_error_max = 0, falloff_error_max = 0;  // against the simulator's truth (per-channel gauge)
+  std::vector<MethodRow> after;                       // the same methods on the corrected frames
+};
+
+PhotometricDemo photometric_demo(const fs::path& dir, const Rig& rig, const std::vector<cv::Mat>& frames,
+                                 const sim::SimulateResult& simr, const sim::CameraEffects& effects,
+                                 const PanoGrid& grid, const cv::Mat& seam, bool progress) {
+  PhotometricDemo d;
+  const auto t0 = std::chrono::steady_clock::now();
+  d.summary = calib::calibrate_photometric(rig, {frames});
+  d.seconds = ms_since(t0) / 1000;
+  // Against the truth: gains up to one scale per channel, falloff over every pixel.
+  const size_t n = rig.cameras.size();
+  std::array<double, 3> le{}, lt{};
+  for (size_t i = 0; i < n; ++i)
+    for (int k = 0; k < 3; ++k) {
+      le[k] += std::log(d.summary.rig.cameras[i].photometric->gains[k]) / n;
+      lt[k] += std::log(simr.frames[i].gains[k]) / n;
+    }
+  for (size_t i = 0; i < n; ++i) {
+    const RigCamera& c = simr.true_rig.cameras[i];
+    const Photometric& p = *d.summary.rig.cameras[i].photometric;
+    for (int k = 0; k < 3; ++k)
+      d.gain_error_max = std::max(d.gain_error_max, std::abs(std::exp(std::log(p.gains[k]) - le[k] -
+                                                                      std::log(simr.frames[i].gains[k]) + lt[k]) - 1));
+    for (int r = 0; r < c.in.height; r += 3)
+      for (int col = 0; col < c.in.width; col += 3)
+        d.falloff_error_max =
+            std::max(d.falloff_error_max, std::abs(vignetting_falloff(p, c.in.width, c.in.height, col + 0.5, r + 0.5) /
+                                                       sim::true_falloff(c, effects, Vec2(col + 0.5, r + 0.5)) - 1));
+  }
+  save_rig(d.summary.rig, dir / "rig_photometric.json");
+  const std::vector<cv::Mat> corrected = isp::correct_frames(d.summary.rig, frames);
+  for (pano::Method m : pano::all_methods()) {
+    pano::StitchOptions opt;
+    opt.method = m;
+    opt.grid = grid;
+    opt.progress = progress;
+    const auto t1 = std::chrono::steady_clock::now();
+    const cv::Mat p = pano::stitch(rig, corrected, opt);
+    MethodRow row{pano::to_string(m), {}, ms_since(t1)};
+    row.eval = pano::evaluate(p, simr.truth, seam);
+    if (m == pano::Method::kMrf) write_image(dir / "pano_mrf_photometric.png", to_u8(p));
+    d.after.push_back(row);
+  }
+  return d;
+}
+
+// The section of the report (Markdown; the HTML gets the same table).
+std::string photometric_markdown(const PhotometricDemo& d, const std::vector<MethodRow>& before) {
+  std::string md = fmt::format(
+      "## Photometric calibration (vignetting and colour gains)\n\n"
+      "Estimated from the overlaps of these frames alone ({} samples over {} camera pairs, {:.1f} s; RMS of the "
+      "log ratio {:.3f} -> {:.3f}), stored in `rig_photometric.json`. Against the simulator's truth: gains within "
+      "{:.2f} % (one scale per channel), falloff within {:.2f} % over every pixel. The same methods on the "
+      "corrected frames:\n\n| method | PSNR before (dB) | PSNR after (dB) | SSIM before | SSIM after |\n"
+      "|---|---|---|---|---|\n",
+      d.summary.samples, d.summary.pairs, d.seconds, d.summary.initial_rms_log, d.summary.rms_log,
+      100 * d.gain_error_max, 100 * d.falloff_error_max);
+  for (size_t i = 0; i < before.size() && i < d.after.size(); ++i)
+    md += fmt::format("| {} | {:.2f} | {:.2f} | {:.4f} | {:.4f} |\n", before[i].method, before[i].eval.psnr_db,
+                      d.after[i].eval.psnr_db, before[i].eval.ssim, d.after[i].eval.ssim);
+  md += "\nBefore: ![mrf before](pano_mrf.png) After: ![mrf after](pano_mrf_photometric.png)\n";
+  return md;
+}
+
+std::string photometric_html(const PhotometricDemo& d, const std::vector<MethodRow>& before) {
+  std::string html = fmt::format(
+      "<h2>Photometric calibration</h2><p>Vignetting and colour gains estimated from the overlaps of these frames "
+      "({} samples, {} pairs, {:.1f} s), within {:.2f} % (gains) and {:.2f} % (falloff) of the simulator's truth."
+      "</p><table><tr><th>method</th><th>PSNR before</th><th>PSNR after</th><th>SSIM before</th>"
+      "<th>SSIM after</th></tr>",
+      d.summary.samples, d.summary.pairs, d.seconds, 100 * d.gain_error_max, 100 * d.falloff_error_max);
+  for (size_t i = 0; i < before.size() && i < d.after.size(); ++i)
+    html += fmt::format("<tr><td>{}</td><td>{:.2f}</td><td>{:.2f}</td><td>{:.4f}</td><td>{:.4f}</td></tr>",
+                        before[i].method, before[i].eval.psnr_db, d.after[i].eval.psnr_db, before[i].eval.ssim,
+                        d.after[i].eval.ssim);
+  html += "</table><div class=\"row\"><div><h3>mrf before</h3><img src=\"pano_mrf.png\"></div><div><h3>mrf after"
+          "</h3><img src=\"pano_mrf_photometric.png\"></div></div>";
+  return html;
+}
+
 void write_report(const fs::path& dir, const DemoOptions& o, const Rig& rig, const std::vector<MethodRow>& rows,
-                  const EngineRow& eng, double inter_psnr, double r_vir, double total_s, const DepthDemo& depth) {
+                  const EngineRow& eng, double inter_psnr, double r_vir, double total_s, const DepthDemo& depth,
+                  const PhotometricDemo& ph) {
   const std::string engine_text = fmt::format(
       "The real-time engine (`omma run`) renders the same mrf panorama from a compiled map ({:.1f} bytes per "
       "output pixel, compiled in {:.2f} s) at {:.0f} panoramas/s on this machine ({:.0f}x the thesis FPGA's 25 fps); "
@@ -124,7 +216,8 @@ void write_report(const fs::path& dir, const DemoOptions& o, const Rig& rig, con
                       r.eval.seam_psnr_db, r.ms);
   md += "\nGround truth: the ideal panorama from the dome centre, rendered noise-free by the simulator "
         "(truth.png). Seam PSNR: the directions seen by two or more cameras. Times: the plain reference "
-        "stitcher (pano::stitch).\n\n## Real-time engine (thesis ch. 5)\n\n" + engine_text + "\n\n" + depth.markdown;
+        "stitcher (pano::stitch).\n\n" + photometric_markdown(ph, rows) +
+        "\n## Real-time engine (thesis ch. 5)\n\n" + engine_text + "\n\n" + depth.markdown;
   write_text_atomically(dir / "report.md", md);
 
   std::string html =
@@ -153,9 +246,28 @@ void write_report(const fs::path& dir, const DemoOptions& o, const Rig& rig, con
     html += fmt::format("<tr><td>{0}</td><td>{1:.2f}</td><td>{2:.4f}</td><td>{3:.2f}</td><td>{4:.0f}</td>"
                         "<td><a href=\"pano_{0}.png\">image</a></td></tr>",
                         r.method, r.eval.psnr_db, r.eval.ssim, r.eval.seam_psnr_db, r.ms);
-  html += "</table><p>Times: the plain reference stitcher (pano::stitch).</p><h2>Real-time engine</h2><p>" +
-          engine_text + "</p>" + depth.html + "</body></html>\n";
+  html += "</table><p>Times: the plain reference stitcher (pano::stitch).</p>" + photometric_html(ph, rows) +
+          "<h2>Real-time engine</h2><p>" + engine_text + "</p>" + depth.html + "</body></html>\n";
   write_text_atomically(dir / "report.html", html);
+}
+
+nlohmann::json photometric_json(const PhotometricDemo& d, const std::vector<MethodRow>& before) {
+  nlohmann::json m = nlohmann::json::object();
+  for (size_t i = 0; i < before.size() && i < d.after.size(); ++i)
+    m[before[i].method] = {{"psnr_before_db", before[i].eval.psnr_db}, {"psnr_after_db", d.after[i].eval.psnr_db},
+                           {"ssim_before", before[i].eval.ssim}, {"ssim_after", d.after[i].eval.ssim}};
+  return {{"samples", d.summary.samples}, {"pairs", d.summary.pairs}, {"seconds", d.seconds},
+          {"rms_log", d.summary.rms_log}, {"initial_rms_log", d.summary.initial_rms_log},
+          {"gain_error_max", d.gain_error_max}, {"falloff_error_max", d.falloff_error_max}, {"methods", m}};
+}
+
+std::string photometric_text(const PhotometricDemo& d, const std::vector<MethodRow>& before) {
+  std::string t = fmt::format("photometric calibration from the overlaps ({:.1f} s): gains within {:.2f} %, falloff "
+                              "within {:.2f} % of the truth; PSNR before -> after:",
+                              d.seconds, 100 * d.gain_error_max, 100 * d.falloff_error_max);
+  for (size_t i = 0; i < before.size() && i < d.after.size(); ++i)
+    t += fmt::format(" {} {:.2f} -> {:.2f}", before[i].method, before[i].eval.psnr_db, d.after[i].eval.psnr_db);
+  return t + "\n";
 }
 
 void run_demo(const DemoOptions& o) {
@@ -214,11 +326,13 @@ void run_demo(const DemoOptions& o) {
   write_image(dir / "boundary_overlay.png", pano::boundary_overlay(mrf, boundary, o.threshold));
   spdlog::info("demo: the real-time engine on the same frames");
   const EngineRow eng = run_engine(rig, grid, frames, mrf);
+  spdlog::info("demo: photometric calibration from the frames' overlaps, then every method again");
+  const PhotometricDemo ph = photometric_demo(dir, rig, frames, simr, so.effects, grid, seam, !o.json);
   const double inter = pano::inter_camera_psnr(rig, frames, grid);
   const double r_vir = design::virtual_radius(rig, deg2rad(0.5));
   const DepthDemo depth = run_depth_demo(rig, grid, frames, simr.truth, simr.truth_depth, mrf, dir, !o.json);
   const double total_s = ms_since(t_start) / 1000;
-  write_report(dir, o, rig, rows, eng, inter, r_vir, total_s, depth);
+  write_report(dir, o, rig, rows, eng, inter, r_vir, total_s, depth, ph);
 
   if (o.json) {
     nlohmann::json methods = nlohmann::json::object();
@@ -231,6 +345,7 @@ void run_demo(const DemoOptions& o) {
                 {"engine", {{"method", "mrf"}, {"fps", eng.fps}, {"compile_s", eng.compile_s},
                             {"bytes_per_pixel", eng.bytes_per_pixel}, {"psnr_vs_reference_db", eng.psnr_vs_reference}}},
                 {"depth", depth.json},
+                {"photometric", photometric_json(ph, rows)},
                 {"seconds", total_s}});
   } else {
     std::cout << fmt::format("\n{:<14} {:>9} {:>7} {:>10} {:>8}\n", "method", "PSNR dB", "SSIM", "seam dB", "ms");
@@ -241,6 +356,7 @@ void run_demo(const DemoOptions& o) {
                              "against the reference stitch, map compiled in {:.2f} s\n",
                              eng.fps, eng.fps / 25, eng.psnr_vs_reference, eng.compile_s);
     std::cout << depth.summary << "\n";
+    std::cout << photometric_text(ph, rows);
     std::cout << fmt::format("inter-camera PSNR (eq. 4.19-4.21): {:.2f} dB; total {:.1f} s\n", inter, total_s);
     std::cout << "demo written to " << fs::absolute(dir).string() << "/ (open report.html)\n";
   }

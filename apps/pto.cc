@@ -16,15 +16,19 @@ void add_pto_command(CLI::App& root) {
   cmd->require_subcommand(1);
   static std::string rig_path, pto_path, frames, in_path, out_rig;
   static int pano_width = 1440, interpolator = 0;
-  static bool json_ex = false, json_im = false;
+  static bool json_ex = false, json_im = false, linear_response = false;
   auto* ex = cmd->add_subcommand(
       "export", "Write a rig as a Hugin project: one rectilinear (f0) image per camera with yaw, pitch, roll, v, "
-                "a, b, c, d, e, and an equirect p-line (cropped to the dome's hemisphere)");
+                "a, b, c, d, e, the photometric model (Vb Vc Vd Vx Vy Vm5, Eev Er Eb) and an equirect p-line "
+                "(cropped to the dome's hemisphere)");
   ex->add_option("RIG", rig_path, "Rig (JSON)")->required();
   ex->add_option("OUT", pto_path, "Project file to write (.pto, atomic)")->required();
   ex->add_option("--frames", frames, "Frames folder: images are DIR/cam_XX.png (default: bare cam_XX.png)");
   ex->add_option("--pano-width", pano_width, "p-line panorama width, pixels (360 x 180 deg; default 1440)");
   ex->add_option("--interpolator", interpolator, "m-line interpolator: 0 poly3 (default), 5 bilinear, 6 nearest");
+  ex->add_flag("--linear-response", linear_response,
+               "Write Rt1 (the frames' pixel values are linear light) so that Hugin applies the rig's photometric "
+               "model (Vb Vc Vd Vx Vy, Eev Er Eb) exactly; default: Hugin's average EMoR camera curve");
   ex->add_flag("--json", json_ex, "Print one JSON object on stdout");
   ex->callback([] {
     set_json_mode(json_ex);
@@ -38,6 +42,7 @@ void add_pto_command(CLI::App& root) {
     }
     opt.pano_width = pano_width;
     opt.interpolator = interpolator;
+    opt.linear_response = linear_response;
     if (pano_width < 8) throw std::invalid_argument("--pano-width must be at least 8");
     const calib::PtoExportResult r = calib::export_pto(rig, opt);
     for (const auto& w : r.warnings) spdlog::warn("pto export: {}", w);

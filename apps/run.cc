@@ -58,7 +58,7 @@ void add_run_command(CLI::App& root) {
     long frames = 0;
     int threads = 0, camera_threads = engine::EngineOptions{}.max_camera_threads,
         max_streams = engine::SinkOptions{}.max_streams;
-    bool loop = false, json = false, no_cache = false, depth = false;
+    bool loop = false, json = false, no_cache = false, depth = false, no_photometric = false;
   };
   static Opts o;
   cmd->add_option("--rig", o.rig, "Rig file (JSON)")->required();
@@ -107,6 +107,9 @@ void add_run_command(CLI::App& root) {
   cmd->add_option("--threads", o.threads, "Renderer threads (0: all; default 0)")->check(CLI::Range(0, 1024));
   cmd->add_option("--cache", o.cache, "Map cache folder (default $OMMA_CACHE_DIR or ~/.cache/omma)");
   cmd->add_flag("--no-cache", o.no_cache, "Do not read or write the map cache");
+  cmd->add_flag("--no-photometric", o.no_photometric,
+                "Ignore the rig's photometric model (by default each camera's frames are corrected for its "
+                "vignetting and colour gains as they arrive, in the camera's thread)");
   cmd->add_flag("--json", o.json, "Print only the JSON summary on stdout (no progress line)");
   cmd->callback([] {
     set_json_mode(o.json);
@@ -122,6 +125,7 @@ void add_run_command(CLI::App& root) {
     eo.fps = o.fps;
     eo.threads = o.threads;
     eo.depth = o.depth;
+    eo.photometric = !o.no_photometric;
     eo.first_frame_timeout_s = o.first_timeout;
     eo.max_camera_threads = o.camera_threads;
     engine::SourceOptions so;
@@ -173,6 +177,7 @@ void add_run_command(CLI::App& root) {
     j["min_weight"] = o.min_weight;
     j["projection"] = o.projection;
     j["size"] = o.size;
+    j["photometric"] = eo.photometric && has_photometric(rig);
     nlohmann::json sk_names = nlohmann::json::array();
     for (const auto& s : sinks) sk_names.push_back(s->describe());
     j["sinks"] = sk_names;

@@ -20,7 +20,7 @@ struct SimulateArgs {
   std::string rig, scene, out, truth_size = "1080x1080", projection = "vr180", perturb;
   bool raw = false, json = false, ideal = false, no_truth = false;
   uint64_t seed = 1;
-  int supersample = 3, truth_supersample = 0, bits = 10;
+  int supersample = 3, truth_supersample = 0, bits = 10, shots = 1;
   double vignetting = 0.5, color_gain = 0.10, electrons = 4000, read_noise = 2.0, exposure = 1.0;
   double dome_z = 0;
 };
@@ -54,13 +54,16 @@ void run_simulate(const SimulateArgs& a) {
   }
   o.pose.translation_mm = Vec3(0, 0, a.dome_z);
   o.progress = !a.json;
+  if (a.shots < 1 || a.shots > 1000) throw std::invalid_argument(fmt::format("--shots must be 1..1000, got {}", a.shots));
+  o.shots = a.shots;
   if (fs::exists(a.out) && !fs::is_directory(a.out))
     throw IoError(fmt::format("--out '{}' exists and is not a folder", a.out));
   const Rig rig = a.rig.empty() ? design::thesis_prototype_rig() : load_rig(a.rig);
   if (rig.cameras.empty()) throw RigError(fmt::format("rig '{}' has no cameras", a.rig));
   const std::unique_ptr<sim::Scene> scene = sim::make_scene(a.scene);
   const sim::SimulateResult res = sim::simulate(rig, *scene, o);
-  sim::write_frames_folder(a.out, res, o, *scene);
+  if (a.shots > 1) sim::write_shots_folder(a.out, res, o, *scene);
+  else sim::write_frames_folder(a.out, res, o, *scene);
   const double total_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   if (a.json) {
     nlohmann::json j = {{"out", a.out},
@@ -74,14 +77,17 @@ void run_simulate(const SimulateArgs& a) {
                                           : nlohmann::json(nullptr)},
                         {"raw", a.raw},
                         {"seed", a.seed},
+                        {"shots", a.shots},
                         {"perturbed", o.perturb.any()},
                         {"cameras_ms", res.cameras_ms},
                         {"truth_ms", res.truth_ms},
                         {"ms", total_ms}};
     print_json(j);
   } else {
-    std::cout << fmt::format("{}: {} cameras ({}x{}){}{} of scene '{}' in {:.0f} ms\n", a.out, rig.cameras.size(),
-                             rig.cameras[0].in.width, rig.cameras[0].in.height, a.raw ? " + raw Bayer" : "",
+    std::cout << fmt::format("{}: {} cameras ({}x{}){}{}{} of scene '{}' in {:.0f} ms\n", a.out, rig.cameras.size(),
+                             rig.cameras[0].in.width, rig.cameras[0].in.height,
+                             a.shots > 1 ? fmt::format(", {} shots (shot_00 .. shot_{:02d})", a.shots, a.shots - 1) : "",
+                             a.raw ? " + raw Bayer" : "",
                              o.truth ? fmt::format(" + {} {}x{} truth", a.projection, ts.width, ts.height) : "",
                              scene->spec(), total_ms);
   }
@@ -101,7 +107,8 @@ void add_simulate_command(CLI::App& root) {
   cmd->add_option("--scene", a.scene,
                   "Scene: photo:PATH (far-field 360x180 equirect photo), colon (procedural tube), "
                   "usaf[:DIST_MM] (USAF 1951 chart, default 25 mm ahead), checker[:RADIUS_MM] (textured sphere, "
-                  "default 100 mm)")
+                  "default 100 mm), tube[:DIAMETER_MM] (the thesis's textured calibration tube, default 35 mm), "
+                  "flat[:LEVEL] (uniformly lit white target, for flat-field photometric calibration)")
       ->required();
   cmd->add_option("--out", a.out, "Output frames folder (created; all or nothing)")->required();
   cmd->add_option("--truth-size", a.truth_size, "Ground-truth panorama size WxH (pixels)")->capture_default_str();
@@ -131,6 +138,10 @@ void add_simulate_command(CLI::App& root) {
   cmd->add_flag("--ideal", a.ideal,
                 "Ideal cameras: no vignetting, gains, noise or quantisation (--supersample still applies)");
   cmd->add_option("--dome-z", a.dome_z, "Move the dome along the scene z axis by this many mm")
+      ->capture_default_str();
+  cmd->add_option("--shots", a.shots,
+                  "Exposures of the (static) scene, 1..1000: the same rig and colour gains, fresh sensor noise per "
+                  "shot; with N > 1, OUT holds one frames folder per shot: OUT/shot_00 .. OUT/shot_<N-1>")
       ->capture_default_str();
   cmd->add_flag("--json", a.json, "Print one JSON summary on stdout");
   cmd->callback([] { run_simulate(a); });

@@ -11,6 +11,8 @@
 #include <iostream>
 #include <stdexcept>
 
+#include <tbb/parallel_for.h>
+
 #include "apps/command.h"
 #include "omma/core/frames.h"
 #include "omma/core/grid.h"
@@ -18,6 +20,7 @@
 #include "omma/core/log.h"
 #include "omma/core/rig.h"
 #include "omma/isp/isp.h"
+#include "omma/isp/photometric.h"
 #include "omma/pano/maps.h"
 #include "omma/pano/surface.h"
 #include "omma/pano/sweep.h"
@@ -35,6 +38,7 @@ struct StitchArgs {
   bool raw = false;
   std::string demosaic = "hybrid", awb = "grayworld", flat;
   bool linear_output = false;
+  bool no_photometric = false;  // ignore the rig's photometric model (compare before / after)
 };
 
 std::filesystem::path overlay_path_for(const std::filesystem::path& boundary) {
@@ -144,6 +148,7 @@ void run_stitch(const StitchArgs& a) {
   if (a.threshold < 0 || a.threshold > 1) throw std::invalid_argument("--threshold must be in [0, 1]");
   const Rig rig = load_rig(a.rig);
   if (rig.cameras.empty()) throw std::invalid_argument("rig " + a.rig + " has no cameras");
+  const bool photometric = has_photometric(rig) && !a.no_photometric;
   std::vector<cv::Mat> frames;
   if (a.raw) {
     isp::IspOptions iso;
@@ -151,9 +156,26 @@ void run_stitch(const StitchArgs& a) {
     iso.awb = isp::parse_awb(a.awb);
     iso.srgb = !a.linear_output;
     if (!a.flat.empty()) iso.flat_gain = isp::load_flat_field(a.flat);
-    frames = isp::develop_all(load_raw_frames(a.frames, rig), iso);
+    const std::vector<cv::Mat> raws = load_raw_frames(a.frames, rig);
+    if (photometric && a.flat.empty()) {
+      // The rig's photometric model replaces the flat field and the white balance: per camera a
+      // flat-gain map 1 / (gain_c V) on the raw mosaic (isp/photometric.h).
+      frames.resize(raws.size());
+      tbb::parallel_for(size_t{0}, raws.size(), [&](size_t i) {
+        isp::IspOptions o = iso;
+        const RigCamera& c = rig.cameras[i];
+        if (c.photometric) {
+          o.flat_gain = isp::flat_gain_from_model(*c.photometric, c.in.width, c.in.height);
+          o.awb = isp::Awb::kNone;
+        }
+        frames[i] = isp::develop(raws[i], o);
+      });
+    } else {
+      frames = isp::develop_all(raws, iso);
+    }
   } else {
     frames = load_frames(a.frames, rig);
+    if (photometric) frames = isp::correct_frames(rig, frames);
   }
 
   std::filesystem::path depth_data;
@@ -212,6 +234,7 @@ void run_stitch(const StitchArgs& a) {
                 {"ms", ms},
                 {"depth", depth.info},
                 {"depth_ms", depth_ms},
+                {"photometric", photometric},
                 {"inter_camera_psnr_db", icp_json}});
   } else {
     std::cout << fmt::format("{}: {}x{} {} panorama by {} in {:.0f} ms, inter-camera PSNR {:.2f} dB\n", a.out,
@@ -278,6 +301,9 @@ void add_stitch_command(CLI::App& root) {
   cmd->add_option("--flat", a.flat, "With --raw: flat-field raw frame for vignetting correction");
   cmd->add_flag("--linear-output", a.linear_output,
                 "With --raw: keep the 8 most significant linear bits (the thesis hardware) instead of sRGB");
+  cmd->add_flag("--no-photometric", a.no_photometric,
+                "Ignore the rig's photometric model (vignetting and colour gains, applied by default when the rig\n"
+                "has one: frames in linear light divided by gain x falloff; with --raw it replaces --awb)");
   cmd->add_flag("--json", a.json,
                 "Print one JSON object {method, width, height, ms, depth, depth_ms, inter_camera_psnr_db} on stdout");
   cmd->callback([] { run_stitch(a); });

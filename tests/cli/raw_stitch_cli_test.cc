@@ -5,7 +5,7 @@
 #include <filesystem>
 
 #include "omma/core/rig.h"
-#include "omma/pano/test_scene.h"
+#include "omma/sim/test_scenes.h"
 #include "tests/cli/cli_util.h"
 
 namespace omma::test {
@@ -20,7 +20,7 @@ double eval_psnr(const fs::path& pano, const fs::path& truth) {
 
 TEST(RawStitchCli, IspDevelopedFramesMatchTheRgbPath) {
   const fs::path d = temp_dir("rawstitch");
-  save_rig(pano::testing::small_rig(64), d / "rig.json");
+  save_rig(sim::testing::small_rig(64), d / "rig.json");
   const RunResult sim = run_omma("simulate --rig " + (d / "rig.json").string() + " --scene photo:" + data_dir() +
                                  "/louvre.jpg --raw --color-gain 0 --truth-size 128x128 --out " +
                                  (d / "f").string());

@@ -62,52 +62,15 @@
 //                 (1.2-1.4 % with no rejection after the warm start), centre 2.6 -> 2.3 px, RMS
 //                 0.32 -> 0.13 px; ray error (rig_diff.h) 1.85 -> 0.41-0.46 deg; nn PSNR at the
 //                 true rig's.
-// Near field: dense, flat-fielded, weighted refinement (dense_refine, dense_tracks in calibrate.cc).
-// A study with TRUE correspondences of the simulated colon (the wall's depth found exactly from the
-// simulator's scene, 17221 SIFT keypoints seen by a second camera, ECC started from the true local
-// homography) found three causes of the ~0.1-0.25 px alignment errors there:
-//   * vignetting (50 % strength): ECC is invariant to one gain and offset per patch, not to the
-//     brightness ramp across a patch near the image edge, which points opposite ways in the two
-//     cameras of an overlap: a bias per camera pair. Median error 0.19 -> 0.13 px without it;
-//     to_alignment_image's flat field (subpixel.h) removes most of it (0.13 px);
-//   * sensor noise: the colon's walls are dark (linear signal ~0.05, ~200 electrons, SNR ~15 per
-//     pixel): 0.12 px -> 0.05 px without noise; larger patches average it (31 px: 0.09 px on flat
-//     wall), more observations average it further;
-//   * the wall's folds: only ~40 % of 21 px patches are flat to 0.1 px (homography fit of the true
-//     map); on the others the error is ~0.4 px, so 41 px patches are worse again.
-// Hence, in the near field, after the first solve: every SIFT keypoint (not only the matched
-// ones) becomes a reference patch in the camera where it lies nearest the principal point, placed
-// by the solution's neighbouring scene points and aligned into every other camera that sees it
-// (31 px patches on flat-fielded images, two rounds), each observation whitened by the
-// alignment's covariance (AlignInfo, eq. Cramer-Rao of the least-squares fit). Measured on the
-// test's colon and two more simulation seeds (--perturb orient=2,focal=0.03,center=5,k1=0.05,
-// one Ceres thread; before -> after): orientation median 0.63 / 0.92 / 0.99 -> 0.53 / 0.54 / 0.58
-// deg, focal 1.23 / 1.94 / 1.19 -> 1.09 / 1.10 / 0.67 %, ray error 0.41 / 0.80 / 0.41 -> 0.34 /
-// 0.40 / 0.23 deg, 2132 -> ~8000 tracks, ~3900 -> ~19500 observations.
-// Why still not 0.1 deg (model checks in the same study, bundle adjustment from the nominal rig):
-//   * exact correspondences of these ~17000 keypoint pairs give the true rig back exactly with no
-//     priors, but the default priors alone leave 0.24 deg (the rotation prior) and 0.37 deg with the
-//     mean-focal prior: the problem has near-null directions (principal point against rotation,
-//     focal length against depth) in which even weak priors move the solution;
-//   * the same pairs with iid Gaussian noise of 0.1 px give 0.09 deg without priors (0.2 px:
-//     0.19 deg), but without priors the real observations let the focal/depth direction run away
-//     (5-10 % focal);
-//   * the real ECC observations, even with those above 0.25 px left out using the truth, give
-//     0.48 deg (0.30 deg on frames without vignetting, 0.17 without noise, 0.10 deg with neither),
-//     and 0.17 deg with each error's sign randomised: the errors are correlated with the geometry
-//     (larger at the image edges, where the parameters that trade against each other differ).
-// So from one shot of this dark, folded scene the observations are not good enough, by a factor of
-// ~3-5, for 0.1 deg; a far-field scene meets every target.
-// Tried without gain: pre-smoothing both images (sigma 0.5-1 px: worse, the blur differs between
-// the views), single colour channels (worse than grey), a high-pass of the log image (like the
-// flat field), thinning the candidates to 6 px apart (0.53 -> 0.60-0.80 deg: overlapping patches
-// still add information), the rotation prior off (1.4 deg: principal point and rotation drift),
-// priors of 15 deg or a mean-focal sigma of 0.005 (0.32-0.84 deg over the three seeds, no
-// better on average), the flat field in the far field (lake slightly better, 0.016 deg; the
-// night-time louvre worse: 0.083 -> 0.117 deg, its dark sky amplifies noise; so far field keeps the
-// plain grey image).
-// An affine warp instead of the homography leaves a bias of ~0.1 px: between cameras 30-60 deg
-// apart the perspective terms across the patch reach ~0.5 px at its edges.
+// Near field: dense, flat-fielded, weighted refinement (dense_refine, refine.h dense_tracks). The
+// study of the near-field limits behind these choices (true correspondences of the simulated
+// colon, vignetting, noise, folds, model checks, what was tried) is in
+// docs/near_field_calibration.md; in short, one dark shot of the colon does not hold the
+// information for 0.1 deg, several shots of the well-lit calibration tube (§3.6) do (README).
+//
+// Stages and files: features and matching (features.h, with the feature tracks), bundle
+// adjustment (bundle.h), subpixel refinement (refine.h, subpixel.h), photometric calibration
+// (photometric.h); calibrate.cc runs them in order.
 #pragma once
 
 #include <string>
@@ -166,7 +129,7 @@ struct CalibrationOptions {
                                   // (warning); measured: lake 99 %, louvre 99 %, colon 68 %
   double refine_outlier_px = 1.0; // outlier_px of the solves on refined observations
   bool dense_refine = true;       // near field: dense guided correspondences from every keypoint
-                                  // (see dense_tracks in calibrate.cc) instead of the matched tracks
+                                  // (see dense_tracks in refine.h) instead of the matched tracks
   int dense_rounds = 2;           // near field with dense_refine: refinement rounds (instead of
                                   // refine_rounds); the second aligns ~50 % more, from a better rig
   SubpixelOptions dense_subpixel = dense_subpixel_defaults();  // alignment options of dense_refine
@@ -175,6 +138,15 @@ struct CalibrationOptions {
   bool dense_weighting = true;    // whiten by the alignment covariance (AlignInfo)
   double dense_weight_floor = 0.5;  // sigma floor, relative to the median sigma
   double dense_reference_weight = 1;  // weight of the reference observation (the patch centre)
+  // The calibration tube (thesis §3.6, Fig. 3.12a; the simulator's tube scene): its known diameter.
+  // Near field only: scene points within tube_tolerance (relative) of its wall, a cylinder about an
+  // axis near the dome's z axis whose offset and tilt are estimated with the rig, are constrained
+  // to it (two surface coordinates instead of a free 3D point), which fixes the depth scale (no
+  // mean-focal prior is then needed or used) and removes the near field's flat directions (see
+  // "Near-field focal ambiguity" and docs/near_field_calibration.md). 0 = off (free points).
+  double tube_diameter_mm = 0;
+  double tube_tolerance = 0.15;          // first solve (from the nominal rig)
+  double tube_tolerance_refined = 0.03;  // solves after the first
   int max_iterations = 50;        // Ceres iterations per solve
   int min_observations = 30;      // a camera with fewer keeps its nominal values (warning)
   int threads = 2;                // Ceres threads; near-field results vary with the summation order
@@ -209,16 +181,12 @@ struct CalibrationResult {
 CalibrationResult calibrate_rig(const Rig& nominal, const std::vector<cv::Mat>& frames,
                                 const CalibrationOptions& opt = {});
 
-// One observation of a feature track: camera (rig index) and continuous pixel (centres at
-// integer + 0.5, conventions.h).
-struct TrackObservation {
-  int cam = 0;
-  Vec2 px;
-  // Whitening of the residual (a square root of the observation's information matrix, scaled so
-  // that an average observation has ~identity): the residual is weight * (projection - px). The
-  // subpixel refinement sets it from the alignment's covariance; identity = plain pixels.
-  Eigen::Matrix2d weight = Eigen::Matrix2d::Identity();
-};
+// Several shots of a static scene (issue 13): the frame sets averaged in linear light (sRGB decoded,
+// averaged, encoded again as 16-bit sRGB, CV_16UC3), which divides the sensor noise by sqrt(shots)
+// and keeps one observation per feature. Throws std::invalid_argument if the sets differ in count
+// or in a frame's size or are not 8/16-bit colour images (names the set and camera index).
+std::vector<cv::Mat> average_frame_sets(const std::vector<std::vector<cv::Mat>>& sets);
+
 
 // The bundle adjustment of calibrate_rig alone, on given feature tracks (one scene point per track,
 // scene kFar or kNear; tracks with fewer than 2 observations of calibrated cameras are ignored).

@@ -10,8 +10,9 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "omma/calib/photometric.h"
 #include "omma/calib/rig_diff.h"
-#include "omma/calib/test_support.h"
+#include "omma/sim/test_scenes.h"
 #include "omma/design/prototype.h"
 #include "omma/pano/quality.h"
 #include "omma/pano/stitch.h"
@@ -20,6 +21,7 @@
 
 namespace omma::calib {
 namespace {
+namespace testing = ::omma::sim::testing;  // the small exact renderers (sim/test_scenes.h)
 
 const PanoGrid kGrid{Projection::kEquirect, 720, 180};
 const char* kPerturb = "orient=2,focal=0.03,center=5,k1=0.05";  // the issue's manufacturing errors
@@ -143,6 +145,48 @@ TEST(Calibrate, ColonNearFieldCalibration) {
   // What the stitch sees: the rays of the calibrated cameras (rig_diff.h), a quarter of the nominal
   // rig's ray error or better.
   EXPECT_LT(o.after.ray_error_deg.median, 0.25 * o.before.ray_error_deg.median);
+}
+
+// The thesis's calibration (§3.6): several shots of the static, well-lit 35 mm calibration tube,
+// averaged, flat-fielded with shots of a white target, wall points constrained to the tube
+// (CalibrationOptions::tube_diameter_mm). The full figures (8 shots, three seeds: all of issue
+// 13's targets met) come from scripts/tube_calibration.sh (README); this test keeps CI shorter
+// (~30 s of CPU) with 2 shots, one dense round and SIFT without upsampling. Measured (seed 1):
+// orientation median 0.19 deg (max 0.30), focal 0.33 % (max 0.61), centre 0.59 px, RMS 0.058 px
+// (with SIFT upsampled: 0.16 / 0.33 deg at 42 s; 8 shots, full settings: 0.089 / 0.165 deg).
+TEST(Calibrate, CalibrationTubeFewShots) {
+  const Rig nominal = design::thesis_prototype_rig();
+  sim::SimulateOptions so;
+  so.perturb = sim::parse_perturb(kPerturb);
+  so.truth = false;
+  so.progress = false;
+  so.shots = 2;
+  so.effects.supersample = 2;
+  auto images = [](const std::vector<sim::CameraFrame>& fs) {
+    std::vector<cv::Mat> out;
+    for (const auto& f : fs) out.push_back(f.image);
+    return out;
+  };
+  const sim::SimulateResult tube = sim::simulate(nominal, *sim::make_tube_scene(), so);
+  const sim::SimulateResult flat = sim::simulate(nominal, *sim::make_flat_scene(), so);
+  const auto frames = flat_field_frames(average_frame_sets({images(tube.frames), images(tube.more_shots[0])}),
+                                        {images(flat.frames), images(flat.more_shots[0])});
+  CalibrationOptions opt;
+  opt.scene = SceneModel::kNear;
+  opt.tube_diameter_mm = 35;
+  opt.dense_rounds = 1;
+  opt.features.upsample = 1;  // SIFT on the frames as they are: a quarter of the work
+  const CalibrationResult r = calibrate_rig(nominal, frames, opt);
+  const RigDiff d = diff_rigs(r.rig, tube.true_rig);
+  std::printf("tube, 2 shots: orientation median %.3f max %.3f deg, focal median %.4f max %.4f, centre median %.3f px, "
+              "RMS %.3f px, %d tracks\n", d.orientation_error_deg.median, d.orientation_error_deg.max,
+              d.focal_error_rel.median, d.focal_error_rel.max, d.center_error_px.median, r.rms_px, r.tracks);
+  EXPECT_TRUE(r.uncalibrated_ids.empty());
+  EXPECT_LT(d.orientation_error_deg.median, 0.25);  // target 0.1 with 8 shots (met there, README)
+  EXPECT_LT(d.orientation_error_deg.max, 0.45);     // target 0.3 with 8 shots
+  EXPECT_LT(d.focal_error_rel.median, 0.005);
+  EXPECT_LT(d.center_error_px.median, 1.0);
+  EXPECT_LT(r.rms_px, 0.3);
 }
 
 // Model check without images: points on a 21 mm tube (the colon's mean radius) projected through

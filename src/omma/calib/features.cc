@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
+#include <numeric>
 #include <random>
 #include <stdexcept>
 
@@ -218,6 +220,51 @@ void PairMatches::choose(SceneModel model, int min_inliers) {
   const bool near = model == SceneModel::kNear || (model == SceneModel::kAuto && prefers_near());
   inliers = near ? essential_set : rotation_set;
   if (static_cast<int>(inliers.size()) < min_inliers) inliers.clear();
+}
+
+namespace {
+struct UnionFind {
+  std::vector<int> parent;
+  explicit UnionFind(int n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
+  int find(int x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  }
+  void unite(int a, int b) { parent[find(a)] = find(b); }
+};
+}  // namespace
+
+std::vector<std::vector<TrackObservation>> build_tracks(const std::vector<CameraFeatures>& feats,
+                                                        const std::vector<PairMatches>& pairs) {
+  const int n = static_cast<int>(feats.size());
+  std::vector<int> offset(n + 1, 0);
+  for (int i = 0; i < n; ++i) offset[i + 1] = offset[i] + static_cast<int>(feats[i].px.size());
+  UnionFind uf(offset[n]);
+  std::vector<char> used(offset[n], 0);
+  for (const auto& pm : pairs)
+    for (const auto& m : pm.inliers) {
+      const int ga = offset[pm.cam_a] + m.a, gb = offset[pm.cam_b] + m.b;
+      uf.unite(ga, gb);
+      used[ga] = used[gb] = 1;
+    }
+  std::map<int, std::vector<int>> groups;
+  for (int g = 0; g < offset[n]; ++g)
+    if (used[g]) groups[uf.find(g)].push_back(g);
+  auto cam_of = [&](int g) { return static_cast<int>(std::upper_bound(offset.begin(), offset.end(), g) - offset.begin()) - 1; };
+  std::vector<std::vector<TrackObservation>> tracks;
+  for (const auto& [root, members] : groups) {
+    std::vector<TrackObservation> t;
+    std::vector<char> seen(n, 0);
+    bool conflict = false;
+    for (int g : members) {
+      const int c = cam_of(g);
+      if (seen[c]) conflict = true;
+      seen[c] = 1;
+      t.push_back({c, feats[c].px[g - offset[c]]});
+    }
+    if (!conflict && t.size() >= 2) tracks.push_back(std::move(t));
+  }
+  return tracks;
 }
 
 }  // namespace omma::calib

@@ -87,4 +87,21 @@ PairMatches match_pair(const Rig& nominal, int cam_a, int cam_b, const CameraFea
 // Least-squares rotation R minimising sum |R a_i - b_i|^2 over unit vectors (Kabsch).
 Mat3 fit_rotation(const std::vector<Vec3>& a, const std::vector<Vec3>& b);
 
+// One observation of a feature track: camera (rig index) and continuous pixel (centres at
+// integer + 0.5, conventions.h).
+struct TrackObservation {
+  int cam = 0;
+  Vec2 px;
+  // Whitening of the residual (a square root of the observation's information matrix, scaled so
+  // that an average observation has ~identity): the residual is weight * (projection - px). The
+  // subpixel refinement sets it from the alignment's covariance; identity = plain pixels.
+  Eigen::Matrix2d weight = Eigen::Matrix2d::Identity();
+};
+
+// Feature tracks from the pairwise matches (union-find over every camera's keypoints): one track per
+// connected set of matched keypoints; a set that holds two keypoints of one camera is dropped
+// (an inconsistent match), as are sets of one. Observations are the keypoints' continuous pixels.
+std::vector<std::vector<TrackObservation>> build_tracks(const std::vector<CameraFeatures>& feats,
+                                                        const std::vector<PairMatches>& pairs);
+
 }  // namespace omma::calib

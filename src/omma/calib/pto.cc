@@ -257,10 +257,14 @@ PtoExportResult export_pto(const Rig& rig, const PtoExportOptions& opt) {
        << fmt_num(rad2deg(cam.in.aov)) << " fv_over_fu " << fmt_num(cam.in.fv / cam.in.fu) << " k " << fmt_num(cam.in.k[0])
        << " " << fmt_num(cam.in.k[1]) << " " << fmt_num(cam.in.k[2]) << " " << fmt_num(cam.in.k[3]) << " "
        << fmt_num(cam.in.k[4]) << " f " << fmt_num(std::sqrt(cam.in.fu * cam.in.fv)) << "\n";
-    os << "i w" << p.width << " h" << p.height << " f0 v" << fmt_num(p.hfov_deg) << " Ra0 Rb0 Rc0 Rd0 Re0 Eev0 Er1 Eb1"
-       << " r" << fmt_num(p.roll_deg) << " p" << fmt_num(p.pitch_deg) << " y" << fmt_num(p.yaw_deg)
-       << " TrX0 TrY0 TrZ0 j0 a" << fmt_num(p.a) << " b" << fmt_num(p.b) << " c" << fmt_num(p.c) << " d"
-       << fmt_num(p.d) << " e" << fmt_num(p.e) << " g0 t0 Va1 Vb0 Vc0 Vd0 Vx0 Vy0 Vm5 n\"" << image << "\"\n";
+    const Photometric ph = cam.photometric.value_or(Photometric{});
+    os << "i w" << p.width << " h" << p.height << " f0 v" << fmt_num(p.hfov_deg) << (opt.linear_response ? " Rt1" : "")
+       << " Ra0 Rb0 Rc0 Rd0 Re0 Eev" << fmt_num(0.0 - std::log2(ph.gains[1])) << " Er" << fmt_num(ph.gains[2] / ph.gains[1])
+       << " Eb" << fmt_num(ph.gains[0] / ph.gains[1]) << " r" << fmt_num(p.roll_deg) << " p" << fmt_num(p.pitch_deg)
+       << " y" << fmt_num(p.yaw_deg) << " TrX0 TrY0 TrZ0 j0 a" << fmt_num(p.a) << " b" << fmt_num(p.b) << " c"
+       << fmt_num(p.c) << " d" << fmt_num(p.d) << " e" << fmt_num(p.e) << " g0 t0 Va1 Vb" << fmt_num(ph.vignetting[0])
+       << " Vc" << fmt_num(ph.vignetting[1]) << " Vd" << fmt_num(ph.vignetting[2]) << " Vx" << fmt_num(ph.center_px.x())
+       << " Vy" << fmt_num(ph.center_px.y()) << " Vm5 n\"" << image << "\"\n";
   }
   res.rms_fit_px = rig.cameras.empty() ? 0 : std::sqrt(s2 / rig.cameras.size());
   res.text = os.str();
@@ -460,6 +464,30 @@ PtoImportResult import_pto(const std::string& text, const fs::path& base_dir) {
         const double f = cam.in.fu;
         cam.in.fu = f / std::sqrt(ratio);
         cam.in.fv = f * std::sqrt(ratio);
+      }
+    }
+    // Photometry (see pto.h): only what differs from "no correction" makes a model.
+    {
+      const int vm = static_cast<int>(value(i, "Vm", 0));
+      const double va = value(i, "Va", 1), eev = value(i, "Eev", 0), er = value(i, "Er", 1), eb = value(i, "Eb", 1);
+      Photometric ph;
+      if (vm & 1) {
+        if (!(va > 0)) throw PtoError(fmt::format("PTO image {} (line {}): Va{} must be positive", i, images[i]["_line"], va));
+        ph.vignetting = {value(i, "Vb", 0) / va, value(i, "Vc", 0) / va, value(i, "Vd", 0) / va};
+        ph.center_px = Vec2(value(i, "Vx", 0), value(i, "Vy", 0));
+      } else if (vm & 2) {
+        res.warnings.push_back(fmt::format("PTO image {}: flat-field vignetting (Vm{}) is not imported", i, vm));
+      }
+      const double scale = (vm & 1) ? va : 1.0;
+      const double g = std::exp2(-eev) * scale;
+      ph.gains = {g * eb, g, g * er};
+      if (!ph.is_identity()) {
+        try {
+          validate_photometric(ph, cam.in.width, cam.in.height, fmt::format("PTO image {}", i));
+        } catch (const std::invalid_argument& e) {
+          throw PtoError(e.what());
+        }
+        cam.photometric = ph;
       }
     }
     res.rig.cameras.push_back(cam);

@@ -38,6 +38,18 @@
 //   reports the residual in pixels; the import fits (f, k1, k2, k5) the same way (linear least
 //   squares). A k1-only rig round-trips exactly.
 //
+// Photometry (core/photometric.h). omma's model is Hugin's radial vignetting and exposure / white
+//   balance: Va1, Vb = b, Vc = c, Vd = d, Vx = x, Vy = y (pixels; Hugin's centre (W-1)/2 + Vx with
+//   integer pixel centres is omma's W/2 + x), Vm5 (radial, correction by division), and
+//   Eev = -log2(gain_G), Er = gain_R / gain_G, Eb = gain_B / gain_G (Hugin divides a pixel by
+//   V * 2^-Eev and red by Er, blue by Eb: the same as omma's division by gain_c * V). A camera
+//   without a model is written Vb0 Vc0 Vd0 Vx0 Vy0 Eev0 Er1 Eb1. Hugin applies the division in the
+//   linear light of its camera response: with `linear_response` the export writes Rt1 (pixel values
+//   are linear light; use linear frames, e.g. 16-bit), otherwise Hugin's default EMoR curve (Ra..Re
+//   0), which is not sRGB, so nona's corrected brightness then differs from omma's (measured in
+//   pto_test.cc). The import reads the same fields (Va != 1 is folded into the gains; a radial
+//   model only when Vm has the radial bit).
+//
 // Not held by PTO and carried in "#-omma" comment lines that Hugin ignores: camera id, position
 // (mm), angle of view of the cone (eq. 2.3), fu/fv ratio, and the rig name and dome radius.
 #pragma once
@@ -79,6 +91,7 @@ struct PtoExportOptions {
   int pano_width = 1440;   // p-line: equirect 360 x 180 of pano_width x pano_width/2
   bool crop_to_dome = true;  // hemisphere rigs: crop the p-line to the top half (omma's 360 x 90)
   int interpolator = 0;    // m-line i: 0 poly3 (Hugin's default), 5 bilinear, 6 nearest
+  bool linear_response = false;  // i-lines Rt1: the frames are linear light (see Photometry above)
 };
 
 struct PtoExportResult {

@@ -7,12 +7,9 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
 
-namespace omma::calib {
+#include "omma/core/srgb.h"
 
-namespace {
-// IEC 61966-2-1 sRGB decoding.
-float srgb_to_linear(float v) { return v <= 0.04045f ? v / 12.92f : std::pow((v + 0.055f) / 1.055f, 2.4f); }
-}  // namespace
+namespace omma::calib {
 
 cv::Mat to_alignment_image(const cv::Mat& image, double flatfield_sigma_px) {
   auto to_gray = [](cv::Mat m) {

@@ -1,5 +1,7 @@
 #include "omma/core/frames.h"
 
+#include <algorithm>
+
 #include <fmt/format.h>
 #include <opencv2/imgproc.hpp>
 
@@ -45,6 +47,35 @@ std::vector<cv::Mat> load_raw_frames(const fs::path& dir, const Rig& rig) {
     frames.push_back(m);
   }
   return frames;
+}
+
+std::vector<fs::path> expand_shot_folders(const std::vector<fs::path>& paths) {
+  std::vector<fs::path> out;
+  for (const fs::path& p : paths) {
+    if (!fs::is_directory(p)) throw IoError("frames folder '" + p.string() + "' does not exist");
+    std::vector<fs::path> shots;
+    bool has_frames = false;
+    for (const auto& e : fs::directory_iterator(p)) {
+      const std::string name = e.path().filename().string();
+      if (e.is_directory() && name.rfind("shot_", 0) == 0) shots.push_back(e.path());
+      if (e.is_regular_file() && name.rfind("cam_", 0) == 0 && e.path().extension() == ".png") has_frames = true;
+    }
+    if (has_frames) {
+      out.push_back(p);
+    } else if (!shots.empty()) {
+      std::sort(shots.begin(), shots.end());
+      out.insert(out.end(), shots.begin(), shots.end());
+    } else {
+      throw IoError("'" + p.string() + "' is neither a frames folder (cam_XX.png) nor a shots folder (shot_XX/)");
+    }
+  }
+  return out;
+}
+
+std::vector<std::vector<cv::Mat>> load_frame_sets(const std::vector<fs::path>& paths, const Rig& rig) {
+  std::vector<std::vector<cv::Mat>> sets;
+  for (const fs::path& p : expand_shot_folders(paths)) sets.push_back(load_frames(p, rig));
+  return sets;
 }
 
 cv::Mat to_float01(const cv::Mat& image) {

@@ -6,6 +6,9 @@
 //   DIR/cam_00_raw.png, ...           optional: 16-bit single-channel RGGB Bayer, 10-bit values
 //   DIR/truth.png                     optional: the ideal panorama (simulator ground truth)
 //   DIR/rig.json, DIR/rig_true.json   optional: nominal rig, and the true (perturbed) rig
+//
+// Shots of a static scene (`omma simulate --shots N`, calibration): a folder of frames folders
+// DIR/shot_00, DIR/shot_01, ... (any folder names "shot_*", taken in name order).
 #pragma once
 
 #include <filesystem>
@@ -27,6 +30,13 @@ std::string raw_frame_filename(int camera_id);  // "cam_07_raw.png"
 std::vector<cv::Mat> load_frames(const std::filesystem::path& dir, const Rig& rig);
 // Same for the raw Bayer frames (CV_16UC1).
 std::vector<cv::Mat> load_raw_frames(const std::filesystem::path& dir, const Rig& rig);
+
+// The frames folders that `paths` name: each path is a frames folder (it holds cam_*.png), or a
+// shots folder (its shot_* sub-folders, in name order). Throws IoError if a path does not exist or
+// is neither.
+std::vector<std::filesystem::path> expand_shot_folders(const std::vector<std::filesystem::path>& paths);
+// load_frames of every folder of expand_shot_folders(paths): one frame set per shot.
+std::vector<std::vector<cv::Mat>> load_frame_sets(const std::vector<std::filesystem::path>& paths, const Rig& rig);
 
 // 8U / 16U / 32F image -> CV_32F with the same channels, values in [0, 1].
 cv::Mat to_float01(const cv::Mat& image);

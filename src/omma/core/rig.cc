@@ -1,5 +1,6 @@
 #include "omma/core/rig.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <unordered_set>
@@ -74,6 +75,38 @@ Vec3 vec3(const json& obj, const std::string& key, const std::string& where) {
 
 json to_array(const Vec3& v) { return json::array({v.x(), v.y(), v.z()}); }
 
+// A JSON array of exactly n finite numbers.
+template <size_t N>
+std::array<double, N> numbers(const json& obj, const std::string& key, const std::string& where) {
+  const json& v = field(obj, key, where);
+  if (!v.is_array() || v.size() != N)
+    throw RigError(fmt::format("{}: field '{}' must be an array of {} numbers", where, key, N));
+  std::array<double, N> r{};
+  for (size_t i = 0; i < N; ++i) {
+    if (!v[i].is_number()) throw RigError(where + ": field '" + key + "' must hold numbers");
+    r[i] = v[i].get<double>();
+    if (!std::isfinite(r[i])) throw RigError(where + ": field '" + key + "' is not finite");
+  }
+  return r;
+}
+
+// The optional "photometric" object of a camera (photometric.h); every field optional, defaults
+// = no vignetting, centred, unit gains. Unknown fields are an error (a typo would silently do nothing).
+Photometric photometric_from_json(const json& j, const std::string& where) {
+  if (!j.is_object()) throw RigError(where + ": expected a JSON object");
+  for (auto it = j.begin(); it != j.end(); ++it)
+    if (it.key() != "vignetting" && it.key() != "vignetting_center_px" && it.key() != "gains_bgr")
+      throw RigError(where + ": unknown field '" + it.key() + "' (use vignetting, vignetting_center_px, gains_bgr)");
+  Photometric p;
+  if (j.contains("vignetting")) p.vignetting = numbers<3>(j, "vignetting", where);
+  if (j.contains("vignetting_center_px")) {
+    const auto c = numbers<2>(j, "vignetting_center_px", where);
+    p.center_px = Vec2(c[0], c[1]);
+  }
+  if (j.contains("gains_bgr")) p.gains = numbers<3>(j, "gains_bgr", where);
+  return p;
+}
+
 }  // namespace
 
 void validate_camera(const RigCamera& c) {
@@ -116,6 +149,17 @@ void validate_camera(const RigCamera& c) {
                                  k, kMaxDistortion));
   if (!std::isfinite(in.aov) || in.aov <= 0 || in.aov >= kPi)
     throw RigError(fmt::format("{}: angle of view {} deg must be in (0, 180)", where, rad2deg(in.aov)));
+  if (c.photometric) {
+    try {
+      validate_photometric(*c.photometric, in.width, in.height, where);
+    } catch (const std::invalid_argument& e) {
+      throw RigError(e.what());
+    }
+  }
+}
+
+bool has_photometric(const Rig& rig) {
+  return std::any_of(rig.cameras.begin(), rig.cameras.end(), [](const RigCamera& c) { return c.photometric.has_value(); });
 }
 
 void Rig::validate() const {
@@ -152,6 +196,12 @@ json rig_to_json(const Rig& rig) {
     jc["intrinsics"] = {{"width", c.in.width}, {"height", c.in.height}, {"fu", c.in.fu},
                         {"fv", c.in.fv},       {"cu", c.in.cu},         {"cv", c.in.cv},
                         {"k", c.in.k},         {"aov_deg", rad2deg(c.in.aov)}};
+    if (c.photometric) {
+      const Photometric& p = *c.photometric;
+      jc["photometric"] = {{"vignetting", p.vignetting},
+                           {"vignetting_center_px", {p.center_px.x(), p.center_px.y()}},
+                           {"gains_bgr", p.gains}};
+    }
     cams.push_back(std::move(jc));
   }
   j["cameras"] = std::move(cams);
@@ -212,6 +262,7 @@ Rig rig_from_json(const json& j) {
         c.in.k[n] = k[n].get<double>();
       }
     }
+    if (jc.contains("photometric")) c.photometric = photometric_from_json(jc["photometric"], where + " photometric");
     try {
       validate_camera(c);
     } catch (const RigError& e) {

@@ -16,6 +16,8 @@
 #include "omma/engine/synthetic.h"
 #include "omma/core/log.h"
 #include "omma/isp/isp.h"
+#include "omma/isp/photometric.h"
+#include "omma/sim/render.h"
 
 namespace omma::engine {
 namespace {
@@ -94,6 +96,35 @@ Workload omma_depth_workload(const Rig& rig, const MapOptions& opt, const std::v
             {"depth_grid", fmt::format("{}x{}", cg.width, cg.height)},
             {"depth_candidates", dr->sweep().options().steps},
             {"depth_every_frame", true}};
+  return w;
+}
+
+Workload omma_live_workload(const Rig& rig, const MapOptions& opt, const std::vector<cv::Mat>& frames,
+                            bool photometric) {
+  auto map = std::make_shared<CompiledMap>(compile_map(rig, opt));
+  auto store = std::make_shared<FrameStore>(map->layout);
+  for (size_t c = 0; c < frames.size(); ++c) store->set(int(c), frames[c]);
+  auto tables = std::make_shared<std::vector<isp::PhotometricTable>>();
+  if (photometric) {
+    Rig modelled = rig;
+    for (RigCamera& c : modelled.cameras) c.photometric = sim::true_photometric(c, sim::CameraEffects{});
+    *tables = isp::photometric_tables(modelled);
+  }
+  auto fr = std::make_shared<std::vector<cv::Mat>>(frames);
+  auto out = std::make_shared<cv::Mat>();
+  auto next = std::make_shared<size_t>(0);
+  Workload w;
+  w.name = "omma-" + pano::to_string(opt.method) + (photometric ? "-photometric-" : "-store-") + size_tag(opt.grid);
+  w.run = [map, store, tables, fr, out, next] {
+    const size_t c = (*next)++ % fr->size();
+    cv::Mat ready;
+    if (!tables->empty()) (*tables)[c].apply((*fr)[c], ready);  // the camera thread's work ...
+    else ready = (*fr)[c].clone();
+    store->set(int(c), ready);                                     // ... and the render loop's
+    render(*map, *store, *out, {});
+  };
+  w.info = {{"bytes_per_pixel", map->bytes_per_pixel()}, {"camera_frames_per_panorama", 1},
+            {"photometric", photometric}};
   return w;
 }
 
@@ -244,6 +275,12 @@ std::vector<BenchEntry> run_bench_suite(const Rig& rig_in, const BenchOptions& o
           all.min_weight = 0;
           add(omma_workload(rig, all, 0, frames, "-alltaps"));
           if (opt.depth && wanted("omma-mrf-depth-" + size_tag(g))) add(omma_depth_workload(rig, mo, frames));
+          // Frames entering the store as in the live engine, with and without the photometric
+          // correction (issue 13 point 5: the mrf figure may drop by at most 10 %).
+          if (wanted(base) || wanted("omma-mrf-store-") || wanted("omma-mrf-photometric-")) {
+            add(omma_live_workload(rig, mo, frames, false));
+            add(omma_live_workload(rig, mo, frames, true));
+          }
         }
         if (m != pano::Method::kNearest)  // mrf if pano has it, else linear
           bound_map = std::make_shared<CompiledMap>(compile_map(rig, mo));
@@ -311,6 +348,11 @@ nlohmann::json BenchRatio::to_json() const {
   if (name.rfind("omma-mrf-1080x1080", 0) == 0) j["target_400fps_met"] = fps >= 400;
   if (vs_static > 0) j["vs_static"] = vs_static;
   if (name == "omma-mrf-depth-1080x1080") j["target_25fps_met"] = fps >= 25;
+  if (vs_plain > 0) {
+    j["vs_plain_render"] = vs_plain, j["target_drop_at_most_10pct_met"] = vs_plain >= 0.9;
+    j["vs_plain_render_rounds"] = vs_plain_rounds;
+  }
+  if (vs_store > 0) j["vs_store_without_photometric"] = vs_store, j["vs_store_rounds"] = vs_store_rounds;
   return j;
 }
 
@@ -344,6 +386,11 @@ std::vector<BenchRatio> bench_ratios(const std::vector<BenchEntry>& entries) {
     r.vs_multiband_rounds = per_round(e, "opencv-multiband-" + size);
     if (const size_t d = e.name.find("-depth-"); d != std::string::npos)  // against the static map
       if (const double st = fps_of(e.name.substr(0, d) + "-" + size); st > 0) r.vs_static = e.fps / st;
+    if (const size_t at = e.name.find("-photometric-"); at != std::string::npos) {
+      const std::string plain = e.name.substr(0, at) + "-" + size, store = e.name.substr(0, at) + "-store-" + size;
+      if (const double f = fps_of(plain); f > 0) r.vs_plain = e.fps / f, r.vs_plain_rounds = per_round(e, plain);
+      if (const double f = fps_of(store); f > 0) r.vs_store = e.fps / f, r.vs_store_rounds = per_round(e, store);
+    }
     out.push_back(r);
   }
   return out;

@@ -37,6 +37,17 @@ Workload omma_workload(const Rig& rig, const MapOptions& opt, int threads, const
 // "omma-<method>-depth-<W>x<H>".
 Workload omma_depth_workload(const Rig& rig, const MapOptions& opt, const std::vector<cv::Mat>& frames);
 
+// Our renderer with frames arriving as in the live engine (engine.h): per panorama, one camera's
+// new frame (round robin over the cameras) is made ready as the engine's camera thread does it
+// (photometric: corrected by that camera's table, isp/photometric.h; otherwise copied) and set
+// into the frame store, then the panorama is rendered. The tables are the simulator's model of
+// the default sensor (sim::true_photometric: 50 % cos^4 vignetting, gains in [0.9, 1.1]). Named
+// "omma-<method>-photometric-<W>x<H>" / "omma-<method>-store-<W>x<H>". One camera frame per
+// panorama is about twice the live load (24 cameras at 30 fps = 720 frames/s against ~1400
+// panoramas/s), so the drop it shows is an upper bound.
+Workload omma_live_workload(const Rig& rig, const MapOptions& opt, const std::vector<cv::Mat>& frames,
+                            bool photometric);
+
 // Peer A: per-camera cv::remap (fixed-point maps from cv::convertMaps, INTER_LINEAR) of every
 // camera's frame into its footprint on the panorama, no blending (each camera overwrites).
 Workload opencv_remap_workload(const Rig& rig, const PanoGrid& grid, const std::vector<cv::Mat>& frames);
@@ -87,6 +98,10 @@ struct BenchRatio {
   // Per round (where both entries have the same rounds): ours / peer A and ours / peer B of that
   // round alone, which shows how much the ratio moves with the machine's load.
   std::vector<double> vs_remap_rounds, vs_multiband_rounds;
+  // "-photometric-" entries: fps over the same method's plain render and over its "-store-"
+  // workload (frames entering the store without the correction), whole run and per round.
+  double vs_plain = 0, vs_store = 0;
+  std::vector<double> vs_plain_rounds, vs_store_rounds;
   nlohmann::json to_json() const;
 };
 // One BenchRatio per "omma-*" entry with all threads (not the -1thread ones).

@@ -150,6 +150,17 @@ cv::Mat FrameStore::camera(int c) const {
   return out;
 }
 
+cv::Mat to_bgr8(const cv::Mat& frame) {
+  cv::Mat src = frame;
+  if (src.depth() == CV_16U) src.convertTo(src, CV_8U, 1.0 / 257.0);
+  else if (src.depth() == CV_32F) src.convertTo(src, CV_8U, 255.0);
+  else if (src.depth() != CV_8U) throw std::invalid_argument("unsupported frame depth");
+  if (src.channels() == 1) cv::cvtColor(src, src, cv::COLOR_GRAY2BGR);
+  else if (src.channels() == 4) cv::cvtColor(src, src, cv::COLOR_BGRA2BGR);
+  else if (src.channels() != 3) throw std::invalid_argument("unsupported channel count");
+  return src;
+}
+
 void FrameStore::set(int c, const cv::Mat& frame) {
   if (c < 0 || c >= static_cast<int>(layout_.size.size()))
     throw std::invalid_argument("frame store: no camera index " + std::to_string(c));
@@ -158,15 +169,12 @@ void FrameStore::set(int c, const cv::Mat& frame) {
                                 std::to_string(frame.cols) + "x" + std::to_string(frame.rows) +
                                 ", the rig says " + std::to_string(layout_.size[c].width) + "x" +
                                 std::to_string(layout_.size[c].height));
-  cv::Mat src = frame;
-  if (src.depth() == CV_16U) src.convertTo(src, CV_8U, 1.0 / 257.0);
-  else if (src.depth() == CV_32F) src.convertTo(src, CV_8U, 255.0);
-  else if (src.depth() != CV_8U)
-    throw std::invalid_argument("camera index " + std::to_string(c) + ": unsupported frame depth");
-  if (src.channels() == 1) cv::cvtColor(src, src, cv::COLOR_GRAY2BGR);
-  else if (src.channels() == 4) cv::cvtColor(src, src, cv::COLOR_BGRA2BGR);
-  else if (src.channels() != 3)
-    throw std::invalid_argument("camera index " + std::to_string(c) + ": unsupported channel count");
+  cv::Mat src;
+  try {
+    src = to_bgr8(frame);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument("camera index " + std::to_string(c) + ": " + e.what());
+  }
   // Row pairs: 3 bytes of row y then 3 bytes of row y + 1 per pixel. Each pixel is one
   // 8-byte store of which the next pixel overwrites the last two bytes; the row's last pixel is
   // written byte by byte so that nothing outside the row is touched.

@@ -75,6 +75,10 @@ struct StoreLayout {
 };
 
 // One buffer holding the latest frame of every camera, in the row-pair layout.
+// Any frame FrameStore::set accepts (8/16-bit or float, gray, BGR or BGRA) as CV_8UC3 BGR (shared,
+// not copied, when it already is). Throws std::invalid_argument on other depths or channel counts.
+cv::Mat to_bgr8(const cv::Mat& frame);
+
 class FrameStore {
  public:
   FrameStore() = default;

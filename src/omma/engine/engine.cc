@@ -14,6 +14,8 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include "omma/isp/photometric.h"
+
 namespace omma::engine {
 namespace {
 
@@ -116,10 +118,12 @@ namespace {
 // is due (the source's own clock, its fps, or at once for "as fast as it can").
 class CameraThreads {
  public:
+  // `tables`: the photometric tables per camera (empty ones: no correction), applied to each frame
+  // in its camera's thread before it is handed over.
   CameraThreads(const Rig& rig, std::vector<std::unique_ptr<CameraSource>>& sources,
                 std::vector<std::unique_ptr<Latest>>& latest, const StoreLayout& layout, int max_threads,
-                std::function<void()> notify)
-      : rig_(rig), sources_(sources), latest_(latest), layout_(layout), notify_(std::move(notify)) {
+                std::function<void()> notify, const std::vector<isp::PhotometricTable>& tables)
+      : rig_(rig), sources_(sources), latest_(latest), layout_(layout), notify_(std::move(notify)), tables_(tables) {
     const int n = int(sources.size());
     const int want = std::min(n, std::max(1, max_threads));
     // Start the threads first, parked until every camera has a thread; if the system refuses a
@@ -229,6 +233,13 @@ class CameraThreads {
         notify_();
         return false;
       }
+      if (!tables_[c].empty() && !src.photometric_applied()) {
+        // The photometric correction, here in the camera's thread: the frame enters the frame
+        // store corrected and the render loop does nothing more.
+        cv::Mat corrected;
+        tables_[c].apply(to_bgr8(frame), corrected);
+        frame = corrected;
+      }
       const auto own = src.last_capture();
       slot.publish(std::move(frame), own != Clock::time_point{} ? own : Clock::now());
     } catch (const std::exception& e) {
@@ -245,6 +256,7 @@ class CameraThreads {
   std::vector<std::unique_ptr<Latest>>& latest_;
   StoreLayout layout_;
   std::function<void()> notify_;
+  const std::vector<isp::PhotometricTable>& tables_;
   std::vector<std::thread> threads_;
   std::mutex mutex_;
   std::condition_variable cv_;
@@ -296,6 +308,8 @@ EngineStats run_engine(const Rig& rig, std::vector<std::unique_ptr<CameraSource>
   }
   std::vector<cv::Mat> current(n);  // depth mode: the frames in the store
   double depth_ms_sum = 0;
+  // Photometric tables per camera (empty where the rig has no model or it is switched off).
+  const std::vector<isp::PhotometricTable> tables = isp::photometric_tables(rig, opt.photometric);
   std::vector<std::unique_ptr<Latest>> latest;
   for (size_t c = 0; c < n; ++c) latest.push_back(std::make_unique<Latest>());
   std::mutex wake_mutex;
@@ -304,7 +318,7 @@ EngineStats run_engine(const Rig& rig, std::vector<std::unique_ptr<CameraSource>
   // The render loop waits for new frames only when it is not paced (fps 0).
   CameraThreads cameras(rig, sources, latest, map->layout, opt.max_camera_threads, [&wake, paced = opt.fps > 0] {
     if (!paced) wake.notify_one();
-  });
+  }, tables);
   stats.camera_threads = cameras.count();
 
   FrameStore store(map->layout);

@@ -67,6 +67,10 @@ struct EngineOptions {
   // in use (no recompile in this mode).
   bool depth = false;
   pano::SweepOptions depth_sweep = engine_sweep_options();
+  // Apply the rig's photometric model (vignetting and colour gains, core/photometric.h) to every
+  // frame as it arrives, in its camera's thread (per-camera tables, isp/photometric.h), so that the
+  // frame store holds corrected frames and the render loop does no extra work.
+  bool photometric = true;
   // Called about twice a second from the render loop with the running statistics (to_json()).
   std::function<void(const nlohmann::json&)> on_progress;
   // Called after every render (before the sinks), from the render loop (tests, measurements).

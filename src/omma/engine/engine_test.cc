@@ -22,6 +22,7 @@
 #include "omma/engine/synthetic.h"
 #include "omma/engine/web_assets.h"
 #include "omma/isp/isp.h"
+#include "omma/isp/photometric.h"
 #include "omma/isp/link.h"
 #include "omma/sim/render.h"
 
@@ -102,6 +103,36 @@ TEST(EngineRun, KilledCameraIsDroppedAndItsRegionFilledFromNeighbours) {
   cv::cvtColor(cap->last, gray, cv::COLOR_BGR2GRAY);
   cv::Mat black_in_region = (gray == 0) & owned;
   EXPECT_EQ(cv::countNonZero(black_in_region), 0);
+}
+
+// The rig's photometric model is applied as each frame arrives (issue 13 point 5): the panorama
+// equals the reference render of the corrected frames, and with photometric = false that of the
+// frames as they are.
+TEST(EngineRun, PhotometricModelIsAppliedAsFramesArrive) {
+  Rig rig = ring_rig_24();
+  for (RigCamera& c : rig.cameras) c.photometric = sim::true_photometric(c, sim::CameraEffects{});
+  const auto frames = scene_frames(rig);
+  for (bool photometric : {true, false}) {
+    std::vector<std::unique_ptr<CameraSource>> sources;
+    for (const cv::Mat& f : frames) sources.push_back(still_source(f, 100));
+    std::vector<std::unique_ptr<Sink>> sinks;
+    sinks.push_back(std::make_unique<CaptureSink>());
+    auto* cap = static_cast<CaptureSink*>(sinks[0].get());
+    EngineOptions opt;
+    opt.map.grid = PanoGrid{Projection::kVr180, 200, 200};
+    opt.map.method = pano::Method::kLinear;
+    opt.fps = 0;
+    opt.max_frames = 5;
+    opt.photometric = photometric;
+    run_engine(rig, std::move(sources), sinks, opt);
+    const cv::Mat corrected = reference_render(rig, opt.map, isp::correct_frames(rig, frames));
+    const cv::Mat plain = reference_render(rig, opt.map, frames);
+    const double db_corrected = psnr_u8(cap->last, corrected), db_plain = psnr_u8(cap->last, plain);
+    std::printf("  photometric %d: PSNR vs corrected reference %.2f dB, vs uncorrected %.2f dB\n", int(photometric),
+                db_corrected, db_plain);
+    EXPECT_GE(photometric ? db_corrected : db_plain, 55.0);
+    EXPECT_LT(photometric ? db_plain : db_corrected, 40.0);  // the correction is visible
+  }
 }
 
 TEST(EngineRun, WrongFrameSizeStopsWithAClearError) {

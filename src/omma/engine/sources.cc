@@ -19,6 +19,7 @@
 #include "omma/engine/synthetic.h"
 #include "omma/isp/isp.h"
 #include "omma/isp/link.h"
+#include "omma/isp/photometric.h"
 
 namespace omma::engine {
 namespace fs = std::filesystem;
@@ -152,10 +153,15 @@ class PanoView : public CameraSource {
 
 // A raw sensor-link file (isp/link.h, chips packed 8 per byte) of one camera: the link decoder
 // runs in a background thread into a small queue; each frame's damaged rows are concealed and the
-// ISP (isp/isp.h) develops it to 8-bit BGR.
+// ISP (isp/isp.h) develops it to 8-bit BGR. A camera with a photometric model is developed with the
+// model as the ISP's flat gain and no automatic white balance (isp/photometric.h).
 class LinkFile : public CameraSource {
  public:
   LinkFile(const fs::path& path, const RigCamera& cam, double fps, bool loop) : path_(path), fps_(fps), loop_(loop) {
+    if (cam.photometric) {
+      isp_.flat_gain = isp::flat_gain_from_model(*cam.photometric, cam.in.width, cam.in.height);
+      isp_.awb = isp::Awb::kNone;
+    }
     config_.width = cam.in.width;
     config_.height = cam.in.height;
     try {
@@ -193,11 +199,12 @@ class LinkFile : public CameraSource {
     }
     cv_.notify_all();
     isp::conceal_damaged_rows(lf);
-    frame = isp::develop(isp::to_mat(lf), isp::IspOptions{});
+    frame = isp::develop(isp::to_mat(lf), isp_);
     return true;
   }
   double fps() const override { return fps_; }
   std::string describe() const override { return "link:" + path_.string(); }
+  bool photometric_applied() const override { return !isp_.flat_gain.empty(); }
 
  private:
   struct Stop {};
@@ -223,6 +230,7 @@ class LinkFile : public CameraSource {
     cv_.notify_all();
   }
   fs::path path_;
+  isp::IspOptions isp_;
   isp::LinkConfig config_;
   std::vector<uint8_t> bytes_;
   double fps_;

@@ -56,6 +56,10 @@ class CameraSource {
   // moment read() returned. Frame ages (the engine's latency) count from this instant.
   virtual Clock::time_point last_capture() const { return {}; }
   virtual std::string describe() const = 0;
+  // True if the frames already have the rig camera's photometric model applied (the sensor-link
+  // source develops raw frames with the model as the ISP's flat gain, isp/photometric.h), so the
+  // engine must not apply it again.
+  virtual bool photometric_applied() const { return false; }
 };
 
 // The simulated sensors of sim: sources (sim_loop.h). The thesis's cameras free-run at 44-56 fps,

@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "omma/core/io.h"
+#include "omma/core/srgb.h"
 
 namespace omma::isp {
 
@@ -81,8 +82,7 @@ std::vector<uint8_t> output_table(int bits, bool srgb) {
     if (!srgb) {
       t[size_t(v)] = uint8_t(v >> (bits - 8));  // the 8 most significant bits (§5.2)
     } else {
-      const double l = double(v) / double(n - 1);
-      const double e = l <= 0.0031308 ? 12.92 * l : 1.055 * std::pow(l, 1.0 / 2.4) - 0.055;
+      const double e = linear_to_srgb(float(double(v) / double(n - 1)));
       t[size_t(v)] = uint8_t(std::clamp(std::lround(255.0 * e), 0L, 255L));
     }
   }

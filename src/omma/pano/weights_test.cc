@@ -5,10 +5,11 @@
 
 #include <cmath>
 
-#include "omma/pano/test_scene.h"
+#include "omma/sim/test_scenes.h"
 
 namespace omma::pano {
 namespace {
+namespace testing = ::omma::sim::testing;  // the small exact renderers (sim/test_scenes.h)
 
 TEST(PanoWeights, StaticWeightsSumToOneAndReduceToSingleCamera) {
   const Rig rig = testing::small_rig(32);

@@ -31,6 +31,7 @@ void check_effects(const CameraEffects& e) {
     throw std::invalid_argument(fmt::format("colour gain spread must be in [0, 1), got {}", e.color_gain));
   if (!(e.full_scale_electrons >= 0) || !(e.read_noise_dn >= 0) || !(e.exposure > 0))
     throw std::invalid_argument("full-scale electrons and read noise must be >= 0, exposure > 0");
+  if (e.shot < 0) throw std::invalid_argument(fmt::format("shot index must be >= 0, got {}", e.shot));
   if (e.bits != 0 && (e.bits < 8 || e.bits > 16))
     throw std::invalid_argument(fmt::format("bits must be 8..16 (or 0 for none), got {}", e.bits));
 }
@@ -55,6 +56,45 @@ cv::Vec3d camera_gains(const CameraEffects& e, int camera_id) {
   cv::Vec3d g;
   for (int c = 0; c < 3; ++c) g[c] = u(rng);
   return g;
+}
+
+double true_falloff(const RigCamera& camera, const CameraEffects& e, const Vec2& px) {
+  if (e.vignetting <= 0) return 1;
+  const double ca = camera.model().unproject(px).dot(camera.frame.t);
+  return 1 - e.vignetting * (1 - ca * ca * ca * ca);
+}
+
+Photometric true_photometric(const RigCamera& camera, const CameraEffects& e, double* max_error) {
+  Photometric p;
+  const cv::Vec3d g = camera_gains(e, camera.id);
+  p.gains = {g[0], g[1], g[2]};
+  const int W = camera.in.width, H = camera.in.height;
+  // V = 1 + b s + c s^2 + d s^3 (s = r^2): the minimax fit over a grid of pixel centres.
+  const int step = std::max(1, std::min(W, H) / 64);
+  std::vector<double> ss, vs;
+  for (int r = 0; r < H; r += step)
+    for (int c = 0; c < W; c += step) {
+      const double rad = vignetting_radius(p, W, H, c + 0.5, r + 0.5);
+      ss.push_back(rad * rad);
+      vs.push_back(true_falloff(camera, e, Vec2(c + 0.5, r + 0.5)));
+    }
+  // The grid misses the image's outermost pixels: add the corners and edge midpoints.
+  for (double c : {0.5, W / 2.0, W - 0.5})
+    for (double r : {0.5, H / 2.0, H - 0.5}) {
+      const double rad = vignetting_radius(p, W, H, c, r);
+      ss.push_back(rad * rad);
+      vs.push_back(true_falloff(camera, e, Vec2(c, r)));
+    }
+  p.vignetting = fit_vignetting(ss, vs);
+  if (max_error) {
+    double mx = 0;
+    for (int r = 0; r < H; ++r)
+      for (int c = 0; c < W; ++c)
+        mx = std::max(mx, std::abs(vignetting_falloff(p, W, H, c + 0.5, r + 0.5) /
+                                       true_falloff(camera, e, Vec2(c + 0.5, r + 0.5)) - 1));
+    *max_error = mx;
+  }
+  return p;
 }
 
 cv::Mat render_radiance(const Scene& scene, const RigCamera& camera, const DomePose& pose, int n) {
@@ -135,7 +175,6 @@ CameraFrame apply_sensor(const cv::Mat& radiance, const RigCamera& camera, const
   check_effects(e);
   CV_Assert(radiance.type() == CV_32FC3);
   if (want_raw && e.bits == 0) throw std::invalid_argument("raw frames need quantisation (bits 8..16)");
-  const CameraModel model = camera.model();
   const int W = radiance.cols, H = radiance.rows;
   CameraFrame f;
   f.gains = camera_gains(e, camera.id);
@@ -145,16 +184,14 @@ CameraFrame apply_sensor(const cv::Mat& radiance, const RigCamera& camera, const
   if (e.bits > 0) dn.create(H, W, CV_16UC3);
   tbb::parallel_for(tbb::blocked_range<int>(0, H, 4), [&](const tbb::blocked_range<int>& rows) {
     for (int r = rows.begin(); r < rows.end(); ++r) {
-      std::mt19937_64 rng(mix(e.seed, static_cast<uint64_t>(camera.id) + 1, static_cast<uint64_t>(r)));
+      // Shot 0 keeps the single-exposure noise of earlier versions; later shots mix their index in.
+      const uint64_t noise_seed = e.shot == 0 ? e.seed : mix(e.seed, 0x73686f74ull, static_cast<uint64_t>(e.shot));
+      std::mt19937_64 rng(mix(noise_seed, static_cast<uint64_t>(camera.id) + 1, static_cast<uint64_t>(r)));
       std::normal_distribution<double> normal(0.0, 1.0);
       const cv::Vec3f* src = radiance.ptr<cv::Vec3f>(r);
       cv::Vec3f* dst = f.signal.ptr<cv::Vec3f>(r);
       for (int c = 0; c < W; ++c) {
-        double v = 1;
-        if (e.vignetting > 0) {
-          const double ca = model.unproject(Vec2(c + 0.5, r + 0.5)).dot(camera.frame.t);
-          v = 1 - e.vignetting * (1 - ca * ca * ca * ca);
-        }
+        const double v = true_falloff(camera, e, Vec2(c + 0.5, r + 0.5));
         for (int k = 0; k < 3; ++k) {
           double s = e.exposure * f.gains[k] * v * src[c][k];
           if (e.full_scale_electrons > 0 && s > 0) s += std::sqrt(s / e.full_scale_electrons) * normal(rng);

@@ -19,6 +19,7 @@
 #include <opencv2/core.hpp>
 
 #include "omma/core/grid.h"
+#include "omma/core/photometric.h"
 #include "omma/core/progress.h"
 #include "omma/core/rig.h"
 #include "omma/sim/scene.h"
@@ -41,6 +42,7 @@ struct CameraEffects {
   double read_noise_dn = 2.0;     // read noise sigma in quantiser steps (DN); 0 = none
   int bits = 10;                  // quantiser bits (8..16); 0 = no quantisation (float)
   uint64_t seed = 1;              // noise and gains; the camera id is mixed in
+  int shot = 0;                   // exposure index of a static scene: fresh noise, the same gains
 
   // No vignetting, gains, noise or quantisation; keeps supersample.
   static CameraEffects ideal(int supersample = 1);
@@ -48,6 +50,14 @@ struct CameraEffects {
 
 // The per-camera colour gains (BGR) that `effects` gives camera `camera_id`.
 cv::Vec3d camera_gains(const CameraEffects& effects, int camera_id);
+// The vignetting V = 1 - strength (1 - cos^4 a) at continuous pixel px of `camera` (a = angle of
+// the pixel's ray to the optical axis): the simulator's truth, which calib/photometric.h estimates.
+double true_falloff(const RigCamera& camera, const CameraEffects& effects, const Vec2& px);
+// The photometric model (core/photometric.h) closest to the simulator's truth for `camera`: its
+// gains, and the vignetting polynomial fitted to true_falloff over the pixel centres (minimax in
+// the relative error, fit_vignetting; centred, so x = y = 0). The largest relative error |fit /
+// truth - 1| over the image in *max_error if given.
+Photometric true_photometric(const RigCamera& camera, const CameraEffects& effects, double* max_error = nullptr);
 
 // Mean linear radiance per pixel (CV_32FC3, camera size), before any sensor effect.
 cv::Mat render_radiance(const Scene& scene, const RigCamera& camera, const DomePose& pose = {},

@@ -13,16 +13,6 @@
 
 namespace omma::sim {
 
-float srgb_to_linear(float e) {
-  e = std::clamp(e, 0.0f, 1.0f);
-  return e <= 0.04045f ? e / 12.92f : std::pow((e + 0.055f) / 1.055f, 2.4f);
-}
-
-float linear_to_srgb(float l) {
-  l = std::clamp(l, 0.0f, 1.0f);
-  return l <= 0.0031308f ? 12.92f * l : 1.055f * std::pow(l, 1.0f / 2.4f) - 0.055f;
-}
-
 namespace {
 
 // ---------------------------------------------------------------- photo (far field)
@@ -197,8 +187,16 @@ std::unique_ptr<Scene> make_scene(const std::string& spec) {
   if (kind == "colon" && !has_arg) return make_colon_scene();
   if (kind == "usaf") return make_usaf_scene(has_arg ? parse_number(arg, spec) : 25.0);
   if (kind == "checker") return make_checker_scene(has_arg ? parse_number(arg, spec) : 100.0);
+  if (kind == "tube") {
+    TubeParams p;
+    if (has_arg) p.diameter_mm = parse_number(arg, spec);
+    return make_tube_scene(p);
+  }
+  if (kind == "flat") return make_flat_scene(has_arg ? parse_number(arg, spec) : 0.6);
   throw SceneError(fmt::format(
-      "unknown scene '{}' (use photo:PATH, colon, usaf[:DISTANCE_MM] or checker[:RADIUS_MM])", spec));
+      "unknown scene '{}' (use photo:PATH, colon, usaf[:DISTANCE_MM], checker[:RADIUS_MM], tube[:DIAMETER_MM] or "
+      "flat[:LEVEL])",
+      spec));
 }
 
 }  // namespace omma::sim

@@ -18,6 +18,7 @@
 #include <opencv2/core.hpp>
 
 #include "omma/core/geometry.h"
+#include "omma/core/srgb.h"
 
 namespace omma::sim {
 
@@ -80,12 +81,34 @@ std::unique_ptr<Scene> make_usaf_scene(double distance_mm = 25.0);
 // radius shrinks). Throws SceneError if radius_mm <= 0 or the origin of a ray is outside it.
 std::unique_ptr<Scene> make_checker_scene(double radius_mm = 100.0);
 
-// Parses a scene spec: "photo:PATH", "colon", "usaf[:DIST_MM]", "checker[:RADIUS_MM]". Throws
+// The thesis's calibration environment (§3.6, Fig. 3.12a): a closed cylindrical tube of
+// `diameter_mm` (35 mm in the thesis, "compatible with the human bowel") on the dome axis, the dome
+// centre on its axis, its far end closed by a disc `length_mm` ahead (+z) and its back `back_mm`
+// behind; evenly lit (radiance = brightness * albedo, no shading: a static, well-lit target). The
+// print is a high-contrast pattern with detail at every scale the cameras resolve (octaves of
+// value noise from 12.8 mm down to 0.1 mm cells, equal amplitude, through a steep sigmoid: albedo
+// 0.06 .. 0.94) tinted by a coarse colour noise (every channel textured). Static: shots of it
+// differ only by the sensor noise.
+struct TubeParams {
+  double diameter_mm = 35;
+  double length_mm = 30;     // far end (closed) ahead of the dome centre
+  double back_mm = 60;       // closed end behind the dome centre
+  double brightness = 0.85;  // radiance of a white print
+  unsigned seed = 11;        // texture seed
+};
+std::unique_ptr<Scene> make_tube_scene(const TubeParams& params = {});
+
+// A uniformly lit white target (an integrating sphere): the same radiance `level` in every
+// direction, for flat-field photometric calibration (calib/photometric.h).
+std::unique_ptr<Scene> make_flat_scene(double level = 0.6);
+
+// Parses a scene spec: "photo:PATH", "colon", "usaf[:DIST_MM]", "checker[:RADIUS_MM]",
+// "tube[:DIAMETER_MM]", "flat[:LEVEL]". Throws
 // SceneError with the list of valid specs for anything else, or if the photo cannot be read.
 std::unique_ptr<Scene> make_scene(const std::string& spec);
 
-// sRGB transfer curve (IEC 61966-2-1), values in [0, 1].
-float srgb_to_linear(float encoded);
-float linear_to_srgb(float linear);
+// sRGB transfer curve (IEC 61966-2-1), values in [0, 1]: core/srgb.h.
+using ::omma::linear_to_srgb;
+using ::omma::srgb_to_linear;
 
 }  // namespace omma::sim

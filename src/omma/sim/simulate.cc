@@ -28,12 +28,22 @@ SimulateResult simulate(const Rig& nominal, const Scene& scene, const SimulateOp
   SimulateResult res;
   res.nominal = nominal;
   res.true_rig = perturb_rig(nominal, o.perturb, o.effects.seed);
+  if (o.shots < 1 || o.shots > 1000) throw std::invalid_argument(fmt::format("shots must be 1..1000, got {}", o.shots));
   res.frames.resize(nominal.cameras.size());
+  res.more_shots.assign(size_t(o.shots - 1), std::vector<CameraFrame>(nominal.cameras.size()));
   {
     Progress progress("simulate cameras", nominal.cameras.size(), o.progress);
     const auto t0 = std::chrono::steady_clock::now();
     tbb::parallel_for(size_t{0}, res.true_rig.cameras.size(), [&](size_t i) {
-      res.frames[i] = render_camera(scene, res.true_rig.cameras[i], o.pose, o.effects, o.raw);
+      // The scene is static: its radiance once, the sensor (noise) once per shot.
+      const RigCamera& cam = res.true_rig.cameras[i];
+      const cv::Mat radiance = render_radiance(scene, cam, o.pose, o.effects.supersample);
+      res.frames[i] = apply_sensor(radiance, cam, o.effects, o.raw);
+      for (int k = 1; k < o.shots; ++k) {
+        CameraEffects e = o.effects;
+        e.shot = k;
+        res.more_shots[size_t(k - 1)][i] = apply_sensor(radiance, cam, e, o.raw);
+      }
       progress.step();
     });
     progress.finish();
@@ -58,18 +68,28 @@ ColonCase colon_case(uint64_t seed) {
   return c;
 }
 
-nlohmann::json simulation_summary(const SimulateResult& r, const SimulateOptions& o, const Scene& scene) {
+
+nlohmann::json simulation_summary(const SimulateResult& r, const SimulateOptions& o, const Scene& scene, int shot) {
   nlohmann::json cams = nlohmann::json::array();
   for (size_t i = 0; i < r.frames.size(); ++i) {
     const auto& c = r.true_rig.cameras[i];
     const auto& g = r.frames[i].gains;
-    cams.push_back({{"id", c.id}, {"width", c.in.width}, {"height", c.in.height}, {"gains_bgr", {g[0], g[1], g[2]}}});
+    double fit_err = 0;
+    const Photometric ph = true_photometric(c, o.effects, &fit_err);
+    cams.push_back({{"id", c.id},
+                    {"width", c.in.width},
+                    {"height", c.in.height},
+                    {"gains_bgr", {g[0], g[1], g[2]}},
+                    {"vignetting_fit", ph.vignetting},
+                    {"vignetting_fit_max_error", fit_err}});
   }
   const auto& e = o.effects;
   return {{"format", "omma-sim"},
           {"version", 1},
           {"scene", scene.spec()},
           {"seed", e.seed},
+          {"shot", shot},
+          {"shots", o.shots},
           {"encoding", "srgb"},
           {"effects",
            {{"supersample", e.supersample},
@@ -100,8 +120,28 @@ nlohmann::json simulation_summary(const SimulateResult& r, const SimulateOptions
           {"truth_ms", r.truth_ms}};
 }
 
-void write_frames_folder(const fs::path& dir, const SimulateResult& r, const SimulateOptions& o,
-                         const Scene& scene) {
+namespace {
+
+// Writes one shot's frames folder into `target` (which exists).
+void write_shot(const fs::path& target, const SimulateResult& r, const SimulateOptions& o, const Scene& scene,
+                int shot) {
+  const std::vector<CameraFrame>& frames = shot == 0 ? r.frames : r.more_shots[size_t(shot - 1)];
+  for (size_t i = 0; i < frames.size(); ++i) {
+    const int id = r.true_rig.cameras[i].id;
+    write_image(target / frame_filename(id), frames[i].image);
+    if (o.raw) write_image(target / raw_frame_filename(id), frames[i].raw);
+  }
+  if (!r.truth.empty()) write_image(target / "truth.png", r.truth);
+  if (!r.truth_depth.empty()) write_image(target / "truth_depth.tiff", r.truth_depth);
+  save_rig(r.nominal, target / "rig.json");
+  save_rig(r.true_rig, target / "rig_true.json");
+  write_text_atomically(target / "sim.json", simulation_summary(r, o, scene, shot).dump(2) + "\n");
+}
+
+// Runs write(target) into `dir`: a fresh folder is written as a temporary sibling and renamed at the
+// end (all or nothing); an existing folder is written in place.
+template <typename Write>
+void write_folder(const fs::path& dir, Write write) {
   if (fs::exists(dir) && !fs::is_directory(dir))
     throw IoError(fmt::format("output '{}' exists and is not a folder", dir.string()));
   const bool fresh = !fs::exists(dir);
@@ -117,16 +157,7 @@ void write_frames_folder(const fs::path& dir, const SimulateResult& r, const Sim
       throw IoError(fmt::format("cannot create folder '{}': {}", target.string(), ec.message()));
   }
   try {
-    for (size_t i = 0; i < r.frames.size(); ++i) {
-      const int id = r.true_rig.cameras[i].id;
-      write_image(target / frame_filename(id), r.frames[i].image);
-      if (o.raw) write_image(target / raw_frame_filename(id), r.frames[i].raw);
-    }
-    if (!r.truth.empty()) write_image(target / "truth.png", r.truth);
-    if (!r.truth_depth.empty()) write_image(target / "truth_depth.tiff", r.truth_depth);
-    save_rig(r.nominal, target / "rig.json");
-    save_rig(r.true_rig, target / "rig_true.json");
-    write_text_atomically(target / "sim.json", simulation_summary(r, o, scene).dump(2) + "\n");
+    write(target);
     if (fresh) {
       std::error_code ec;
       fs::rename(target, dir, ec);
@@ -139,6 +170,26 @@ void write_frames_folder(const fs::path& dir, const SimulateResult& r, const Sim
     }
     throw;
   }
+}
+
+}  // namespace
+
+void write_frames_folder(const fs::path& dir, const SimulateResult& r, const SimulateOptions& o, const Scene& scene) {
+  write_folder(dir, [&](const fs::path& target) { write_shot(target, r, o, scene, 0); });
+}
+
+std::string shot_folder_name(int shot) { return fmt::format("shot_{:02d}", shot); }
+
+void write_shots_folder(const fs::path& dir, const SimulateResult& r, const SimulateOptions& o, const Scene& scene) {
+  write_folder(dir, [&](const fs::path& target) {
+    for (int k = 0; k <= static_cast<int>(r.more_shots.size()); ++k) {
+      const fs::path sub = target / shot_folder_name(k);
+      std::error_code ec;
+      fs::create_directories(sub, ec);
+      if (ec) throw IoError(fmt::format("cannot create folder '{}': {}", sub.string(), ec.message()));
+      write_shot(sub, r, o, scene, k);
+    }
+  });
 }
 
 }  // namespace omma::sim

@@ -8,7 +8,11 @@
 //                         range (render_truth_depth; `omma stitch --depth truth:FILE` reads it)
 //   DIR/rig.json          the nominal rig (what the stitcher is told)
 //   DIR/rig_true.json     the rig the frames were rendered with (= rig.json without perturbation)
-//   DIR/sim.json          what was simulated: scene, seed, effects, per-camera gains, perturbation
+//   DIR/sim.json          what was simulated: scene, seed, effects, per-camera gains and the
+//                         vignetting polynomial closest to the truth (true_photometric), perturbation
+// Several shots of a static scene (shots > 1, e.g. the calibration tube, issue 13): the same rig,
+// radiance and colour gains, independent sensor noise per shot; written as one frames folder per
+// shot, DIR/shot_00, DIR/shot_01, ... (each complete: frames, truth, rigs, sim.json with "shot").
 #pragma once
 
 #include <filesystem>
@@ -30,12 +34,14 @@ struct SimulateOptions {
   bool raw = false;                                      // also produce Bayer raw frames
   DomePose pose;                                         // where the dome is in the scene
   bool progress = true;                                  // progress bar on stderr
+  int shots = 1;                                         // exposures of the static scene (>= 1)
 };
 
 struct SimulateResult {
   Rig nominal;                      // the rig given
   Rig true_rig;                     // the rig rendered (perturbed)
-  std::vector<CameraFrame> frames;  // in rig order
+  std::vector<CameraFrame> frames;  // in rig order (shot 0)
+  std::vector<std::vector<CameraFrame>> more_shots;  // shots 1 .. shots-1, each in rig order
   cv::Mat truth;                    // CV_8UC3 sRGB (empty if options.truth is false)
   cv::Mat truth_depth;              // CV_32FC1 mm (render_truth_depth; empty if options.truth is false)
   double cameras_ms = 0, truth_ms = 0;
@@ -60,8 +66,13 @@ struct ColonCase {
 };
 ColonCase colon_case(uint64_t seed);
 
-// The content of DIR/sim.json.
+// Writes DIR/shot_00 .. DIR/shot_<N-1> (N = 1 + result.more_shots.size()), all or nothing.
+void write_shots_folder(const std::filesystem::path& dir, const SimulateResult& result,
+                        const SimulateOptions& options, const Scene& scene);
+std::string shot_folder_name(int shot);  // "shot_03"
+
+// The content of DIR/sim.json (of shot `shot`).
 nlohmann::json simulation_summary(const SimulateResult& result, const SimulateOptions& options,
-                                  const Scene& scene);
+                                  const Scene& scene, int shot = 0);
 
 }  // namespace omma::sim
