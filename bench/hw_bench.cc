@@ -8,7 +8,7 @@
 #include "omma/design/prototype.h"
 #include "omma/hw/pipeline.h"
 #include "omma/pano/stitch.h"
-#include "omma/pano/test_scene.h"
+#include "omma/sim/test_scenes.h"
 
 namespace {
 using namespace omma;
@@ -20,8 +20,8 @@ struct Fixture {
   std::vector<cv::Mat> frames;
   PanoGrid grid{Projection::kVr180, 1080, 1080};
   Fixture() {
-    const cv::Mat tex = pano::testing::photo_texture(std::string(OMMA_DATA_DIR) + "/louvre.jpg", 1440);
-    for (const cv::Mat& f : pano::testing::render_frames(rig, tex)) frames.push_back(to_u8(f));
+    const cv::Mat tex = sim::testing::photo_texture(std::string(OMMA_DATA_DIR) + "/louvre.jpg", 1440);
+    for (const cv::Mat& f : sim::testing::render_frames(rig, tex)) frames.push_back(to_u8(f));
   }
 };
 const Fixture& fixture() {
