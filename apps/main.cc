@@ -19,11 +19,14 @@ void set_json_mode(bool on) { omma::set_progress_enabled(!on); }
 static const CommandEntry kCommands[] = {
     {"rig", add_rig_command},           {"design", add_design_command},
     {"coverage", add_coverage_command}, {"sweep", add_sweep_command},
-    {"optics", add_optics_command},     {"simulate", add_simulate_command},
+    {"optics", add_optics_command},     {"plan", add_plan_command},
+    {"simulate", add_simulate_command},
     {"link", add_link_command},         {"isp", add_isp_command},
     {"calibrate", add_calibrate_command}, {"rig-diff", add_rig_diff_command},
     {"pto", add_pto_command},           {"stitch", add_stitch_command},
     {"eval", add_eval_command},         {"resolution", add_resolution_command},
+    {"render", add_render_command},     {"record", add_record_command},
+    {"recording", add_recording_command},
     {"run", add_run_command},           {"bench", add_bench_command},
     {"demo", add_demo_command},
 };
