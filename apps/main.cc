@@ -28,6 +28,7 @@ static const CommandEntry kCommands[] = {
     {"render", add_render_command},     {"record", add_record_command},
     {"recording", add_recording_command},
     {"run", add_run_command},           {"bench", add_bench_command},
+    {"hw", add_hw_command},
     {"demo", add_demo_command},
 };
 
