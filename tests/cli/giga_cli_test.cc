@@ -117,9 +117,9 @@ TEST_F(GigaSim, RenderAgainstTruth) {
 TEST_F(GigaSim, RecordCheckRenderAndSurviveSigkill) {
   const auto dir = temp_dir("giga-record");
   const std::string rec = (dir / "rec").string();
-  // The 12-bit raw frames of the simulation, one still source per camera: two frame sets.
-  const auto r = run_omma("record --rig gigaeye-44-skip5 --source '" + frames() + "/cam_{id}_raw.png' --fps 4 --frames 2 --out " +
-                          rec + " --json");
+  // The simulated frames as stills (frames:DIR), two frame sets.
+  const auto r = run_omma("record --rig gigaeye-44-skip5 --source frames:" + frames() + " --fps 4 --frames 2 --out " + rec +
+                          " --json");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto c = run_omma("recording check " + rec + " --json");
   ASSERT_EQ(c.exit_code, 0) << c.err;
