@@ -7,7 +7,7 @@
 set -euo pipefail
 pkgs=(cmake g++ ninja-build ccache pkg-config libopencv-dev libeigen3-dev libceres-dev libtbb-dev
       libcli11-dev nlohmann-json3-dev libspdlog-dev libfmt-dev libgtest-dev libgmock-dev
-      libbenchmark-dev hugin-tools libcpp-httplib-dev zlib1g-dev)
+      libbenchmark-dev hugin-tools libcpp-httplib-dev zlib1g-dev libtiff-dev libhdf5-dev)
 [ "${1:-}" = "--test" ] && pkgs+=(chromium verilator yosys iverilog)
 command -v npm >/dev/null || pkgs+=(nodejs npm)
 missing=()

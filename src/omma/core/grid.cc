@@ -8,12 +8,26 @@
 #include "omma/core/limits.h"
 
 namespace omma {
+namespace {
+// Polar span of the equirectangular grids (radians).
+double theta_span(Projection p) {
+  switch (p) {
+    case Projection::kEquirect: return kPi / 2;
+    case Projection::kEquirectFull: return kPi;
+    case Projection::kEquirect100: return deg2rad(100);
+    case Projection::kVr180: break;
+  }
+  return 0;
+}
+}  // namespace
 
 Projection parse_projection(const std::string& name) {
   if (name == "equirect") return Projection::kEquirect;
   if (name == "vr180") return Projection::kVr180;
   if (name == "equirect-full") return Projection::kEquirectFull;
-  throw std::invalid_argument("unknown projection '" + name + "' (use equirect, vr180 or equirect-full)");
+  if (name == "equirect-100") return Projection::kEquirect100;
+  throw std::invalid_argument("unknown projection '" + name +
+                              "' (use equirect, vr180, equirect-full or equirect-100)");
 }
 
 std::string to_string(Projection p) {
@@ -21,6 +35,7 @@ std::string to_string(Projection p) {
     case Projection::kEquirect: return "equirect";
     case Projection::kVr180: return "vr180";
     case Projection::kEquirectFull: return "equirect-full";
+    case Projection::kEquirect100: return "equirect-100";
   }
   return "?";
 }
@@ -28,10 +43,11 @@ std::string to_string(Projection p) {
 Vec3 PanoGrid::direction(double x, double y) const {
   switch (projection) {
     case Projection::kEquirect:
-    case Projection::kEquirectFull: {
-      const double theta_span = projection == Projection::kEquirect ? kPi / 2 : kPi;
+    case Projection::kEquirectFull:
+    case Projection::kEquirect100: {
+      const double span = theta_span(projection);
       const double phi = x / width * 2 * kPi;
-      const double theta = y / height * theta_span;
+      const double theta = y / height * span;
       return direction_from_spherical(theta, phi);
     }
     case Projection::kVr180: {
@@ -48,11 +64,12 @@ std::optional<Vec2> PanoGrid::pixel(const Vec3& w_in) const {
   const Vec3 w = w_in.normalized();
   switch (projection) {
     case Projection::kEquirect:
-    case Projection::kEquirectFull: {
-      const double theta_span = projection == Projection::kEquirect ? kPi / 2 : kPi;
+    case Projection::kEquirectFull:
+    case Projection::kEquirect100: {
+      const double span = theta_span(projection);
       const Spherical s = spherical_from_direction(w);
-      if (s.theta > theta_span) return std::nullopt;
-      return Vec2(s.phi / (2 * kPi) * width, s.theta / theta_span * height);
+      if (s.theta > span) return std::nullopt;
+      return Vec2(s.phi / (2 * kPi) * width, s.theta / span * height);
     }
     case Projection::kVr180: {
       if (w.z() < 0) return std::nullopt;
@@ -67,9 +84,10 @@ std::optional<Vec2> PanoGrid::pixel(const Vec3& w_in) const {
 double PanoGrid::pixel_solid_angle(int col, int row) const {
   switch (projection) {
     case Projection::kEquirect:
-    case Projection::kEquirectFull: {
-      const double theta_span = projection == Projection::kEquirect ? kPi / 2 : kPi;
-      const double t0 = row * theta_span / height, t1 = (row + 1) * theta_span / height;
+    case Projection::kEquirectFull:
+    case Projection::kEquirect100: {
+      const double span = theta_span(projection);
+      const double t0 = row * span / height, t1 = (row + 1) * span / height;
       return (2 * kPi / width) * (std::cos(t0) - std::cos(t1));
     }
     case Projection::kVr180: {
@@ -80,7 +98,7 @@ double PanoGrid::pixel_solid_angle(int col, int row) const {
   return 0;
 }
 
-Size2 parse_size(const std::string& text) {
+Size2 parse_size(const std::string& text, bool banded) {
   // W 'x' H, decimal digits only; the values are range-checked as 64-bit integers before narrowing.
   auto bad = [&] {
     return std::invalid_argument("size '" + text + "' must be WxH with positive integers, e.g. 1080x1080");
@@ -97,7 +115,8 @@ Size2 parse_size(const std::string& text) {
     return v;
   };
   const int64_t w = number(0, x), h = number(x + 1, text.size());
-  check_image_size(w, h, "size");
+  if (banded) check_banded_size(w, h, "size");
+  else check_image_size(w, h, "size");
   return Size2{int(w), int(h)};
 }
 

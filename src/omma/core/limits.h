@@ -13,6 +13,13 @@ namespace omma {
 inline constexpr int kMaxImageSide = 16384;
 inline constexpr std::int64_t kMaxImagePixels = std::int64_t(1) << 28;
 
+// Panoramas rendered band by band (`omma render`, engine/pano_render.h: the Giga-Eye's 17700 x 4650)
+// may be larger: at most 65536 pixels a side and 2^30 pixels in all, while each band (a map's
+// window) stays within the image bounds above; 2^30 keeps every pixel index of the whole panorama
+// in a signed 32-bit int.
+inline constexpr int kMaxBandedSide = 65536;
+inline constexpr std::int64_t kMaxBandedPixels = std::int64_t(1) << 30;
+
 // Cameras per rig. The compiled map (engine/compiled_map.h) addresses the frame store with 32-bit
 // offsets in units of 2 bytes, i.e. at most 8 GiB of store: 6 bytes per pixel (row pairs) times the
 // widest camera's width times the sum of the heights, e.g. 22 906 cameras of 250 x 250, or 44 of the
@@ -40,5 +47,7 @@ inline constexpr double kMaxDistortion = 1e6;
 // kMaxImageSide and width * height <= kMaxImagePixels. 64-bit arguments so that callers can pass
 // values before narrowing them to int.
 void check_image_size(std::int64_t width, std::int64_t height, const std::string& what);
+// The same with kMaxBandedSide and kMaxBandedPixels: a panorama rendered band by band.
+void check_banded_size(std::int64_t width, std::int64_t height, const std::string& what);
 
 }  // namespace omma

@@ -14,6 +14,9 @@
 //      "photometric": {"vignetting": [b, c, d], "vignetting_center_px": [x, y],   // optional,
 //                      "gains_bgr": [B, G, R]}}, ...]                            // photometric.h
 // }
+// Intrinsics may add "field": "cone" (the default: the cone of aov_deg, eq. 2.3) or "image" (the
+// camera sees what lands inside its image; aov_deg may be left out and is recomputed on loading as
+// the bounding cone of the image, Intrinsics::bounding_aov).
 // Loading validates everything and throws RigError naming the camera and field at fault.
 #pragma once
 
