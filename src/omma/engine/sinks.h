@@ -1,7 +1,9 @@
 // Sinks of the live engine (issue 5 point 3). Sink specs (`omma run --sink`):
 //   FILE.mp4 | FILE.mkv | FILE.avi   video file (OpenCV VideoWriter: mp4v in mp4, MJPG in mkv/avi),
-//                                    written to a temporary file renamed into place at the end
-//   png:DIR  or  DIR/                PNG sequence DIR/frame_000000.png ... (each written atomically)
+//                                    written to a temporary file renamed into place at the end;
+//                                    mp4 with Spherical Video V2 metadata (SinkOptions::projection)
+//   png:DIR  or  DIR/                PNG sequence DIR/frame_000000.png ... (each written atomically,
+//                                    with the GPano XMP when SinkOptions::projection is set)
 //   cam:ID:SINK                      camera ID's own frames passed through to SINK (a video file or
 //                                    PNG folder) instead of the panorama: the ASIC's output
 //                                    multiplexer (thesis §6.3)
@@ -13,12 +15,14 @@
 #pragma once
 
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 
+#include "omma/core/grid.h"
 #include "omma/core/rig.h"
 #include "omma/engine/compiled_map.h"
 
@@ -45,6 +49,9 @@ class Sink {
 struct SinkOptions {
   double fps = 30;       // frame rate written into video files
   int jpeg_quality = 80;  // live view
+  // Projection of the panoramas: MP4 files and PNG frames then carry 360-degree metadata
+  // (omma/core/metadata.h: Spherical Video V2, GPano XMP). Unset: plain files.
+  std::optional<Projection> projection;
 };
 
 // Opens one sink. `pano_size` is the panorama size; the rig gives camera sizes for cam:ID sinks.
