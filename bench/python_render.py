@@ -11,7 +11,8 @@ and, with the frames copied into the frame store every time (what render(frames)
   cpp+upload / python+upload   (_render_loop(n, frames) / engine.render(frames, out=buffer))
 The workloads are measured in turns (--rounds interleaved slices), so that the shared machine's
 drifting speed slows them alike; the ratios python / cpp are printed per round and overall. With
---omma-bench, `omma bench --only omma-mrf-WxH` runs between the rounds as a further peer.
+--omma-bench, `omma bench --only omma-mrf-WxH` (its own process, map and frames) runs between the
+rounds as a further peer (all threads only).
 """
 import argparse
 import json
@@ -28,6 +29,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--size", default="1080x1080")
     ap.add_argument("--method", default="mrf")
+    ap.add_argument("--threads", type=int, default=0, help="renderer threads (0: all)")
     ap.add_argument("--rounds", type=int, default=5)
     ap.add_argument("--seconds", type=float, default=0.5, help="per workload and round")
     ap.add_argument("--omma-bench", action="store_true", help="also run `omma bench` between the rounds")
@@ -37,7 +39,7 @@ def main():
     rig = omma.thesis_prototype_rig()
     rng = np.random.default_rng(1)
     frames = [rng.integers(0, 256, size=(ch, cw, 3), dtype=np.uint8) for cw, ch in rig.camera_sizes]
-    eng = omma.Engine(rig, method=a.method, size=(w, h))
+    eng = omma.Engine(rig, method=a.method, size=(w, h), threads=a.threads)
     eng.set_frames(frames)
     buf = eng.render()
 
@@ -90,7 +92,7 @@ def main():
     fps = {k: v[0] / v[1] for k, v in totals.items()}
     ratio = lambda a_, b_: [x / y for x, y in zip(rounds[a_], rounds[b_])]
     result = {
-        "size": f"{w}x{h}", "method": a.method, "kernel": eng.kernel, "fps": fps, "round_fps": rounds,
+        "size": f"{w}x{h}", "method": a.method, "kernel": eng.kernel, "threads": a.threads, "fps": fps, "round_fps": rounds,
         "python_over_cpp": fps["python"] / fps["cpp"],
         "python_out_over_cpp": fps["python-out"] / fps["cpp"],
         "python_upload_over_cpp_upload": fps["python+upload"] / fps["cpp+upload"],
@@ -102,7 +104,8 @@ def main():
     if a.json:
         print(json.dumps(result))
         return
-    print(f"{a.method} {w}x{h}, kernel {eng.kernel}, {a.rounds} rounds of {a.seconds} s per workload")
+    print(f"{a.method} {w}x{h}, kernel {eng.kernel}, threads {a.threads or 'all'}, {a.rounds} rounds of "
+          f"{a.seconds} s per workload")
     for k, v in fps.items():
         print(f"  {k:<14} {v:8.0f} fps   rounds: " + " ".join(f"{x:.0f}" for x in rounds[k]))
     for k in ("python_over_cpp", "python_out_over_cpp", "python_upload_over_cpp_upload", "python_over_omma_bench"):

@@ -22,6 +22,7 @@ def main():
     ap.add_argument("frames", nargs="?", help="frames folder of `omma demo` / `omma simulate` (default: simulate)")
     ap.add_argument("--methods", nargs=2, default=["nn", "mrf"], choices=omma.METHODS)
     ap.add_argument("--out", default="compare-methods", help="output folder")
+    ap.add_argument("--seconds", type=float, default=1.0, help="time the engine this long per method")
     a = ap.parse_args()
 
     if a.frames:
@@ -48,7 +49,7 @@ def main():
         engine = omma.Engine(rig, method=method, size=size)
         fast = engine.render(frames)
         n, t0 = 0, time.perf_counter()
-        while time.perf_counter() - t0 < 1.0:
+        while time.perf_counter() - t0 < a.seconds:
             engine.render(frames, out=fast)
             n += 1
         fps = n / (time.perf_counter() - t0)

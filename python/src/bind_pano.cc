@@ -172,7 +172,13 @@ void add_pano(py::module_& m) {
       .def_readwrite("dense_refine", &CalibrationOptions::dense_refine)
       .def_readwrite("max_iterations", &CalibrationOptions::max_iterations)
       .def_readwrite("min_observations", &CalibrationOptions::min_observations)
-      .def_readwrite("threads", &CalibrationOptions::threads);
+      .def_readwrite("threads", &CalibrationOptions::threads)
+      .def_property(
+          "upsample", [](const CalibrationOptions& o) { return o.features.upsample; },
+          [](CalibrationOptions& o, int v) { o.features.upsample = v; }, "SIFT on frames upsampled this much (1 = off)")
+      .def_property(
+          "max_features", [](const CalibrationOptions& o) { return o.features.max_features; },
+          [](CalibrationOptions& o, int v) { o.features.max_features = v; }, "SIFT features per camera");
 
   m.def(
       "calibrate",

@@ -2,6 +2,8 @@
 and against the `omma` command on the same frames."""
 import json
 import subprocess
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -108,3 +110,14 @@ def test_simulate_photo_scene_from_an_array(rig):
 def test_simulation_save_writes_a_frames_folder(frames_dir):
     assert sorted(p.name for p in frames_dir.glob("cam_*.png"))[:2] == ["cam_00.png", "cam_01.png"]
     assert json.loads((frames_dir / "sim.json").read_text())["scene"] == "photo:memory"
+
+
+def test_example_compares_two_methods(frames_dir, tmp_path):
+    example = Path(__file__).resolve().parents[2] / "examples" / "python" / "compare_methods.py"
+    r = subprocess.run([sys.executable, str(example), str(frames_dir), "--out", str(tmp_path), "--seconds", "0.1"],
+                       capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    rows = {w[0]: w for w in map(str.split, r.stdout.splitlines()) if w[:1] in (["nn"], ["mrf"]) and "vs" not in w}
+    assert set(rows) == {"nn", "mrf"}
+    assert all(float(rows[m][3]) > 28 for m in rows)  # PSNR against the truth, dB
+    assert (tmp_path / "pano_mrf.jpg").stat().st_size > 1000 and (tmp_path / "side_by_side.png").exists()
