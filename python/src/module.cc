@@ -5,6 +5,8 @@
 
 #include "bindings.h"
 #include "omma/core/io.h"
+#include "omma/core/log.h"
+#include "omma/core/progress.h"
 #include "omma/core/rig.h"
 #include "omma/engine/sinks.h"
 #include "omma/sim/scene.h"
@@ -78,9 +80,23 @@ void add_errors(py::module_& m) {
 
 PYBIND11_MODULE(_omma, m) {
   m.doc() = "omma: compound-eye camera toolkit (rigs, design, simulator, stitcher, real-time engine, calibration)";
+  omma::init_logging(false, false);  // "[info] ..." on stderr, as the command line
   omma::py::add_errors(m);
   omma::py::add_rig(m);
   omma::py::add_sim(m);
   omma::py::add_pano(m);
   omma::py::add_engine(m);
+  m.def(
+      "set_verbosity",
+      [](const std::string& level) {
+        if (level != "quiet" && level != "info" && level != "debug")
+          throw std::invalid_argument("verbosity must be quiet, info or debug (got '" + level + "')");
+        spdlog::set_level(level == "debug" ? spdlog::level::debug
+                          : level == "quiet" ? spdlog::level::warn
+                                             : spdlog::level::info);
+        omma::set_progress_enabled(level != "quiet");
+      },
+      pybind11::arg("level"),
+      "What omma writes to stderr: 'info' (default: log lines and progress bars of long operations),\n"
+      "'quiet' (warnings and errors only, no progress) or 'debug'.");
 }

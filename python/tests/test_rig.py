@@ -73,3 +73,20 @@ def test_missing_image_is_an_os_error(tmp_path):
         omma.read_image(str(tmp_path / "nothing.png"))
     assert isinstance(e.value, OSError)
     assert "nothing.png' does not exist" in str(e.value)
+
+
+def test_set_verbosity(rig, capfd):
+    d = rig.to_dict()
+    d["cameras"] = d["cameras"][:3]
+    small = omma.Rig.from_dict(d)
+    run = lambda: omma.simulate(small, scene="checker", truth=False, supersample=1, progress=True)
+    run()
+    assert "simulate cameras: 100%" in capfd.readouterr().err
+    omma.set_verbosity("quiet")
+    try:
+        run()
+        assert capfd.readouterr().err == ""
+    finally:
+        omma.set_verbosity("info")
+    with pytest.raises(ValueError, match="verbosity must be quiet, info or debug"):
+        omma.set_verbosity("loud")
