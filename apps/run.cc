@@ -84,7 +84,8 @@ void add_run_command(CLI::App& root) {
     std::vector<std::unique_ptr<engine::Sink>> sinks;
     engine::SinkOptions sk;
     sk.fps = o.fps > 0 ? o.fps : 30;
-    sk.projection = eo.map.grid.projection;  // 360-degree metadata in mp4 and png outputs
+    sk.projection = eo.map.grid.projection;
+    sk.spherical_metadata = true;  // 360-degree metadata in mp4 and png outputs
     try {
       for (const auto& s : o.sinks)
         sinks.push_back(engine::open_sink(s, rig, cv::Size(size.width, size.height), sk));

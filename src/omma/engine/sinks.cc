@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <mutex>
+#include <optional>
 #include <thread>
 
 #include <fmt/format.h>
@@ -279,13 +280,14 @@ std::unique_ptr<Sink> open_sink(const std::string& spec, const Rig& rig, cv::Siz
       throw SinkError("sink '" + spec + "': a passed-through camera goes to a video file or PNG folder");
     const cv::Size size(rig.cameras[index].in.width, rig.cameras[index].in.height);
     SinkOptions camera_opt = opt;
-    camera_opt.projection.reset();  // a camera's frames are not panoramas
+    camera_opt.spherical_metadata = false;  // a camera's frames are not panoramas
     return std::make_unique<PassthroughSink>(index, open_sink(inner, rig, size, camera_opt));
   }
-  if (spec.rfind("png:", 0) == 0) return std::make_unique<PngSink>(spec.substr(4), pano_size, opt.projection);
-  if (!spec.empty() && spec.back() == '/') return std::make_unique<PngSink>(spec, pano_size, opt.projection);
+  const auto metadata = opt.spherical_metadata ? std::optional(opt.projection) : std::nullopt;
+  if (spec.rfind("png:", 0) == 0) return std::make_unique<PngSink>(spec.substr(4), pano_size, metadata);
+  if (!spec.empty() && spec.back() == '/') return std::make_unique<PngSink>(spec, pano_size, metadata);
   const std::string ext = lower(fs::path(spec).extension().string());
-  if (ext == ".mp4" || ext == ".mkv" || ext == ".avi") return std::make_unique<VideoSink>(spec, pano_size, opt.fps, opt.projection);
+  if (ext == ".mp4" || ext == ".mkv" || ext == ".avi") return std::make_unique<VideoSink>(spec, pano_size, opt.fps, metadata);
   throw SinkError("sink '" + spec + "': use FILE.mp4|.mkv|.avi, png:DIR, DIR/, cam:ID:SINK or http:PORT");
 }
 

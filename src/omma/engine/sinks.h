@@ -1,9 +1,9 @@
 // Sinks of the live engine (issue 5 point 3). Sink specs (`omma run --sink`):
 //   FILE.mp4 | FILE.mkv | FILE.avi   video file (OpenCV VideoWriter: mp4v in mp4, MJPG in mkv/avi),
 //                                    written to a temporary file renamed into place at the end;
-//                                    mp4 with Spherical Video V2 metadata (SinkOptions::projection)
+//                                    mp4 with Spherical Video V2 metadata (SinkOptions)
 //   png:DIR  or  DIR/                PNG sequence DIR/frame_000000.png ... (each written atomically,
-//                                    with the GPano XMP when SinkOptions::projection is set)
+//                                    with the GPano XMP with SinkOptions::spherical_metadata)
 //   cam:ID:SINK                      camera ID's own frames passed through to SINK (a video file or
 //                                    PNG folder) instead of the panorama: the ASIC's output
 //                                    multiplexer (thesis §6.3)
@@ -15,7 +15,6 @@
 #pragma once
 
 #include <memory>
-#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -49,9 +48,10 @@ class Sink {
 struct SinkOptions {
   double fps = 30;       // frame rate written into video files
   int jpeg_quality = 80;  // live view
-  // Projection of the panoramas: MP4 files and PNG frames then carry 360-degree metadata
-  // (omma/core/metadata.h: Spherical Video V2, GPano XMP). Unset: plain files.
-  std::optional<Projection> projection;
+  Projection projection = Projection::kVr180;  // the panoramas' projection
+  // MP4 files and PNG frames carry the 360-degree metadata of `projection` (omma/core/metadata.h:
+  // Spherical Video V2, GPano XMP); off: plain files (and always for cam:ID pass-through sinks).
+  bool spherical_metadata = false;
 };
 
 // Opens one sink. `pano_size` is the panorama size; the rig gives camera sizes for cam:ID sinks.
