@@ -43,5 +43,6 @@ void add_rig_diff_command(CLI::App& root);
 void add_pto_command(CLI::App& root);
 void add_run_command(CLI::App& root);
 void add_bench_command(CLI::App& root);
+void add_hw_command(CLI::App& root);
 
 }  // namespace omma::app

@@ -25,6 +25,7 @@ static const CommandEntry kCommands[] = {
     {"pto", add_pto_command},           {"stitch", add_stitch_command},
     {"eval", add_eval_command},         {"resolution", add_resolution_command},
     {"run", add_run_command},           {"bench", add_bench_command},
+    {"hw", add_hw_command},
     {"demo", add_demo_command},
 };
 
