@@ -34,6 +34,9 @@ def test_render_into_out_and_from_stored_frames(rig, frames, engines):
     out = np.zeros((SIZE[1], SIZE[0], 3), np.uint8)
     back = eng.render(frames, out=out)
     assert back is out and np.array_equal(out, first)
+    video = np.zeros((3, SIZE[1], SIZE[0], 3), np.uint8)  # recording into one preallocated array
+    eng.render(frames, out=video[1])
+    assert np.array_equal(video[1], first) and not video[0].any() and not video[2].any()
     assert np.array_equal(eng.render(), first)  # the frames stay in the engine's store
     other = random_frames(rig, seed=5)
     eng.set_frames(other)
