@@ -65,20 +65,21 @@ class VideoSink : public Sink {
       fs::remove(tmp_, ec);
       throw SinkError("no frames were rendered: video " + path_.string() + " not written");
     }
-    if (projection_ && lower(path_.extension().string()) == ".mp4") {  // 360-degree metadata (metadata.h)
-      try {
-        add_spherical_video_metadata(tmp_, PanoGrid{*projection_, size_.width, size_.height});
-      } catch (const IoError& e) {
-        fs::remove(tmp_, ec);
-        throw SinkError(e.what());
-      }
-    }
     // VideoWriter reports no write errors: check that the file plays to its last frame before it
     // takes the final name (a full disk leaves a file without its index, or short).
     if (const std::string bad = check_playable(); !bad.empty()) {
       fs::remove(tmp_, ec);
       throw SinkError("video " + path_.string() + " could not be written completely (disk full?): " + bad +
                       "; nothing was left under its name");
+    }
+    // 360-degree metadata (metadata.h) in the checked file, rewritten atomically with its frames
+    // unchanged. The rewrite needs room for a second copy: if it fails, the video is kept untagged.
+    if (projection_ && lower(path_.extension().string()) == ".mp4") {
+      try {
+        add_spherical_video_metadata(tmp_, PanoGrid{*projection_, size_.width, size_.height});
+      } catch (const IoError& e) {
+        spdlog::warn("{} (the video is kept without 360-degree metadata)", e.what());
+      }
     }
     fs::rename(tmp_, path_, ec);
     if (ec) {
