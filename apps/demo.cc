@@ -15,6 +15,7 @@
 #include "apps/giga_demo.h"
 #include "omma/core/frames.h"
 #include "omma/core/io.h"
+#include "omma/core/metadata.h"
 #include "omma/core/log.h"
 #include "omma/core/progress.h"
 #include "omma/design/coverage.h"
@@ -291,7 +292,7 @@ void run_demo(const DemoOptions& o) {
   std::vector<cv::Mat> frames;
   for (const auto& f : simr.frames) frames.push_back(f.image);
   write_image(dir / "frames_mosaic.png", frame_mosaic(rig, frames));
-  write_image(dir / "truth.png", simr.truth);
+  write_panorama(dir / "truth.png", simr.truth, grid);
 
   // Maps that use the overlap (§4.3).
   const cv::Mat coverage = pano::coverage_map(rig, grid);
@@ -315,11 +316,10 @@ void run_demo(const DemoOptions& o) {
     MethodRow row{pano::to_string(m), {}, ms_since(t0)};
     row.eval = pano::evaluate(p, simr.truth, seam);
     const cv::Mat p8 = to_u8(p);
-    write_image(dir / ("pano_" + row.method + ".png"), p8);
+    write_panorama(dir / ("pano_" + row.method + ".png"), p8, grid);
     if (m == pano::Method::kMrf) mrf = p8;
     rows.push_back(row);
   }
-  write_image(dir / "pano_mrf.png", mrf);
   const cv::Mat boundary = pano::boundary_map(rig, frames, grid);
   cv::Mat boundary8;
   boundary.convertTo(boundary8, CV_8U, 255.0 / std::max(1e-6, o.threshold * 3));

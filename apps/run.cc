@@ -141,6 +141,7 @@ void add_run_command(CLI::App& root) {
     sk.fps = o.fps > 0 ? o.fps : 30;
     sk.max_streams = o.max_streams;
     sk.projection = eo.map.grid.projection;
+    sk.spherical_metadata = true;  // 360-degree metadata in mp4 and png outputs
     try {
       for (const auto& s : o.sinks)
         sinks.push_back(engine::open_sink(s, rig, cv::Size(size.width, size.height), sk));

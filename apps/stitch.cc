@@ -18,6 +18,7 @@
 #include "omma/core/grid.h"
 #include "omma/core/io.h"
 #include "omma/core/log.h"
+#include "omma/core/metadata.h"
 #include "omma/core/rig.h"
 #include "omma/isp/isp.h"
 #include "omma/isp/photometric.h"
@@ -207,7 +208,7 @@ void run_stitch(const StitchArgs& a) {
     coverage = pano::coverage_map(rig, grid, opt.blend.search, opt.depth);
   if (!a.single_camera.empty()) single = pano::single_camera_map(coverage);
 
-  write_image(a.out, to_u8(pano_img));
+  write_panorama(a.out, to_u8(pano_img), grid);  // JPEG/PNG with the 360-degree XMP
   if (!a.boundary.empty()) {
     write_image(a.boundary, to_u8(boundary));
     write_image(

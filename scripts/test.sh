@@ -6,7 +6,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/install-deps.sh --test
-scripts/build.sh
+OMMA_PYTHON=ON scripts/build.sh  # the tests include the Python bindings' (python/tests)
 (cd build && ctest --output-on-failure -j"$(nproc)" --timeout 600 "$@")
 [ "${OMMA_SANITIZE:-1}" = 0 ] && exit 0
 scripts/test-asan.sh

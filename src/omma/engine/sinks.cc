@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <mutex>
+#include <optional>
 #include <thread>
 
 #include <fmt/format.h>
@@ -14,6 +15,7 @@
 #include <spdlog/spdlog.h>
 
 #include "omma/core/io.h"
+#include "omma/core/metadata.h"
 #include "omma/engine/web_assets.h"
 
 namespace omma::engine {
@@ -37,7 +39,8 @@ void remove_leftover(const fs::path& tmp, const fs::path& target) {
 
 class VideoSink : public Sink {
  public:
-  VideoSink(const fs::path& path, cv::Size size, double fps) : path_(path) {
+  VideoSink(const fs::path& path, cv::Size size, double fps, std::optional<Projection> projection)
+      : path_(path), size_(size), projection_(projection) {
     const std::string ext = lower(path.extension().string());
     const int fourcc = ext == ".mp4" ? cv::VideoWriter::fourcc('m', 'p', '4', 'v')
                                      : cv::VideoWriter::fourcc('M', 'J', 'P', 'G');
@@ -69,6 +72,15 @@ class VideoSink : public Sink {
       throw SinkError("video " + path_.string() + " could not be written completely (disk full?): " + bad +
                       "; nothing was left under its name");
     }
+    // 360-degree metadata (metadata.h) in the checked file, rewritten atomically with its frames
+    // unchanged. The rewrite needs room for a second copy: if it fails, the video is kept untagged.
+    if (projection_ && lower(path_.extension().string()) == ".mp4") {
+      try {
+        add_spherical_video_metadata(tmp_, PanoGrid{*projection_, size_.width, size_.height});
+      } catch (const IoError& e) {
+        spdlog::warn("{} (the video is kept without 360-degree metadata)", e.what());
+      }
+    }
     fs::rename(tmp_, path_, ec);
     if (ec) {
       fs::remove(tmp_, ec);
@@ -98,6 +110,8 @@ class VideoSink : public Sink {
     return {};
   }
   fs::path path_, tmp_;
+  cv::Size size_;
+  std::optional<Projection> projection_;
   cv::VideoWriter writer_;
   long frames_ = 0;
   bool done_ = false;
@@ -105,7 +119,8 @@ class VideoSink : public Sink {
 
 class PngSink : public Sink {
  public:
-  explicit PngSink(const fs::path& dir) : dir_(dir) {
+  PngSink(const fs::path& dir, cv::Size size, std::optional<Projection> projection) : dir_(dir) {
+    if (projection) grid_ = PanoGrid{*projection, size.width, size.height};
     std::error_code ec;
     fs::create_directories(dir, ec);
     if (ec || !fs::is_directory(dir)) throw SinkError("cannot create PNG folder " + dir.string() + ": " + ec.message());
@@ -125,12 +140,14 @@ class PngSink : public Sink {
   void write(const cv::Mat& pano, const FrameStore&) override {
     char name[32];
     std::snprintf(name, sizeof name, "frame_%06ld.png", n_++);
-    write_image(dir_ / name, pano);
+    if (grid_) write_panorama(dir_ / name, pano, *grid_);  // with the 360-degree XMP
+    else write_image(dir_ / name, pano);
   }
   std::string describe() const override { return "png:" + dir_.string(); }
 
  private:
   fs::path dir_;
+  std::optional<PanoGrid> grid_;
   long n_ = 0;
 };
 
@@ -371,12 +388,15 @@ std::unique_ptr<Sink> open_sink(const std::string& spec, const Rig& rig, cv::Siz
     if (inner.rfind("cam:", 0) == 0 || inner.rfind("http", 0) == 0)
       throw SinkError("sink '" + spec + "': a passed-through camera goes to a video file or PNG folder");
     const cv::Size size(rig.cameras[index].in.width, rig.cameras[index].in.height);
-    return std::make_unique<PassthroughSink>(index, open_sink(inner, rig, size, opt));
+    SinkOptions camera_opt = opt;
+    camera_opt.spherical_metadata = false;  // a camera's frames are not panoramas
+    return std::make_unique<PassthroughSink>(index, open_sink(inner, rig, size, camera_opt));
   }
-  if (spec.rfind("png:", 0) == 0) return std::make_unique<PngSink>(spec.substr(4));
-  if (!spec.empty() && spec.back() == '/') return std::make_unique<PngSink>(spec);
+  const auto metadata = opt.spherical_metadata ? std::optional(opt.projection) : std::nullopt;
+  if (spec.rfind("png:", 0) == 0) return std::make_unique<PngSink>(spec.substr(4), pano_size, metadata);
+  if (!spec.empty() && spec.back() == '/') return std::make_unique<PngSink>(spec, pano_size, metadata);
   const std::string ext = lower(fs::path(spec).extension().string());
-  if (ext == ".mp4" || ext == ".mkv" || ext == ".avi") return std::make_unique<VideoSink>(spec, pano_size, opt.fps);
+  if (ext == ".mp4" || ext == ".mkv" || ext == ".avi") return std::make_unique<VideoSink>(spec, pano_size, opt.fps, metadata);
   throw SinkError("sink '" + spec + "': use FILE.mp4|.mkv|.avi, png:DIR, DIR/, cam:ID:SINK or http:PORT");
 }
 

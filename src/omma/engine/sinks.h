@@ -2,8 +2,10 @@
 //   FILE.mp4 | FILE.mkv | FILE.avi   video file (OpenCV VideoWriter: mp4v in mp4, MJPG in mkv/avi),
 //                                    written to a temporary file (.NAME.partial.EXT beside it),
 //                                    checked (it opens and holds every frame) and renamed into
-//                                    place at the end; a failed check (full disk) removes it
-//   png:DIR  or  DIR/                PNG sequence DIR/frame_000000.png ... (each written atomically)
+//                                    place at the end; a failed check (full disk) removes it;
+//                                    mp4 with Spherical Video V2 metadata (SinkOptions)
+//   png:DIR  or  DIR/                PNG sequence DIR/frame_000000.png ... (each written atomically,
+//                                    with the GPano XMP with SinkOptions::spherical_metadata)
 //   cam:ID:SINK                      camera ID's own frames passed through to SINK (a video file or
 //                                    PNG folder) instead of the panorama: the ASIC's output
 //                                    multiplexer (thesis §6.3)
@@ -56,7 +58,10 @@ struct SinkOptions {
   double fps = 30;        // frame rate written into video files
   int jpeg_quality = 80;  // live view
   int max_streams = 8;    // live view: concurrent /stream.mjpg viewers (the page is one)
-  Projection projection = Projection::kVr180;  // live view: how the viewer shows the panorama
+  Projection projection = Projection::kVr180;  // the panoramas' projection (live view: how the viewer shows them)
+  // MP4 files and PNG frames carry the 360-degree metadata of `projection` (omma/core/metadata.h:
+  // Spherical Video V2, GPano XMP); off: plain files (and always for cam:ID pass-through sinks).
+  bool spherical_metadata = false;
 };
 
 // Opens one sink. `pano_size` is the panorama size; the rig gives camera sizes for cam:ID sinks.
