@@ -1,11 +1,12 @@
 #!/usr/bin/env bash
 # Installs the Debian packages omma needs, only those missing. Uses sudo when not root.
-# --test also installs what only the tests use: Chromium, for the live-view test in a headless browser.
+# --test also installs what only the tests use: Chromium, for the live-view test in a headless browser,
+# and xxhash (xxhsum: the MPI tests check the manifests' checksums with the standard tool).
 set -euo pipefail
 pkgs=(cmake g++ ninja-build ccache pkg-config libopencv-dev libeigen3-dev libceres-dev libtbb-dev
       libcli11-dev nlohmann-json3-dev libspdlog-dev libfmt-dev libgtest-dev libgmock-dev
-      libbenchmark-dev hugin-tools libcpp-httplib-dev)
-[ "${1:-}" = "--test" ] && pkgs+=(chromium)
+      libbenchmark-dev hugin-tools libcpp-httplib-dev libxxhash-dev libopenmpi-dev openmpi-bin)
+[ "${1:-}" = "--test" ] && pkgs+=(chromium xxhash)
 missing=()
 for p in "${pkgs[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
