@@ -43,6 +43,10 @@ void add_rig_diff_command(CLI::App& root);
 void add_pto_command(CLI::App& root);
 void add_run_command(CLI::App& root);
 void add_bench_command(CLI::App& root);
+void add_plan_command(CLI::App& root);
+void add_render_command(CLI::App& root);
+void add_record_command(CLI::App& root);
+void add_recording_command(CLI::App& root);
 void add_hw_command(CLI::App& root);
 
 }  // namespace omma::app

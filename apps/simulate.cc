@@ -56,7 +56,7 @@ void run_simulate(const SimulateArgs& a) {
   o.progress = !a.json;
   if (fs::exists(a.out) && !fs::is_directory(a.out))
     throw IoError(fmt::format("--out '{}' exists and is not a folder", a.out));
-  const Rig rig = a.rig.empty() ? design::thesis_prototype_rig() : load_rig(a.rig);
+  const Rig rig = a.rig.empty() ? design::thesis_prototype_rig() : design::load_rig_or_builtin(a.rig);
   if (rig.cameras.empty()) throw RigError(fmt::format("rig '{}' has no cameras", a.rig));
   const std::unique_ptr<sim::Scene> scene = sim::make_scene(a.scene);
   const sim::SimulateResult res = sim::simulate(rig, *scene, o);
@@ -97,7 +97,9 @@ void add_simulate_command(CLI::App& root) {
       "from the dome centre (ground truth). Writes the frames folder OUT: cam_XX.png (8-bit sRGB),\n"
       "cam_XX_raw.png (--raw: 16-bit RGGB Bayer, 10-bit values), truth.png, rig.json (nominal),\n"
       "rig_true.json (rendered, with --perturb errors), sim.json (what was simulated).");
-  cmd->add_option("--rig", a.rig, "Rig file (JSON, omma-rig); default: the thesis 24-camera prototype");
+  cmd->add_option("--rig", a.rig,
+                  "Rig file (JSON, omma-rig) or built-in rig (thesis-24, gigaeye-44, gigaeye-44-skip1, ...); default: "
+                  "thesis-24");
   cmd->add_option("--scene", a.scene,
                   "Scene: photo:PATH (far-field 360x180 equirect photo), colon (procedural tube), "
                   "usaf[:DIST_MM] (USAF 1951 chart, default 25 mm ahead), checker[:RADIUS_MM] (textured sphere, "
@@ -105,7 +107,7 @@ void add_simulate_command(CLI::App& root) {
       ->required();
   cmd->add_option("--out", a.out, "Output frames folder (created; all or nothing)")->required();
   cmd->add_option("--truth-size", a.truth_size, "Ground-truth panorama size WxH (pixels)")->capture_default_str();
-  cmd->add_option("--projection", a.projection, "Ground-truth grid: equirect (360x90 deg) | vr180 | equirect-full")
+  cmd->add_option("--projection", a.projection, "Ground-truth grid: equirect (360x90 deg) | vr180 | equirect-full | equirect-100 (360x100 deg)")
       ->capture_default_str();
   cmd->add_flag("--no-truth", a.no_truth, "Do not render truth.png");
   cmd->add_flag("--raw", a.raw, "Also write 16-bit RGGB Bayer raw frames cam_XX_raw.png");

@@ -5,7 +5,8 @@
 set -euo pipefail
 pkgs=(cmake g++ ninja-build ccache pkg-config libopencv-dev libeigen3-dev libceres-dev libtbb-dev
       libcli11-dev nlohmann-json3-dev libspdlog-dev libfmt-dev libgtest-dev libgmock-dev
-      libbenchmark-dev hugin-tools libcpp-httplib-dev libxxhash-dev libopenmpi-dev openmpi-bin)
+      libbenchmark-dev hugin-tools libcpp-httplib-dev libtiff-dev libhdf5-dev libxxhash-dev libopenmpi-dev
+      openmpi-bin)
 [ "${1:-}" = "--test" ] && pkgs+=(chromium xxhash)
 missing=()
 for p in "${pkgs[@]}"; do

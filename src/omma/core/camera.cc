@@ -1,6 +1,8 @@
 #include "omma/core/camera.h"
 
+#include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 namespace omma {
 
@@ -13,6 +15,37 @@ bool Intrinsics::has_distortion() const {
 double Intrinsics::focal_for_aov(int width, double aov) {
   return 0.5 * width / std::tan(aov / 2);
 }
+
+double Intrinsics::bounding_aov() const {
+  // Largest angle from the optical axis over the ray through every point of the border.
+  double worst = 0;
+  auto visit = [&](double col, double row) {
+    Vec2 xy((col - cu) / fu, (row - cv) / fv);
+    if (has_distortion()) xy = undistort(k, xy);
+    worst = std::max(worst, std::atan(xy.norm()));
+  };
+  if (!has_distortion()) {  // a pinhole's farthest border points are its corners
+    visit(0, 0), visit(width, 0), visit(0, height), visit(width, height);
+    return 2 * worst;
+  }
+  for (int c = 0; c <= width; ++c) {
+    visit(c, 0);
+    visit(c, height);
+  }
+  for (int r = 0; r <= height; ++r) {
+    visit(0, r);
+    visit(width, r);
+  }
+  return 2 * worst;
+}
+
+Intrinsics::Field parse_field(const std::string& name) {
+  if (name == "cone") return Intrinsics::Field::kCone;
+  if (name == "image") return Intrinsics::Field::kImage;
+  throw std::invalid_argument("unknown field of view '" + name + "' (use cone or image)");
+}
+
+std::string to_string(Intrinsics::Field f) { return f == Intrinsics::Field::kCone ? "cone" : "image"; }
 
 Vec2 distort(const std::array<double, 5>& k, const Vec2& xy) {
   const double x = xy.x(), y = xy.y();
@@ -30,6 +63,12 @@ Vec2 undistort(const std::array<double, 5>& k, const Vec2& xd, int iterations) {
     if (err.squaredNorm() < 1e-24) break;
   }
   return xy;
+}
+
+bool CameraModel::sees(const Vec3& w) const {
+  if (in.field == Intrinsics::Field::kCone) return w.dot(frame.t) >= std::cos(in.aov / 2);  // eq. 2.3
+  const auto px = project(w);
+  return px && inside(*px);
 }
 
 std::optional<Vec2> CameraModel::project(const Vec3& w) const {

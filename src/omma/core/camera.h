@@ -5,6 +5,7 @@
 
 #include <array>
 #include <optional>
+#include <string>
 
 #include "omma/core/geometry.h"
 
@@ -19,11 +20,25 @@ struct Intrinsics {
   double cv = 125;         // principal point, image y, pixels
   std::array<double, 5> k{};  // k1, k2 radial; k3, k4 tangential; k5 radial (eq. 5.24-5.26)
   double aov = deg2rad(64);   // full angle of view of the camera cone, radians (eq. 2.3)
+  // Which directions the camera sees. kCone (the thesis's model, eq. 2.3, and the default of rig
+  // files that do not say): the cone of full angle `aov` (clipped by the image bounds wherever the
+  // cone pokes out of them). kImage: every direction that projects inside the image [0,W)x[0,H),
+  // e.g. the 53 x 43 deg rectangle of a Giga-Eye camera (thesis ch. 7); `aov` is then only the
+  // bounding cone (bounding_aov()), which culling code may use as a cheap superset.
+  enum class Field { kCone, kImage };
+  Field field = Field::kCone;
 
   bool has_distortion() const;
   // Focal length (pixels) that makes a centred W x H sensor's half-width see aov/2.
   static double focal_for_aov(int width, double aov);
+  // Full angle of the smallest cone around the optical axis holding the whole image: twice the
+  // largest angle between the axis and the ray through any point of the image border (sampled
+  // every pixel along the border, so distortion is included).
+  double bounding_aov() const;
 };
+
+Intrinsics::Field parse_field(const std::string& name);  // "cone" | "image"
+std::string to_string(Intrinsics::Field f);
 
 // Normalised (undistorted) image-plane coordinates -> distorted normalised coordinates
 // (eq. 5.23-5.26).
@@ -35,8 +50,9 @@ struct CameraModel {
   Frame frame;
   Intrinsics in;
 
-  // eq. 2.3: the direction lies inside the camera's cone of view.
-  bool sees(const Vec3& w) const { return w.dot(frame.t) >= std::cos(in.aov / 2); }
+  // Does the camera see the unit direction w? kCone: w lies inside the cone of view (eq. 2.3).
+  // kImage: w projects inside the image bounds (w need not be unit).
+  bool sees(const Vec3& w) const;
   // eq. 5.21-5.26: continuous pixel coordinates (col, row) of direction w (need not be unit).
   // nullopt if w is behind the camera (w.t <= 0). Does NOT check the image bounds or the aov.
   std::optional<Vec2> project(const Vec3& w) const;

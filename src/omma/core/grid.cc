@@ -6,12 +6,26 @@
 #include <stdexcept>
 
 namespace omma {
+namespace {
+// Polar span of the equirectangular grids (radians).
+double theta_span(Projection p) {
+  switch (p) {
+    case Projection::kEquirect: return kPi / 2;
+    case Projection::kEquirectFull: return kPi;
+    case Projection::kEquirect100: return deg2rad(100);
+    case Projection::kVr180: break;
+  }
+  return 0;
+}
+}  // namespace
 
 Projection parse_projection(const std::string& name) {
   if (name == "equirect") return Projection::kEquirect;
   if (name == "vr180") return Projection::kVr180;
   if (name == "equirect-full") return Projection::kEquirectFull;
-  throw std::invalid_argument("unknown projection '" + name + "' (use equirect, vr180 or equirect-full)");
+  if (name == "equirect-100") return Projection::kEquirect100;
+  throw std::invalid_argument("unknown projection '" + name +
+                              "' (use equirect, vr180, equirect-full or equirect-100)");
 }
 
 std::string to_string(Projection p) {
@@ -19,6 +33,7 @@ std::string to_string(Projection p) {
     case Projection::kEquirect: return "equirect";
     case Projection::kVr180: return "vr180";
     case Projection::kEquirectFull: return "equirect-full";
+    case Projection::kEquirect100: return "equirect-100";
   }
   return "?";
 }
@@ -26,10 +41,11 @@ std::string to_string(Projection p) {
 Vec3 PanoGrid::direction(double x, double y) const {
   switch (projection) {
     case Projection::kEquirect:
-    case Projection::kEquirectFull: {
-      const double theta_span = projection == Projection::kEquirect ? kPi / 2 : kPi;
+    case Projection::kEquirectFull:
+    case Projection::kEquirect100: {
+      const double span = theta_span(projection);
       const double phi = x / width * 2 * kPi;
-      const double theta = y / height * theta_span;
+      const double theta = y / height * span;
       return direction_from_spherical(theta, phi);
     }
     case Projection::kVr180: {
@@ -46,11 +62,12 @@ std::optional<Vec2> PanoGrid::pixel(const Vec3& w_in) const {
   const Vec3 w = w_in.normalized();
   switch (projection) {
     case Projection::kEquirect:
-    case Projection::kEquirectFull: {
-      const double theta_span = projection == Projection::kEquirect ? kPi / 2 : kPi;
+    case Projection::kEquirectFull:
+    case Projection::kEquirect100: {
+      const double span = theta_span(projection);
       const Spherical s = spherical_from_direction(w);
-      if (s.theta > theta_span) return std::nullopt;
-      return Vec2(s.phi / (2 * kPi) * width, s.theta / theta_span * height);
+      if (s.theta > span) return std::nullopt;
+      return Vec2(s.phi / (2 * kPi) * width, s.theta / span * height);
     }
     case Projection::kVr180: {
       if (w.z() < 0) return std::nullopt;
@@ -65,9 +82,10 @@ std::optional<Vec2> PanoGrid::pixel(const Vec3& w_in) const {
 double PanoGrid::pixel_solid_angle(int col, int row) const {
   switch (projection) {
     case Projection::kEquirect:
-    case Projection::kEquirectFull: {
-      const double theta_span = projection == Projection::kEquirect ? kPi / 2 : kPi;
-      const double t0 = row * theta_span / height, t1 = (row + 1) * theta_span / height;
+    case Projection::kEquirectFull:
+    case Projection::kEquirect100: {
+      const double span = theta_span(projection);
+      const double t0 = row * span / height, t1 = (row + 1) * span / height;
       return (2 * kPi / width) * (std::cos(t0) - std::cos(t1));
     }
     case Projection::kVr180: {

@@ -11,10 +11,12 @@ namespace omma {
 enum class Projection {
   kEquirect,     // 360 x 90 deg: phi 0..360 left to right, theta 0 (dome axis) top .. 90 deg bottom
   kVr180,        // 180 x 180 deg half-equirectangular, dome axis (+z) at the centre, right=+x, up=+y
-  kEquirectFull  // 360 x 180 deg: theta 0 top .. 180 deg bottom (full-sphere rigs)
+  kEquirectFull,  // 360 x 180 deg: theta 0 top .. 180 deg bottom (full-sphere rigs)
+  kEquirect100    // 360 x 100 deg: theta 0 top .. 100 deg bottom (Giga-Eye, thesis Table 7.4)
 };
 
-Projection parse_projection(const std::string& name);  // "equirect", "vr180", "equirect-full"
+// "equirect", "vr180", "equirect-full", "equirect-100"
+Projection parse_projection(const std::string& name);
 std::string to_string(Projection p);
 
 struct PanoGrid {

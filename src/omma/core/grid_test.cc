@@ -20,7 +20,8 @@ TEST(Grid, EquirectTopRowIsDomeAxis) {
 }
 
 TEST(Grid, RoundTripAllProjections) {
-  for (Projection p : {Projection::kVr180, Projection::kEquirect, Projection::kEquirectFull}) {
+  for (Projection p : {Projection::kVr180, Projection::kEquirect, Projection::kEquirectFull,
+                       Projection::kEquirect100}) {
     PanoGrid g{p, 640, 320};
     for (int r = 3; r < 320; r += 37)
       for (int c = 2; c < 640; c += 41) {
@@ -43,6 +44,20 @@ TEST(Grid, SolidAnglesSumToTheField) {
     for (int c = 0; c < 200; ++c) b += vr.pixel_solid_angle(c, r);
   EXPECT_NEAR(a, 2 * kPi, 1e-9);  // hemisphere
   EXPECT_NEAR(b, 2 * kPi, 1e-9);
+}
+
+TEST(Grid, Equirect100SpansPolar0To100Degrees) {
+  // Table 7.4: 360 x 100 deg; 9000 x 2400 keeps 25 x 24 px per degree.
+  const PanoGrid g{parse_projection("equirect-100"), 9000, 2400};
+  EXPECT_EQ(to_string(g.projection), "equirect-100");
+  EXPECT_NEAR(rad2deg(spherical_from_direction(g.direction(0, 2400)).theta), 100, 1e-9);
+  EXPECT_NEAR(rad2deg(spherical_from_direction(g.direction(4500, 1200)).theta), 50, 1e-9);
+  EXPECT_FALSE(g.pixel(direction_from_spherical(deg2rad(100.5), 1.0)).has_value());
+  double a = 0;
+  const PanoGrid small{Projection::kEquirect100, 90, 50};
+  for (int r = 0; r < 50; ++r)
+    for (int c = 0; c < 90; ++c) a += small.pixel_solid_angle(c, r);
+  EXPECT_NEAR(a, 2 * kPi * (1 - std::cos(deg2rad(100))), 1e-9);
 }
 
 TEST(Grid, ParseSize) {

@@ -109,6 +109,7 @@ json rig_to_json(const Rig& rig) {
     jc["intrinsics"] = {{"width", c.in.width}, {"height", c.in.height}, {"fu", c.in.fu},
                         {"fv", c.in.fv},       {"cu", c.in.cu},         {"cv", c.in.cv},
                         {"k", c.in.k},         {"aov_deg", rad2deg(c.in.aov)}};
+    if (c.in.field != Intrinsics::Field::kCone) jc["intrinsics"]["field"] = to_string(c.in.field);
     cams.push_back(std::move(jc));
   }
   j["cameras"] = std::move(cams);
@@ -162,7 +163,17 @@ Rig rig_from_json(const json& j) {
     c.in.fv = number(in, "fv", wi);
     c.in.cu = number(in, "cu", wi);
     c.in.cv = number(in, "cv", wi);
-    c.in.aov = deg2rad(number(in, "aov_deg", wi));
+    if (in.contains("field")) {
+      if (!in["field"].is_string()) throw RigError(wi + ": field 'field' must be \"cone\" or \"image\"");
+      try {
+        c.in.field = parse_field(in["field"].get<std::string>());
+      } catch (const std::invalid_argument& e) {
+        throw RigError(wi + ": " + e.what());
+      }
+    }
+    // kImage: the image bounds decide and aov is their bounding cone (aov_deg optional, ignored).
+    if (c.in.field == Intrinsics::Field::kCone || in.contains("aov_deg"))
+      c.in.aov = deg2rad(number(in, "aov_deg", wi));
     if (in.contains("k")) {
       const json& k = in["k"];
       if (!k.is_array() || k.size() > 5) throw RigError(wi + ": 'k' must be an array of up to 5 numbers");
@@ -171,6 +182,9 @@ Rig rig_from_json(const json& j) {
         c.in.k[n] = k[n].get<double>();
       }
     }
+    if (c.in.field == Intrinsics::Field::kImage && c.in.width > 0 && c.in.height > 0 && c.in.fu > 0 &&
+        c.in.fv > 0)
+      c.in.aov = c.in.bounding_aov();
     try {
       validate_camera(c);
     } catch (const RigError& e) {

@@ -12,6 +12,9 @@
 //      "intrinsics": {"width": 250, "height": 250, "fu": 200, "fv": 200, "cu": 125, "cv": 125,
 //                     "k": [0,0,0,0,0], "aov_deg": 64}}, ...]
 // }
+// Intrinsics may add "field": "cone" (the default: the cone of aov_deg, eq. 2.3) or "image" (the
+// camera sees what lands inside its image; aov_deg may be left out and is recomputed on loading as
+// the bounding cone of the image, Intrinsics::bounding_aov).
 // Loading validates everything and throws RigError naming the camera and field at fault.
 #pragma once
 

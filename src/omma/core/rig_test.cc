@@ -46,6 +46,28 @@ TEST(Rig, JsonRoundTripIsLossless) {
   }
 }
 
+TEST(Rig, FieldOfViewIsConeUnlessTheFileSaysImage) {
+  Rig rig = two_camera_rig();
+  nlohmann::json j = rig_to_json(rig);
+  EXPECT_FALSE(j["cameras"][0]["intrinsics"].contains("field"));  // cone files stay as they were
+  EXPECT_EQ(rig_from_json(j).cameras[0].in.field, Intrinsics::Field::kCone);
+  rig.cameras[1].in.field = Intrinsics::Field::kImage;
+  j = rig_to_json(rig);
+  EXPECT_EQ(j["cameras"][1]["intrinsics"]["field"], "image");
+  // aov_deg is optional for an image field and recomputed as the image's bounding cone.
+  j["cameras"][1]["intrinsics"].erase("aov_deg");
+  const Rig back = rig_from_json(j);
+  EXPECT_EQ(back.cameras[1].in.field, Intrinsics::Field::kImage);
+  EXPECT_NEAR(back.cameras[1].in.aov, back.cameras[1].in.bounding_aov(), 1e-15);
+  j["cameras"][1]["intrinsics"]["field"] = "square";
+  EXPECT_NE(expect_rig_error(j).find("unknown field of view 'square'"), std::string::npos);
+  j["cameras"][1]["intrinsics"]["field"] = 3;
+  EXPECT_NE(expect_rig_error(j).find("field"), std::string::npos);
+  j["cameras"][0]["intrinsics"].erase("aov_deg");  // a cone camera still needs its aov
+  j["cameras"][1]["intrinsics"]["field"] = "image";
+  EXPECT_NE(expect_rig_error(j).find("aov_deg"), std::string::npos);
+}
+
 TEST(Rig, YawPitchRollInputMatchesVectors) {
   nlohmann::json j = rig_to_json(two_camera_rig());
   for (auto& c : j["cameras"]) {

@@ -22,19 +22,35 @@ struct Cone {
   double c2 = 0;
   bool radial = false;  // p = rho t with rho >= 0
   double rho = 0;
+  bool image = false;   // rectangular field (Intrinsics::Field::kImage): the pyramid below
+  Vec3 n[4];            // inward normals of the planes through p and the image edges
 };
 
-std::vector<Cone> make_cones(const Rig& rig) {
+// at_infinity: the cameras' positions do not matter (the pinholes collapse to the centre).
+std::vector<Cone> make_cones(const Rig& rig, bool at_infinity = false) {
   std::vector<Cone> cones;
   for (const RigCamera& cam : rig.cameras) {
     Cone k;
-    k.p = cam.position_mm;
+    k.p = at_infinity ? Vec3::Zero() : cam.position_mm;
     k.t = cam.frame.t.normalized();
     k.c = std::cos(cam.in.aov / 2);
     k.s = std::sin(cam.in.aov / 2);
     k.c2 = k.c * k.c;
     k.rho = k.p.dot(k.t);
     k.radial = k.rho >= 0 && (k.p - k.rho * k.t).norm() <= 1e-9 * (1 + k.p.norm());
+    if (cam.in.field == Intrinsics::Field::kImage) {
+      // d = X - p is inside when x = d.u / d.t lies in [xl, xr] and y = d.v / d.t in [yt, yb]
+      // (normalised coordinates of the image edges, undistorted): four half-spaces n . d >= 0.
+      const Intrinsics& in = cam.in;
+      const Vec2 tl = undistort(in.k, Vec2(-in.cu / in.fu, -in.cv / in.fv));
+      const Vec2 br = undistort(in.k, Vec2((in.width - in.cu) / in.fu, (in.height - in.cv) / in.fv));
+      const Frame& f = cam.frame;
+      k.image = true;
+      k.n[0] = f.u - tl.x() * f.t;
+      k.n[1] = br.x() * f.t - f.u;
+      k.n[2] = f.v - tl.y() * f.t;
+      k.n[3] = br.y() * f.t - f.v;
+    }
     cones.push_back(k);
   }
   return cones;
@@ -43,6 +59,11 @@ std::vector<Cone> make_cones(const Rig& rig) {
 inline bool sees(const Cone& k, const Vec3& X) {
   const Vec3 d = X - k.p;
   const double dt = d.dot(k.t);
+  if (k.image) {
+    const double tol = -1e-12 * d.norm();
+    return dt > 0 && k.n[0].dot(d) >= tol && k.n[1].dot(d) >= tol && k.n[2].dot(d) >= tol &&
+           k.n[3].dot(d) >= tol;
+  }
   // Inclusive cone (relative tolerance 1e-9): a point exactly on the rim, e.g. at R_vir, is seen.
   return dt >= 0 && dt * dt >= k.c2 * d.squaredNorm() * (1 - 1e-9);
 }
@@ -55,6 +76,21 @@ struct Interval {
 // in fact at most one; two guard against rounding at a touching point).
 int cone_intervals(const Cone& k, const Vec3& w, std::array<Interval, 3>& out) {
   const double a = w.dot(k.t);
+  if (k.image) {
+    // The pyramid is convex: every half-space n . (R w - p) >= 0 bounds R on one side.
+    double lo = 0, hi = kInfinity;
+    auto half = [&](const Vec3& n, bool strict) {
+      const double an = n.dot(w), bn = n.dot(k.p);
+      if (an > 0) lo = std::max(lo, bn / an);
+      else if (an < 0) hi = std::min(hi, bn / an);
+      else if (bn > 0 || (strict && bn >= 0)) hi = -1;  // never (or only at R where it is 0)
+    };
+    half(k.t, true);
+    for (const Vec3& n : k.n) half(n, false);
+    if (!(lo <= hi) || (std::isinf(hi) && a <= 0)) return 0;
+    out[0] = {lo, hi};
+    return 1;
+  }
   if (k.radial) {
     if (a <= k.c) return 0;  // angle(w, t) >= h: the ray never enters the cone (see header)
     if (k.rho <= 0) {
@@ -144,12 +180,15 @@ double Sampling::weight(int row) const {
   return 2 * kPi * (std::cos(lo) - std::cos(hi)) / cols;
 }
 
-Sampling make_sampling(double step_rad, bool sphere) {
+Sampling make_sampling(double step_rad, bool sphere, double theta_limit) {
   if (!(step_rad > 0) || step_rad > deg2rad(45))
     throw std::invalid_argument("coverage step must be in (0, 45] degrees");
+  if (!(theta_limit >= 0 && theta_limit <= kPi))
+    throw std::invalid_argument("coverage polar limit must be in (0, 180] degrees");
   Sampling s;
   s.step_rad = step_rad;
   s.sphere = sphere;
+  s.theta_limit = theta_limit;
   s.rows = static_cast<int>(std::ceil(s.theta_max() / step_rad - 1e-9)) + 1;
   s.cols = std::max(1, static_cast<int>(std::lround(2 * kPi / step_rad)));
   for (int k = 0; k < s.cols; ++k) {
@@ -160,15 +199,24 @@ Sampling make_sampling(double step_rad, bool sphere) {
 }
 
 bool camera_sees_point(const RigCamera& cam, const Vec3& X) {
-  // Reference form of the test: angle(X - p, t) <= aov / 2.
   const Vec3 d = X - cam.position_mm;
   if (d.norm() == 0) return true;
+  if (cam.in.field == Intrinsics::Field::kImage) return cam.model().sees(d);  // the image bounds
+  // Reference form of the cone test: angle(X - p, t) <= aov / 2.
   return angle_between(d, cam.frame.t) <= cam.in.aov / 2;
 }
 
 int cameras_seeing(const Rig& rig, const Vec3& w, double distance_mm) {
   int n = 0;
-  for (const RigCamera& cam : rig.cameras) n += camera_sees_point(cam, distance_mm * w);
+  for (const RigCamera& cam : rig.cameras) {
+    if (std::isinf(distance_mm)) {
+      RigCamera at_centre = cam;
+      at_centre.position_mm = Vec3::Zero();
+      n += camera_sees_point(at_centre, w);
+    } else {
+      n += camera_sees_point(cam, distance_mm * w);
+    }
+  }
   return n;
 }
 
@@ -181,12 +229,14 @@ namespace {
 struct RowResult {
   int min_count = std::numeric_limits<int>::max(), max_count = 0;
   double weighted_count = 0, covered_weight = 0, max_covered_from = 0;
+  std::vector<double> by_count;  // solid angle seen by exactly n cameras
 };
 
 // One pass over the sampling: counts at `distance` (if count) and R_vir (if rvir).
 std::vector<RowResult> scan(const Rig& rig, const Sampling& s, double distance, bool count,
                             bool rvir) {
-  const std::vector<Cone> cones = make_cones(rig);
+  const bool inf = std::isinf(distance);
+  const std::vector<Cone> cones = make_cones(rig, inf && !rvir);
   const std::vector<double>& cphi = s.cos_phi;
   const std::vector<double>& sphi = s.sin_phi;
   std::vector<RowResult> rows(s.rows);
@@ -195,15 +245,17 @@ std::vector<RowResult> scan(const Rig& rig, const Sampling& s, double distance, 
       const double th = s.theta(j), st = std::sin(th), ct = std::cos(th);
       const double wgt = s.weight(j);
       RowResult r;
+      r.by_count.assign(cones.size() + 1, 0.0);
       // At the poles every phi gives the same direction: one sample stands for the row.
       const int ncols = (st < 1e-12) ? 1 : s.cols;
       const double scale = static_cast<double>(s.cols) / ncols;
       for (int k = 0; k < ncols; ++k) {
         const Vec3 w(st * cphi[k], st * sphi[k], ct);
         if (count) {
-          const Vec3 X = distance * w;
+          const Vec3 X = inf ? w : Vec3(distance * w);
           int n = 0;
           for (const Cone& c : cones) n += sees(c, X);
+          r.by_count[n] += wgt * scale;
           r.min_count = std::min(r.min_count, n);
           r.max_count = std::max(r.max_count, n);
           r.weighted_count += wgt * scale * n;
@@ -219,14 +271,18 @@ std::vector<RowResult> scan(const Rig& rig, const Sampling& s, double distance, 
 
 }  // namespace
 
-CoverageStats analyze_coverage(const Rig& rig, double distance_mm, double step_rad) {
+CoverageStats analyze_coverage(const Rig& rig, double distance_mm, double step_rad, double theta_max_rad) {
   if (!(distance_mm > 0)) throw std::invalid_argument("coverage distance must be > 0 mm");
-  const Sampling s = make_sampling(step_rad, rig.dome.sphere);
-  const auto rows = scan(rig, s, distance_mm, true, true);
+  const Sampling s = make_sampling(step_rad, rig.dome.sphere, theta_max_rad);
+  // At infinity the counts use directions only; R_vir needs the positions (a second scan).
+  const bool inf = std::isinf(distance_mm);
+  const auto rows = scan(rig, s, distance_mm, true, !inf);
   CoverageStats st;
   st.distance_mm = distance_mm;
   st.step_deg = rad2deg(step_rad);
+  st.theta_max_deg = rad2deg(s.theta_max());
   st.min_cameras = std::numeric_limits<int>::max();
+  st.solid_angle_by_count.assign(rig.cameras.size() + 1, 0.0);
   double total = 0, covered = 0, weighted = 0;
   for (int j = 0; j < s.rows; ++j) {
     const RowResult& r = rows[j];
@@ -236,11 +292,51 @@ CoverageStats analyze_coverage(const Rig& rig, double distance_mm, double step_r
     covered += r.covered_weight;
     total += s.weight(j) * s.cols;
     st.r_virtual_mm = std::max(st.r_virtual_mm, r.max_covered_from);
+    for (size_t n = 0; n < r.by_count.size(); ++n) st.solid_angle_by_count[n] += r.by_count[n];
+    st.row_theta_rad.push_back(s.theta(j));
+    st.row_min.push_back(r.min_count);
+    st.row_max.push_back(r.max_count);
   }
+  if (inf)
+    for (const RowResult& r : scan(rig, s, 1.0, false, true))
+      st.r_virtual_mm = std::max(st.r_virtual_mm, r.max_covered_from);
   // Exactly 1 when no sample has a gap (the weighted sum itself carries rounding).
   st.covered_fraction = st.min_cameras >= 1 ? 1.0 : covered / total;
   st.mean_cameras = weighted / total;
   return st;
+}
+
+double CoverageStats::solid_angle_at_least(int n) const {
+  double a = 0;
+  for (size_t k = std::max(0, n); k < solid_angle_by_count.size(); ++k) a += solid_angle_by_count[k];
+  return a;
+}
+
+PolarBand CoverageStats::polar_band(int n) const {
+  PolarBand best;
+  size_t best_len = 0;
+  for (size_t j = 0; j < row_min.size();) {
+    if (row_min[j] < n) {
+      ++j;
+      continue;
+    }
+    size_t e = j;
+    PolarBand b;
+    b.min_cameras = row_min[j];
+    while (e < row_min.size() && row_min[e] >= n) {
+      b.min_cameras = std::min(b.min_cameras, row_min[e]);
+      b.max_cameras = std::max(b.max_cameras, row_max[e]);
+      ++e;
+    }
+    if (e - j > best_len) {
+      best_len = e - j;
+      best = b;
+      best.from_rad = row_theta_rad[j];
+      best.to_rad = row_theta_rad[e - 1];
+    }
+    j = e;
+  }
+  return best;
 }
 
 double virtual_radius(const Rig& rig, double step_rad) {
@@ -268,12 +364,14 @@ double virtual_radius_bisection(const Rig& rig, double step_rad, double tol_mm, 
 }
 
 cv::Mat coverage_count_map(const Rig& rig, const PanoGrid& grid, double distance_mm) {
-  const std::vector<Cone> cones = make_cones(rig);
+  const bool inf = std::isinf(distance_mm);
+  const std::vector<Cone> cones = make_cones(rig, inf);
   cv::Mat counts(grid.height, grid.width, CV_32SC1);
   tbb::parallel_for(0, grid.height, [&](int row) {
     int* out = counts.ptr<int>(row);
     for (int col = 0; col < grid.width; ++col) {
-      const Vec3 X = distance_mm * grid.pixel_direction(col, row);
+      const Vec3 w = grid.pixel_direction(col, row);
+      const Vec3 X = inf ? w : Vec3(distance_mm * w);
       int n = 0;
       for (const Cone& c : cones) n += sees(c, X);
       out[col] = n;

@@ -271,6 +271,9 @@ bool MapOptions::IsValid(std::string* why) const {
     return false;
   };
   if (grid.width <= 0 || grid.height <= 0) return fail("panorama size must be positive");
+  if (!window.empty() && (window.x < 0 || window.y < 0 || window.x + window.width > grid.width ||
+                          window.y + window.height > grid.height))
+    return fail("the map's window must lie inside the panorama");
   if (!(min_weight >= 0 && min_weight < 0.5)) return fail("min_weight must be in [0, 0.5)");
   return true;
 }
@@ -281,8 +284,12 @@ CompiledMap compile_map(const Rig& rig, const MapOptions& opt) {
     throw std::invalid_argument("compile_map: active set has " + std::to_string(opt.active.size()) +
                                 " entries for " + std::to_string(rig.cameras.size()) + " cameras");
   CompiledMap map;
-  map.width = opt.grid.width;
-  map.height = opt.grid.height;
+  // The window of the grid this map covers (map pixel (c, r) = grid pixel (wx + c, wy + r)).
+  const cv::Rect win = opt.window.empty() ? cv::Rect(0, 0, opt.grid.width, opt.grid.height) : opt.window;
+  const int wx = win.x, wy = win.y;
+  auto grid_dir = [&](double x, double y) { return opt.grid.direction(x + wx, y + wy); };
+  map.width = win.width;
+  map.height = win.height;
   map.method = opt.method;
   map.sad_epsilon = static_cast<float>(opt.params.sad_epsilon);
   map.layout = StoreLayout::for_rig(rig);
@@ -303,13 +310,13 @@ CompiledMap compile_map(const Rig& rig, const MapOptions& opt) {
     if (opt.cull) {
       tile_rig.name = sub.name;
       tile_rig.dome = sub.dome;
-      const Vec3 wc = opt.grid.direction(0.5 * (c0 + c1), 0.5 * (r0 + r1));
+      const Vec3 wc = grid_dir(0.5 * (c0 + c1), 0.5 * (r0 + r1));
       double radius = 0;
       for (double fy : {0.0, 0.5, 1.0})
         for (double fx : {0.0, 0.5, 1.0}) {
-          const double x = std::clamp(c0 - 2 + fx * (c1 - c0 + 4), 0.0, double(W));
-          const double y = std::clamp(r0 - 2 + fy * (r1 - r0 + 4), 0.0, double(H));
-          radius = std::max(radius, angle_between(wc, opt.grid.direction(x, y)));
+          const double x = std::clamp(c0 - 2 + fx * (c1 - c0 + 4), -double(wx), double(opt.grid.width - wx));
+          const double y = std::clamp(r0 - 2 + fy * (r1 - r0 + 4), -double(wy), double(opt.grid.height - wy));
+          radius = std::max(radius, angle_between(wc, grid_dir(x, y)));
         }
       radius += deg2rad(2.0);
       for (size_t c = 0; c < sub.cameras.size(); ++c)
@@ -341,7 +348,7 @@ CompiledMap compile_map(const Rig& rig, const MapOptions& opt) {
     std::vector<uint8_t> done(found.size(), 0);
     std::array<Node, 4> outside;
     auto fill = [&](Node& n, int col, int row) {
-      n.cs = pano::find_contributors(tile_rig, opt.grid.pixel_direction(col, row), opt.params.search);
+      n.cs = pano::find_contributors(tile_rig, opt.grid.pixel_direction(col + wx, row + wy), opt.params.search);
       if (needs_nb) n.phi = pano::node_potentials(n.cs, spherical);
     };
     auto node = [&](int col, int row, int slot) -> const Node& {
@@ -366,10 +373,10 @@ CompiledMap compile_map(const Rig& rig, const MapOptions& opt) {
         std::vector<double> mw;
         if (needs_nb) {  // = pano::method_weights, with the cached potentials
           std::array<pano::MrfNode, 4> nb;
-          const auto nbs = pano::grid_neighbours(opt.grid, col, row);
+          const auto nbs = pano::grid_neighbours(opt.grid, col + wx, row + wy);
           for (int k = 0; k < 4; ++k)
             if (nbs[k][0] >= 0) {
-              const Node& v = node(nbs[k][0], nbs[k][1], k);
+              const Node& v = node(nbs[k][0] - wx, nbs[k][1] - wy, k);
               nb[k] = {&v.cs, &v.phi};
             }
           mw = pano::mrf_posterior(cs, u.phi, nb);
@@ -490,6 +497,7 @@ std::string map_key(const Rig& rig, const MapOptions& opt) {
   j["rig"] = rig_to_json(rig);
   j["projection"] = to_string(opt.grid.projection);
   j["size"] = {opt.grid.width, opt.grid.height};
+  if (!opt.window.empty()) j["window"] = {opt.window.x, opt.window.y, opt.window.width, opt.window.height};
   j["method"] = pano::to_string(opt.method);
   j["q"] = {opt.params.search.q.x(), opt.params.search.q.y(), opt.params.search.q.z()};
   j["min_r"] = opt.params.search.min_r_mm;

@@ -109,6 +109,11 @@ struct MapOptions {
   //   1/8         1.38        60.4 dB       44.6 dB
   // At 1080x1080 on 2 threads, 1/20 renders about 10 % faster than 1/32 (same run, interleaved).
   double min_weight = 1.0 / 20;
+  // Part of the grid the map covers (grid pixels); empty = the whole grid. The map is then
+  // window.width x window.height and its pixel (c, r) is grid pixel (window.x + c, window.y + r), with
+  // the same taps as in the whole grid's map (mrf neighbours outside the window included): a
+  // panorama too large for one map is rendered block by block (pano_render.h).
+  cv::Rect window;
   bool IsValid(std::string* why = nullptr) const;
 };
 

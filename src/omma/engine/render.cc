@@ -310,7 +310,8 @@ cv::Mat reference_render(const Rig& rig, const MapOptions& opt, const std::vecto
     throw std::invalid_argument("reference_render: need one frame per camera");
   const auto [sub, to_full] = active_cameras(rig, opt.active);
   const PanoGrid& g = opt.grid;
-  cv::Mat out(g.height, g.width, CV_8UC3, cv::Scalar::all(0));
+  const cv::Rect win = opt.window.empty() ? cv::Rect(0, 0, g.width, g.height) : opt.window;  // MapOptions::window
+  cv::Mat out(win.height, win.width, CV_8UC3, cv::Scalar::all(0));
   // Bilinear sample with replicated edges; centres at integer + 0.5.
   auto sample = [](const cv::Mat& img, double x, double y, int ch) {
     const double sx = x - 0.5, sy = y - 0.5;
@@ -324,10 +325,10 @@ cv::Mat reference_render(const Rig& rig, const MapOptions& opt, const std::vecto
     return (1 - fy) * ((1 - fx) * at(x0, y0) + fx * at(x0 + 1, y0)) +
            fy * ((1 - fx) * at(x0, y0 + 1) + fx * at(x0 + 1, y0 + 1));
   };
-  tbb::parallel_for(0, g.height, [&](int row) {
-    for (int col = 0; col < g.width; ++col) {
+  tbb::parallel_for(0, win.height, [&](int row) {
+    for (int col = 0; col < win.width; ++col) {
       if (sub.cameras.empty()) continue;
-      auto taps = pano::static_taps(sub, g, col, row, opt.method, opt.params);
+      auto taps = pano::static_taps(sub, g, col + win.x, row + win.y, opt.method, opt.params);
       std::vector<std::array<double, 3>> s(taps.size());
       std::vector<double> gray(taps.size());
       for (size_t i = 0; i < taps.size(); ++i) {

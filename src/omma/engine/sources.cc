@@ -159,6 +159,7 @@ struct SimScene {
   bool translate = false;
   double speed = 5;
   sim::CameraEffects effects = sim::CameraEffects::ideal(1);
+  bool raw = false;  // deliver the 12-bit raw mosaic (SourceOptions::raw)
   std::chrono::steady_clock::time_point t0 = std::chrono::steady_clock::now();
 };
 
@@ -177,6 +178,10 @@ class SimView : public CameraSource {
     }
     sim::CameraEffects fx = scene_->effects;
     fx.seed = ++n_;
+    if (scene_->raw) {
+      frame = sim::render_camera(*scene_->scene, cam_, pose, fx, true).raw;
+      return true;
+    }
     frame = sim::render_camera(*scene_->scene, cam_, pose, fx, false).image;
     return true;
   }
@@ -354,6 +359,12 @@ std::vector<std::unique_ptr<CameraSource>> open_sources(const Rig& rig, const st
     const bool colon = spec.rfind("colon", 0) == 0;
     scene->translate = colon;
     scene->speed = split_rate(spec, specs[0], "sim:SCENE@SPEED").value_or(colon ? 5.0 : 10.0);
+    if (opt.raw) {
+      scene->raw = true;
+      scene->effects = sim::CameraEffects{};
+      scene->effects.supersample = 1;
+      scene->effects.bits = 12;
+    }
     try {
       scene->scene = sim::make_scene(spec);
     } catch (const std::exception& e) {

@@ -49,6 +49,9 @@ struct SourceOptions {
                       // video files and devices use their own rate unless `force_fps`
   bool force_fps = false;
   bool loop = false;  // image sequences and video files start again at their end
+  // sim: sources deliver the sensor's raw 12-bit RGGB mosaic (CV_16UC1) with the simulator's
+  // default sensor effects (noise, vignetting, gains) instead of ideal 8-bit frames (omma record).
+  bool raw = false;
 };
 
 // Opens the sources for every camera of `rig` from the specs (see the file comment). Throws

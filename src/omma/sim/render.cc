@@ -196,6 +196,7 @@ int auto_truth_supersample(const PanoGrid& grid) {
     case Projection::kEquirect: deg_per_px = std::max(360.0 / grid.width, 90.0 / grid.height); break;
     case Projection::kVr180: deg_per_px = std::max(180.0 / grid.width, 180.0 / grid.height); break;
     case Projection::kEquirectFull: deg_per_px = std::max(360.0 / grid.width, 180.0 / grid.height); break;
+    case Projection::kEquirect100: deg_per_px = std::max(360.0 / grid.width, 100.0 / grid.height); break;
   }
   return std::clamp(static_cast<int>(std::ceil(deg_per_px / 0.09 - 1e-9)), 1, 4);
 }

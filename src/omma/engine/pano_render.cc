@@ -1,0 +1,174 @@
+#include "omma/engine/pano_render.h"
+
+#include <chrono>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "omma/core/io.h"
+#include "omma/core/log.h"
+#include "omma/core/progress.h"
+#include "omma/engine/tiff_writer.h"
+
+namespace omma::engine {
+
+bool PanoRenderOptions::IsValid(std::string* why) const {
+  auto fail = [&](const std::string& m) {
+    if (why) *why = m;
+    return false;
+  };
+  if (grid.width < 1 || grid.height < 1 || grid.width > 1 << 20 || grid.height > 1 << 20)
+    return fail(fmt::format("panorama size {}x{} must be 1..1048576 per side", grid.width, grid.height));
+  if (band_rows < 1) return fail("band_rows must be >= 1");
+  if (!(min_weight >= 0 && min_weight < 0.5)) return fail("min_weight must be in [0, 0.5)");
+  if (!resident_maps && cache_dir.empty()) return fail("non-resident maps need a cache folder");
+  return true;
+}
+
+PanoRenderer::PanoRenderer(const Rig& rig, const PanoRenderOptions& options) : rig_(rig), opt_(options) {
+  if (std::string why; !opt_.IsValid(&why)) throw std::invalid_argument("render: " + why);
+  rig_.validate();
+  store_ = FrameStore(StoreLayout::for_rig(rig_));
+  if (opt_.offline) return;  // the offline blend needs no maps
+  const auto t0 = std::chrono::steady_clock::now();
+  const int n = bands();
+  maps_.resize(n);
+  map_files_.resize(n);
+  Progress progress("band maps", n, opt_.progress);
+  for (int i = 0; i < n; ++i) {
+    MapOptions mo;
+    mo.grid = opt_.grid;
+    mo.method = opt_.method;
+    mo.params = opt_.params;
+    mo.min_weight = opt_.min_weight;
+    mo.window = band(i);
+    MapLoad ml = compile_map_cached(rig_, mo, opt_.cache_dir);
+    maps_from_cache_ += ml.from_cache;
+    map_files_[i] = ml.file;
+    const size_t bytes = ml.map.bytes();
+    largest_map_ = std::max(largest_map_, bytes);
+    all_maps_ += bytes;
+    if (opt_.resident_maps) maps_[i] = std::make_unique<CompiledMap>(std::move(ml.map));
+    progress.step();
+  }
+  maps_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+PanoRenderer::~PanoRenderer() = default;
+
+int PanoRenderer::bands() const { return (opt_.grid.height + opt_.band_rows - 1) / opt_.band_rows; }
+
+cv::Rect PanoRenderer::band(int i) const {
+  const int r0 = i * opt_.band_rows;
+  return {0, r0, opt_.grid.width, std::min(opt_.band_rows, opt_.grid.height - r0)};
+}
+
+void PanoRenderer::set_frames(const std::vector<cv::Mat>& frames) {
+  if (frames.size() != rig_.cameras.size())
+    throw std::invalid_argument(
+        fmt::format("render: {} frames for a rig of {} cameras", frames.size(), rig_.cameras.size()));
+  for (size_t c = 0; c < frames.size(); ++c) store_.set(static_cast<int>(c), frames[c]);
+  if (opt_.offline) {
+    frames_.resize(frames.size());
+    for (size_t c = 0; c < frames.size(); ++c) frames_[c] = store_.camera(static_cast<int>(c));
+  }
+}
+
+const CompiledMap& PanoRenderer::band_map(int i, std::unique_ptr<CompiledMap>& scratch) const {
+  if (maps_[i]) return *maps_[i];
+  auto m = load_map(map_files_[i]);
+  if (!m) throw std::runtime_error("render: the cached map '" + map_files_[i].string() + "' disappeared");
+  scratch = std::make_unique<CompiledMap>(std::move(*m));
+  return *scratch;
+}
+
+void PanoRenderer::render(const BandSink& sink) {
+  cv::Mat out;
+  for (int i = 0; i < bands(); ++i) {
+    const cv::Rect b = band(i);
+    if (opt_.offline) {
+      MapOptions mo;
+      mo.grid = opt_.grid;
+      mo.method = opt_.method;
+      mo.params = opt_.params;
+      mo.window = b;
+      out = reference_render(rig_, mo, frames_);
+    } else {
+      std::unique_ptr<CompiledMap> scratch;
+      engine::render(band_map(i, scratch), store_, out, opt_.render);
+    }
+    sink(b.y, out);
+  }
+}
+
+cv::Mat PanoRenderer::render_image() {
+  cv::Mat img(opt_.grid.height, opt_.grid.width, CV_8UC3);
+  render([&](int row0, const cv::Mat& band) { band.copyTo(img.rowRange(row0, row0 + band.rows)); });
+  return img;
+}
+
+PanoRenderMemory PanoRenderer::memory() const {
+  PanoRenderMemory m;
+  m.store_bytes = store_.layout().bytes();
+  m.maps_bytes = opt_.resident_maps ? all_maps_ : largest_map_;
+  m.band_bytes = size_t(opt_.grid.width) * std::min(opt_.band_rows, opt_.grid.height) * 3;
+  return m;
+}
+
+double render_to_file(PanoRenderer& renderer, const std::filesystem::path& path) {
+  const PanoGrid& g = renderer.options().grid;
+  std::string ext = path.extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  double seconds = 0;
+  auto timed = [&](const BandSink& sink) {
+    return [&seconds, sink, t = std::chrono::steady_clock::now()](int row0, const cv::Mat& band) mutable {
+      seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+      sink(row0, band);
+      t = std::chrono::steady_clock::now();
+    };
+  };
+  if (ext == ".tif" || ext == ".tiff") {
+    BigTiffWriter w(path, g.width, g.height);
+    renderer.render(timed([&](int, const cv::Mat& band) { w.write_rows(band); }));
+    w.finish();
+  } else {
+    if ((ext == ".jpg" || ext == ".jpeg") && (g.width > 65535 || g.height > 65535))
+      throw IoError(fmt::format("JPEG cannot hold {}x{}; write a .tif (BigTIFF)", g.width, g.height));
+    cv::Mat img(g.height, g.width, CV_8UC3);
+    renderer.render(timed([&](int row0, const cv::Mat& band) { band.copyTo(img.rowRange(row0, row0 + band.rows)); }));
+    write_image(path, img);
+  }
+  return seconds;
+}
+
+FrameSetTimes render_frame_set(const RecordingReader& recording, int64_t set, PanoRenderer& renderer,
+                               isp::IspOptions iso, const std::filesystem::path& path) {
+  using clock = std::chrono::steady_clock;
+  FrameSetTimes t;
+  auto t0 = clock::now();
+  std::vector<cv::Mat> raws = recording.read_frame_set(set);
+  auto t1 = clock::now();
+  t.read = std::chrono::duration<double>(t1 - t0).count();
+  iso.bits = recording.manifest().bits;
+  std::vector<size_t> present;
+  std::vector<cv::Mat> have;
+  for (size_t c = 0; c < raws.size(); ++c)
+    if (!raws[c].empty()) {
+      present.push_back(c);
+      have.push_back(raws[c]);
+    }
+  std::vector<cv::Mat> developed = isp::develop_all(have, iso);
+  std::vector<cv::Mat> frames(raws.size());
+  const Rig& rig = recording.manifest().rig;
+  for (size_t c = 0; c < raws.size(); ++c)
+    frames[c] = cv::Mat::zeros(rig.cameras[c].in.height, rig.cameras[c].in.width, CV_8UC3);
+  for (size_t k = 0; k < present.size(); ++k) frames[present[k]] = developed[k];
+  auto t2 = clock::now();
+  t.develop = std::chrono::duration<double>(t2 - t1).count();
+  renderer.set_frames(frames);
+  t.render = render_to_file(renderer, path);
+  t.write = std::chrono::duration<double>(clock::now() - t2).count() - t.render;
+  return t;
+}
+
+}  // namespace omma::engine
