@@ -52,6 +52,8 @@ int main(int argc, char** argv) {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
+  } catch (const omma::app::ExitSilently& e) {
+    return e.code;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "omma: error: %s\n", e.what());
     return 1;

@@ -31,6 +31,8 @@ void LocalComm::send(int dest, int, const std::string&) {
   throw std::logic_error(fmt::format("LocalComm: no rank {} to send to (one process)", dest));
 }
 
+void LocalComm::abort(int code) { std::exit(code); }
+
 bool launched_by_mpi(int* size) {
   for (const char* var : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_RANK"}) {
     if (const char* v = std::getenv(var)) {
@@ -132,6 +134,11 @@ class MpiComm : public Comm {
     std::vector<std::string> out;
     for (size_t r = 0; r < counts.size(); ++r) out.push_back(all.substr(displs[r], counts[r]));
     return out;
+  }
+
+  [[noreturn]] void abort(int code) override {
+    MPI_Abort(MPI_COMM_WORLD, code);
+    std::_Exit(code);
   }
 
  private:

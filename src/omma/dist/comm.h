@@ -43,6 +43,10 @@ class Comm {
   virtual std::string broadcast(const std::string& data) = 0;
   // Every rank's `data`, in rank order, on rank 0 (empty vector on the others).
   virtual std::vector<std::string> gather(const std::string& data) = 0;
+
+  // Ends every rank at once (MPI_Abort) after a failure on this rank that the others cannot know
+  // of; one process: exits.
+  [[noreturn]] virtual void abort(int code) = 0;
 };
 
 // A single process: rank 0 of 1. Point-to-point calls throw (there is no other rank).
@@ -55,6 +59,7 @@ class LocalComm : public Comm {
   std::optional<Message> try_recv() override { return std::nullopt; }
   std::string broadcast(const std::string& data) override { return data; }
   std::vector<std::string> gather(const std::string& data) override { return {data}; }
+  [[noreturn]] void abort(int code) override;
 };
 
 // True when this process was started by an MPI launcher (OpenMPI's mpirun, or a PMI/PMIx launcher

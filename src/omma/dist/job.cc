@@ -23,6 +23,7 @@
 #include "omma/core/log.h"
 #include "omma/core/progress.h"
 #include "omma/dist/checksum.h"
+#include "omma/dist/worker_thread.h"
 
 namespace omma::dist {
 namespace fs = std::filesystem;
@@ -234,13 +235,14 @@ fs::path journal_path(const fs::path& manifest) {
   return j;
 }
 
-// Records of an earlier run with the same parameters: the manifest, then the journal (later wins).
-std::map<int64_t, ItemRecord> previous_records(const fs::path& manifest, const json& params, int64_t items) {
-  std::map<int64_t, ItemRecord> out;
+// Records of an earlier run with the same parameters, by output path (an earlier run over another
+// range of frame sets numbers its items differently): the manifest, then the journal (later wins).
+std::map<std::string, ItemRecord> previous_records(const fs::path& manifest, const json& params) {
+  std::map<std::string, ItemRecord> out;
   auto take = [&](const json& rec) {
     try {
       ItemRecord r = ItemRecord::from_json(rec);
-      if (r.item >= 0 && r.item < items) out[r.item] = r;
+      out[r.output] = r;
     } catch (const json::exception&) {
     }
   };
@@ -284,7 +286,7 @@ std::map<int64_t, ItemRecord> previous_records(const fs::path& manifest, const j
 // SIGTERM to every rank. Prepared before the job runs (a signal handler may only write()).
 char g_stop_message[1024];
 size_t g_stop_len = 0;
-extern "C" void on_stop_signal(int sig) {
+void on_stop_signal(int sig) {  // C++ linkage: file-local (anonymous namespace)
   ssize_t n = ::write(STDERR_FILENO, g_stop_message, g_stop_len);
   (void)n;
   std::signal(sig, SIG_DFL);
@@ -315,77 +317,24 @@ struct SignalGuard {
   }
 };
 
-// Rank 0's own worker: a thread that runs the items rank 0's main thread gives it.
-class LocalWorker {
- public:
-  LocalWorker(Job& job, const std::string& host) : job_(job), host_(host), thread_([this] { loop(); }) {}
-  ~LocalWorker() {
-    {
-      std::lock_guard l(m_);
-      stop_ = true;
-    }
-    cv_.notify_all();
-    thread_.join();
-  }
-  void assign(int64_t item) {
-    {
-      std::lock_guard l(m_);
-      item_ = item;
-    }
-    cv_.notify_all();
-  }
-  // Waits up to `timeout` for the result of the item assigned last.
-  std::optional<ItemResult> wait_result(std::chrono::microseconds timeout) {
-    std::unique_lock l(m_);
-    cv_.wait_for(l, timeout, [&] { return result_.has_value(); });
-    std::optional<ItemResult> r;
-    r.swap(result_);
-    return r;
-  }
+}  // namespace
 
- private:
-  void loop() {
-    for (;;) {
-      int64_t item;
-      {
-        std::unique_lock l(m_);
-        cv_.wait(l, [&] { return stop_ || item_ >= 0; });
-        if (stop_) return;
-        item = item_;
-        item_ = -1;
-      }
-      ItemResult r = run_one(job_, item, 0, host_);
-      {
-        std::lock_guard l(m_);
-        result_ = std::move(r);
-      }
-      cv_.notify_all();
-    }
-  }
-  Job& job_;
-  std::string host_;
-  std::mutex m_;
-  std::condition_variable cv_;
-  int64_t item_ = -1;
-  bool stop_ = false;
-  std::optional<ItemResult> result_;
-  std::thread thread_;  // last: starts after the members above exist
-};
-
-// Every rank: rank 0's verdict of a phase ("" = go on). Throws JobError when there is a problem.
-void phase_verdict(Comm& comm, const std::string& error_on_rank0) {
+void broadcast_verdict(Comm& comm, const std::string& error_on_rank0) {
   const std::string verdict = comm.broadcast(comm.rank() == 0 ? error_on_rank0 : std::string());
   if (!verdict.empty()) throw JobError(verdict, comm.rank() != 0);
 }
 
-// Gathers every rank's error ("" = none) and turns them into one message on rank 0.
-void gathered_verdict(Comm& comm, const std::string& my_error, const std::string& what) {
+void check_all_ranks(Comm& comm, const std::string& my_error, const std::string& what) {
   const std::string mine = my_error.empty() ? "" : json{{"host", comm.host()}, {"error", my_error}}.dump();
   const auto all = comm.gather(mine);
   std::string msg;
   if (comm.rank() == 0) {
     std::vector<std::string> parts;
-    for (size_t r = 0; r < all.size(); ++r)
+    std::set<std::string> distinct;
+    for (const auto& m : all) distinct.insert(m.empty() ? "" : json::parse(m)["error"].get<std::string>());
+    const bool same_everywhere = distinct.size() == 1 && !all[0].empty();
+    if (same_everywhere) parts.push_back(*distinct.begin());  // given once
+    for (size_t r = 0; r < all.size() && !same_everywhere; ++r)
       if (!all[r].empty()) {
         const json j = json::parse(all[r]);
         parts.push_back(comm.size() > 1 ? fmt::format("rank {} ({}): {}", r, j["host"].get<std::string>(),
@@ -397,10 +346,8 @@ void gathered_verdict(Comm& comm, const std::string& my_error, const std::string
       for (size_t i = 1; i < parts.size(); ++i) msg += "; " + parts[i];
     }
   }
-  phase_verdict(comm, msg);
+  broadcast_verdict(comm, msg);
 }
-
-}  // namespace
 
 RunSummary run_job(Comm& comm, Job& job, const RunOptions& options) {
   const auto t_start = Clock::now();
@@ -416,14 +363,17 @@ RunSummary run_job(Comm& comm, Job& job, const RunOptions& options) {
   // Phase 1, rank 0: options, ranks against items, output folders, setup, the earlier run's records.
   std::string error;
   json params;
-  std::map<int64_t, ItemRecord> previous;
+  std::map<int64_t, ItemRecord> previous;  // item -> the earlier run's record of its output
   if (root) {
+    bool own = false;  // the runner's own checks need no rank name
     try {
       if (std::string why; !options.IsValid(&why)) throw std::invalid_argument(why);
+      job.open();
       const int64_t n = job.items();
       if (n < 1) throw std::invalid_argument("there is nothing to make (0 items)");
       const int workers = size - (sum.rank0 == Rank0::kServes ? 1 : 0);
-      if (workers > n)
+      own = workers > n;
+      if (own)
         throw std::invalid_argument(fmt::format(
             "{} ranks{} for {} {}: start at most {} (mpirun -np {})", size,
             sum.rank0 == Rank0::kServes ? " (rank 0 only serves)" : "", n, options.label,
@@ -431,24 +381,33 @@ RunSummary run_job(Comm& comm, Job& job, const RunOptions& options) {
       for (const auto& d : output_folders(job, options.manifest)) check_writable(d, rank);
       job.setup();
       params = job.parameters();
-      if (options.resume) previous = previous_records(options.manifest, params, n);
+      if (options.resume) {
+        auto by_path = previous_records(options.manifest, params);
+        for (int64_t i = 0; i < n && !by_path.empty(); ++i) {
+          const auto it = by_path.find(job.output(i).string());
+          if (it == by_path.end()) continue;
+          it->second.item = i;
+          previous[i] = it->second;
+        }
+      }
     } catch (const std::exception& e) {
-      error = size > 1 ? fmt::format("rank 0 ({}): {}", host, e.what()) : e.what();
+      error = size > 1 && !own ? fmt::format("rank 0 ({}): {}", host, e.what()) : e.what();
     }
   }
-  phase_verdict(comm, error);
+  broadcast_verdict(comm, error);
 
   // Phase 2, the other ranks: setup, output folders.
   error.clear();
   if (!root) {
     try {
-      job.setup();
+      job.open();
       for (const auto& d : output_folders(job, options.manifest)) check_writable(d, rank);
+      job.setup();
     } catch (const std::exception& e) {
       error = e.what();
     }
   }
-  gathered_verdict(comm, error, "");
+  check_all_ranks(comm, error, "");
 
   // Phase 3, every rank: verify a share of the earlier run's outputs (every size-th).
   json to_check = json::array();
@@ -478,7 +437,7 @@ RunSummary run_job(Comm& comm, Job& job, const RunOptions& options) {
       if (item < 0) break;
       report = result_to_json(run_one(job, item, rank, host)).dump();
     }
-    phase_verdict(comm, "");
+    broadcast_verdict(comm, "");
     sum.seconds = since(t_start);
     return sum;
   }
@@ -558,23 +517,20 @@ RunSummary run_job(Comm& comm, Job& job, const RunOptions& options) {
     progress.step();
   };
   {
-    std::optional<LocalWorker> local;
-    bool local_busy = false;
+    std::optional<WorkerThread<ItemResult>> local;
     if (sum.rank0 == Rank0::kWorks) {
-      local.emplace(job, host);
+      local.emplace([&job, &host](int64_t item) { return run_one(job, item, 0, host); });
       if (!todo.empty()) {
         local->assign(todo.front());
         todo.pop_front();
-        local_busy = true;
       }
     }
     int remote = size - 1;  // workers not yet told to stop
-    while (remote > 0 || local_busy) {
-      if (local_busy) {
+    while (remote > 0 || (local && local->busy())) {
+      if (local && local->busy()) {
         if (auto r = local->wait_result(remote > 0 ? std::chrono::microseconds(500) : std::chrono::hours(1))) {
           accept(*r, 0);
-          local_busy = !todo.empty();
-          if (local_busy) {
+          if (!todo.empty()) {
             local->assign(todo.front());
             todo.pop_front();
           }
@@ -592,7 +548,7 @@ RunSummary run_job(Comm& comm, Job& job, const RunOptions& options) {
             --remote;
           }
           comm.send(m->source, kTagAssign, json(next).dump());
-        } else if (!local_busy) {
+        } else if (!(local && local->busy())) {
           std::this_thread::sleep_for(std::chrono::microseconds(500));
         }
       }
@@ -621,7 +577,7 @@ RunSummary run_job(Comm& comm, Job& job, const RunOptions& options) {
     failure += fmt::format(" ({} of {} {} are finished and recorded in {}: run the same command again to make the rest)",
                            sum.records.size(), sum.items, options.label, jpath.string());
   }
-  phase_verdict(comm, failure);
+  broadcast_verdict(comm, failure);
   return sum;
 }
 

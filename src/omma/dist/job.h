@@ -79,8 +79,11 @@ class Job {
   // Everything the outputs depend on (input, sizes, method, ...): outputs listed in a manifest with
   // other parameters are not reused.
   virtual nlohmann::json parameters() const { return nlohmann::json::object(); }
-  // Prepares this rank (opens the input, compiles or loads maps). Rank 0 runs it first, the other
-  // ranks after it (so that they read caches rank 0 filled). Throw to report a problem.
+  // Opens the input, cheaply (items() may depend on it): every rank, before anything else.
+  virtual void open() {}
+  // Prepares this rank for run() (compiles or loads maps): after the checks that need only open()
+  // (ranks against items, output folders). Rank 0 runs it first, the other ranks after it (so that
+  // they read caches rank 0 filled). Throw (from either) to report a problem.
   virtual void setup() {}
   // Makes output(item) atomically. On rank 0 it runs on a worker thread. Throw to report a problem.
   virtual ItemTimes run(int64_t item) = 0;
@@ -129,6 +132,15 @@ class JobError : public std::runtime_error {
 // Runs the job on every rank of `comm` (every rank calls it with the same job and options).
 // Returns the summary (complete on rank 0). Throws JobError (see the file comment).
 RunSummary run_job(Comm& comm, Job& job, const RunOptions& options);
+
+// A collective: rank 0's verdict ("" = go on; else the error) reaches every rank, which throws
+// JobError with it (quietly on ranks other than 0).
+void broadcast_verdict(Comm& comm, const std::string& error_on_rank0);
+
+// A collective: every rank reports its error ("" = none). If any rank has one, every rank throws
+// JobError: rank 0 with one message, `context` + "rank R (host): error; ...", the others quietly
+// (an error every rank has, such as a bad option, is given once, without rank names).
+void check_all_ranks(Comm& comm, const std::string& error, const std::string& context = "");
 
 // Whether `file` is a temporary that an atomic write of `output` leaves when it is killed: core/io.h's
 // ".STEM.tmpN.EXT", or "NAME.tmpN" (streaming writers such as the BigTIFF writer).
