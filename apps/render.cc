@@ -249,7 +249,8 @@ void render(dist::Comm& comm, const RenderArgs& a) {
                    {"develop", sum.totals.develop},
                    {"render", sum.totals.render},
                    {"write", sum.totals.write},
-                   {"checksum", sum.checksum_seconds}}}};
+                   {"checksum", sum.checksum_seconds}}},
+                 {"cpu_seconds", sum.cpu_seconds}};
   } else {
     // --split tiles: every rank opens and prepares, then each frame set is split by bands.
     error.clear();

@@ -1,6 +1,7 @@
 #include "omma/dist/job.h"
 
 #include <fcntl.h>
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -41,7 +42,7 @@ ItemTimes& ItemTimes::operator+=(const ItemTimes& o) {
 json ItemRecord::to_json() const {
   return {{"item", item},         {"output", output},     {"size", size},
           {"checksum", checksum}, {"rank", rank},         {"host", host},
-          {"seconds", seconds},   {"read", times.read},   {"develop", times.develop},
+          {"seconds", seconds},   {"cpu_seconds", cpu_seconds}, {"read", times.read},   {"develop", times.develop},
           {"render", times.render}, {"write", times.write}, {"checksum_seconds", checksum_seconds},
           {"reused", reused}};
 }
@@ -55,6 +56,7 @@ ItemRecord ItemRecord::from_json(const json& j) {
   r.rank = j.value("rank", -1);
   r.host = j.value("host", "");
   r.seconds = j.value("seconds", 0.0);
+  r.cpu_seconds = j.value("cpu_seconds", 0.0);
   r.times.read = j.value("read", 0.0);
   r.times.develop = j.value("develop", 0.0);
   r.times.render = j.value("render", 0.0);
@@ -99,7 +101,8 @@ json RunSummary::to_json() const {
             {"develop", totals.develop},
             {"render", totals.render},
             {"write", totals.write},
-            {"checksum", checksum_seconds}}},
+            {"checksum", checksum_seconds},
+            {"cpu", cpu_seconds}}},
           {"outputs", outs}};
 }
 
@@ -124,6 +127,12 @@ namespace {
 enum Tag : int { kTagRequest = 1, kTagAssign = 2 };
 
 double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+double process_cpu_seconds() {
+  rusage u {};
+  getrusage(RUSAGE_SELF, &u);
+  return u.ru_utime.tv_sec + u.ru_stime.tv_sec + 1e-6 * (u.ru_utime.tv_usec + u.ru_stime.tv_usec);
+}
 
 // What a rank reports after an item: its record, or the error.
 struct ItemResult {
@@ -156,6 +165,7 @@ ItemResult run_one(Job& job, int64_t item, int rank, const std::string& host) {
   res.item = item;
   res.host = host;
   const auto t0 = Clock::now();
+  const double cpu0 = process_cpu_seconds();
   try {
     ItemRecord r;
     r.item = item;
@@ -169,6 +179,7 @@ ItemResult run_one(Job& job, int64_t item, int rank, const std::string& host) {
     r.size = d.size;
     r.checksum = d.checksum;
     r.seconds = since(t0);
+    r.cpu_seconds = process_cpu_seconds() - cpu0;
     res.record = std::move(r);
   } catch (const std::exception& e) {
     res.error = e.what();
@@ -564,6 +575,7 @@ RunSummary run_job(Comm& comm, Job& job, const RunOptions& options) {
         ++sum.made;
         sum.totals += r->times;
         sum.checksum_seconds += r->checksum_seconds;
+        sum.cpu_seconds += r->cpu_seconds;
       }
     }
   if (failure.empty()) {

@@ -14,8 +14,8 @@
 //    "ranks": K, "mpi": true, "rank0": "works", "made": M, "reused": R, "seconds": wall,
 //    "totals": {"read": s, "develop": s, "render": s, "write": s, "checksum": s},
 //    "outputs": [{"item": i, "output": path, "size": bytes, "checksum": "xxh3:...", "rank": r,
-//                 "host": h, "seconds": s, "read": s, "develop": s, "render": s, "write": s,
-//                 "checksum_seconds": s, "reused": false}, ...]}   (item order)
+//                 "host": h, "seconds": s, "cpu_seconds": s, "read": s, "develop": s, "render": s,
+//                 "write": s, "checksum_seconds": s, "reused": false}, ...]}   (item order)
 //
 // Resuming: a rerun reads the earlier manifest and journal (same parameters only), verifies the
 // outputs they list (exists, size, checksum; the ranks share this work), reuses those that match
@@ -60,6 +60,8 @@ struct ItemRecord {
   int rank = -1;
   std::string host;
   double seconds = 0;          // wall time of the item on its rank, checksum included
+  double cpu_seconds = 0;      // CPU time of its process meanwhile (all threads): the work itself,
+                               // whatever else shares the machine
   ItemTimes times;
   double checksum_seconds = 0;
   bool reused = false;         // made by an earlier run and verified, not made again
@@ -114,6 +116,7 @@ struct RunSummary {
   double setup_seconds = 0;        // until the first item was handed out
   ItemTimes totals;                // sums over the items made by this run
   double checksum_seconds = 0;
+  double cpu_seconds = 0;
   nlohmann::json parameters;
   std::vector<ItemRecord> records; // rank 0: every item, item order; other ranks: empty
   nlohmann::json to_json() const;  // the manifest
