@@ -10,6 +10,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "apps/command.h"
+#include "apps/giga_demo.h"
 #include "omma/core/frames.h"
 #include "omma/core/io.h"
 #include "omma/core/log.h"
@@ -257,7 +258,28 @@ void add_demo_command(CLI::App& root) {
       ->capture_default_str();
   cmd->add_option("--seed", opts->seed, "Simulation seed")->capture_default_str();
   cmd->add_flag("--json", opts->json, "Print one JSON summary on stdout");
-  cmd->callback([opts] { run_demo(*opts); });
+  // The Giga-Eye (thesis ch. 7): its own demo (giga_demo.h).
+  static std::string rig = "thesis-24";
+  static GigaDemoOptions giga;
+  cmd->add_option("--rig", rig,
+                  "thesis-24 (default) or gigaeye-44: the Giga-Eye end to end (plan, coverage, a simulated raw "
+                  "recording, calibration, 21.6 MP panoramas; --out, --seed, --json and --size apply, --scene "
+                  "defaults to photo:../shared/data/lake.jpg if present, else checker:50000; --giga-mode and "
+                  "--frame-sets below)")
+      ->capture_default_str();
+  cmd->add_option("--giga-mode", giga.mode, "Giga-Eye demo: sensor mode of the recording (full, skip1, skip2, skip3, skip5)")
+      ->capture_default_str();
+  cmd->add_option("--frame-sets", giga.frame_sets, "Giga-Eye demo: frame sets to record")->capture_default_str();
+  cmd->callback([opts, cmd] {
+    if (rig == "thesis-24") return run_demo(*opts);
+    if (rig != "gigaeye-44") throw std::invalid_argument("--rig must be thesis-24 or gigaeye-44");
+    giga.json = opts->json;
+    giga.seed = opts->seed;
+    if (cmd->get_option("--out")->count()) giga.out = opts->out;
+    if (cmd->get_option("--scene")->count()) giga.scene = opts->scene;
+    if (cmd->get_option("--size")->count()) giga.size = opts->size;
+    run_giga_demo(giga);
+  });
 }
 
 }  // namespace omma::app

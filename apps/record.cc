@@ -49,7 +49,6 @@ void run_record(const RecordArgs& a) {
   engine::SourceOptions so;
   so.fps = a.source_fps.value_or(a.fps);
   if (so.fps < 0) throw std::invalid_argument("--source-fps must be >= 0");
-  so.raw = true;
   auto sources = engine::open_sources(rig, a.sources, so);
   engine::RecordingManifest m;
   m.rig = rig;
@@ -143,7 +142,7 @@ void add_record_command(CLI::App& root) {
       "safe: flushed every --flush seconds; `omma recording check OUT` reads a killed recording.");
   cmd->add_option("--rig", a.rig, "Rig file or built-in rig")->required();
   cmd->add_option("--source", a.sources,
-                  "Sources as in `omma run` (sim:SCENE delivers the simulator's 12-bit raw; others are mosaicked)")
+                  "Sources as in `omma run` (16-bit single-channel frames are raw already; others are mosaicked RGGB)")
       ->required();
   cmd->add_option("--out", a.out, "Recording folder (must not exist)")->required();
   cmd->add_option("--duration", a.duration, "Seconds to record");

@@ -16,6 +16,24 @@
 namespace omma::app {
 namespace {
 extern "C" void on_signal(int) { engine::request_stop(); }
+
+// "MIN-MAX" or "F" (frames/s).
+void parse_fps_range(const std::string& text, double* lo, double* hi) {
+  const size_t dash = text.find('-', 1);
+  try {
+    size_t a = 0, b = 0;
+    if (dash == std::string::npos) {
+      *lo = *hi = std::stod(text, &a);
+      if (a == text.size()) return;
+    } else {
+      *lo = std::stod(text.substr(0, dash), &a);
+      *hi = std::stod(text.substr(dash + 1), &b);
+      if (a == dash && b == text.size() - dash - 1) return;
+    }
+  } catch (const std::exception&) {
+  }
+  throw std::invalid_argument("--sim-fps '" + text + "': expected MIN-MAX or one rate, frames/s (e.g. 44-56)");
+}
 }  // namespace
 
 void add_run_command(CLI::App& root) {
@@ -24,16 +42,22 @@ void add_run_command(CLI::App& root) {
       "Live panoramic video: free-running camera sources -> compiled map -> fast renderer -> sinks.\n"
       "Sources (one per camera in rig order, or one for all): DIR (image sequence), FILE.mp4|mkv|avi "
       "(video), /dev/videoN or v4l2:N (V4L2), frames:DIR (cam_XX.png stills), pano:IMAGE[@DEG_S] "
-      "(views of a turning 360x180 photograph), a pattern with {id} (two-digit camera id).\n"
+      "(views of a turning 360x180 photograph), sim:SCENE[@SPEED] (the simulator: colon, photo:PATH, usaf, "
+      "checker; free-running cameras at 44-56 fps, a loop pre-rendered at start-up), link:FILE or FILE.bin "
+      "(raw sensor link), a pattern with {id} (two-digit camera id).\n"
       "Sinks: FILE.mp4|mkv|avi, png:DIR or DIR/, cam:ID:SINK (one camera passed through), "
-      "http:PORT (live view on 127.0.0.1: / page, /stream.mjpg MJPEG).\n"
-      "A camera that ends or fails is dropped and the map recompiled without it. Ctrl-C stops cleanly.");
+      "http:PORT (live view on 127.0.0.1: / 360-degree viewer, /stream.mjpg MJPEG, /frame.jpg, /stats.json).\n"
+      "Latency = mean age of a panorama's camera frames when it is rendered (README, 'Real-time engine').\n"
+      "A camera that ends or fails is dropped and the map recompiled without it. Ctrl-C or SIGTERM stops "
+      "cleanly and leaves playable videos.");
   struct Opts {
-    std::string rig, method = "linear", projection = "vr180", size = "1080x1080", cache;
+    std::string rig, method = "linear", projection = "vr180", size = "1080x1080", cache, sim_fps = "44-56";
     std::vector<std::string> sources, sinks;
     double duration = 0, fps = 30, source_fps = 30, first_timeout = 10, min_weight = engine::MapOptions{}.min_weight;
+    double sim_jitter = engine::SimCameraOptions{}.jitter_ms, sim_loop = engine::SimCameraOptions{}.loop_s;
     long frames = 0;
-    int threads = 0;
+    int threads = 0, camera_threads = engine::EngineOptions{}.max_camera_threads,
+        max_streams = engine::SinkOptions{}.max_streams;
     bool loop = false, json = false, no_cache = false;
   };
   static Opts o;
@@ -58,6 +82,23 @@ void add_run_command(CLI::App& root) {
   cmd->add_option("--first-frame-timeout", o.first_timeout,
                   "A camera without a first frame after this many seconds is dropped (default 10)")
       ->check(CLI::PositiveNumber);
+  cmd->add_option("--sim-fps", o.sim_fps,
+                  "sim: sources: the cameras' rates, frames/s, MIN-MAX (each camera draws its own) or one value "
+                  "(default 44-56, the thesis's sensors)");
+  cmd->add_option("--sim-jitter", o.sim_jitter,
+                  "sim: sources: standard deviation of each frame's capture instant, ms (default 0.5)")
+      ->check(CLI::Range(0.0, 1000.0));
+  cmd->add_option("--sim-loop", o.sim_loop,
+                  "sim: sources: length of the pre-rendered loop = period of the back-and-forth motion, s "
+                  "(default 1; memory and start-up time grow with it: 3 bytes per camera pixel per frame)")
+      ->check(CLI::Range(0.01, 3600.0));
+  cmd->add_option("--camera-threads", o.camera_threads,
+                  "Camera threads at most; more cameras share them (default 64)")
+      ->check(CLI::Range(1, 4096));
+  cmd->add_option("--max-streams", o.max_streams,
+                  "Live view: concurrent /stream.mjpg viewers (each open page is one); the next one gets "
+                  "503 (default 8)")
+      ->check(CLI::Range(1, 256));
   cmd->add_flag("--loop", o.loop, "Restart image sequences and video files at their end");
   cmd->add_option("--threads", o.threads, "Renderer threads (0: all; default 0)")->check(CLI::NonNegativeNumber);
   cmd->add_option("--cache", o.cache, "Map cache folder (default $OMMA_CACHE_DIR or ~/.cache/omma)");
@@ -77,13 +118,20 @@ void add_run_command(CLI::App& root) {
     eo.fps = o.fps;
     eo.threads = o.threads;
     eo.first_frame_timeout_s = o.first_timeout;
+    eo.max_camera_threads = o.camera_threads;
     engine::SourceOptions so;
     so.fps = o.source_fps;
     so.loop = o.loop;
+    so.sim.jitter_ms = o.sim_jitter;
+    so.sim.loop_s = o.sim_loop;
+    so.sim.progress = !o.json && progress_enabled();
+    parse_fps_range(o.sim_fps, &so.sim.fps_min, &so.sim.fps_max);
     auto sources = engine::open_sources(rig, o.sources, so);
     std::vector<std::unique_ptr<engine::Sink>> sinks;
     engine::SinkOptions sk;
     sk.fps = o.fps > 0 ? o.fps : 30;
+    sk.max_streams = o.max_streams;
+    sk.projection = eo.map.grid.projection;
     try {
       for (const auto& s : o.sinks)
         sinks.push_back(engine::open_sink(s, rig, cv::Size(size.width, size.height), sk));
@@ -96,9 +144,10 @@ void add_run_command(CLI::App& root) {
     eo.on_progress = [show, tty](const nlohmann::json& j) {
       if (!show) return;
       const std::string line = fmt::format(
-          "omma run: {} frames  {:.1f} fps  latency {:.1f} ms  dropped frames {}  cameras live {}",
+          "omma run: {} frames  {:.1f} fps  latency {:.1f} ms  cameras live {} at {:.1f}-{:.1f} fps  dropped frames {}",
           j["frames"].get<long>(), j["fps"].get<double>(), j["latency_ms"].get<double>(),
-          j["dropped_frames"].get<long>(), j["cameras_live"].get<long>());
+          j["cameras_live"].get<long>(), j["window"]["camera_fps_min"].get<double>(),
+          j["window"]["camera_fps_max"].get<double>(), j["dropped_frames"].get<long>());
       std::fprintf(stderr, tty ? "\r%s\033[K" : "%s\n", line.c_str());
     };
     // Sources and sinks run in their own threads; OpenCV's own parallelism inside them would only
@@ -106,6 +155,9 @@ void add_run_command(CLI::App& root) {
     cv::setNumThreads(1);
     std::signal(SIGINT, on_signal);
     std::signal(SIGTERM, on_signal);
+    // A file-size limit (ulimit -f) then fails a write like a full disk does, instead of killing
+    // the process before it can clean up.
+    std::signal(SIGXFSZ, SIG_IGN);
     const engine::EngineStats st = engine::run_engine(rig, std::move(sources), sinks, eo);
     std::signal(SIGINT, SIG_DFL);
     std::signal(SIGTERM, SIG_DFL);

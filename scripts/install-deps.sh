@@ -2,12 +2,15 @@
 # Installs the Debian packages omma needs, only those missing. Uses sudo when not root.
 # --test also installs what only the tests use: Chromium, for the live-view test in a headless browser,
 # and xxhash (xxhsum: the MPI tests check the manifests' checksums with the standard tool).
+# Then the live view's npm packages (web/package-lock.json: the Pannellum viewer, embedded in the
+# binary at build time, and playwright-core, which drives Chromium in the viewer's test) with npm ci.
 set -euo pipefail
 pkgs=(cmake g++ ninja-build ccache pkg-config libopencv-dev libeigen3-dev libceres-dev libtbb-dev
       libcli11-dev nlohmann-json3-dev libspdlog-dev libfmt-dev libgtest-dev libgmock-dev
       libbenchmark-dev hugin-tools libcpp-httplib-dev libtiff-dev libhdf5-dev libxxhash-dev libopenmpi-dev
       openmpi-bin)
 [ "${1:-}" = "--test" ] && pkgs+=(chromium xxhash)
+command -v npm >/dev/null || pkgs+=(nodejs npm)
 missing=()
 for p in "${pkgs[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
@@ -19,4 +22,12 @@ if [ ${#missing[@]} -gt 0 ]; then
   export DEBIAN_FRONTEND=noninteractive
   $sudo apt-get update -qq
   $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >&2
+fi
+
+# npm ci only when web/node_modules does not match the lock file (a copy of it marks what was installed).
+web="$(dirname "$0")/../web"
+if ! cmp -s "$web/package-lock.json" "$web/node_modules/.omma-lock" 2>/dev/null; then
+  echo "omma: installing the live view's npm packages (web/package-lock.json)" >&2
+  (cd "$web" && npm ci --no-audit --no-fund --loglevel=error >&2)
+  cp "$web/package-lock.json" "$web/node_modules/.omma-lock"
 fi

@@ -117,8 +117,8 @@ TEST_F(GigaSim, RenderAgainstTruth) {
 TEST_F(GigaSim, RecordCheckRenderAndSurviveSigkill) {
   const auto dir = temp_dir("giga-record");
   const std::string rec = (dir / "rec").string();
-  // The simulator as a raw source (12-bit mosaics with sensor noise): two frame sets.
-  const auto r = run_omma("record --rig gigaeye-44-skip5 --source sim:photo:" + lake() + " --fps 4 --frames 2 --out " + rec +
+  // The simulated frames as stills (frames:DIR), two frame sets.
+  const auto r = run_omma("record --rig gigaeye-44-skip5 --source frames:" + frames() + " --fps 4 --frames 2 --out " + rec +
                           " --json");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto c = run_omma("recording check " + rec + " --json");

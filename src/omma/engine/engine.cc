@@ -17,25 +17,67 @@
 namespace omma::engine {
 namespace {
 
-using Clock = std::chrono::steady_clock;
 std::atomic<bool> g_stop{false};
 
-// The latest frame of one camera, written by its source thread.
+// The latest frame of one camera: a triple buffer. The camera fills buf[back] and swaps it with the
+// middle one (marking it fresh); the render loop, when the middle one is fresh, swaps it with its
+// buf[front]. Neither ever waits for the other.
 struct Latest {
-  std::mutex mutex;
-  cv::Mat frame;
-  Clock::time_point captured;
-  long seq = 0;          // frames delivered so far
-  bool ended = false;    // the source ended or failed
+  struct Frame {
+    cv::Mat image;
+    Clock::time_point captured;
+    long seq = 0;
+  };
+  static constexpr int kFresh = 4;
+  Frame buf[3];
+  std::atomic<int> middle{1};
+  int back = 0;   // the camera's
+  int front = 2;  // the render loop's
+  std::atomic<long> delivered{0};
+  // Set once by the camera's thread before `ended` (release); read after `ended` (acquire).
   std::string reason;
-  bool fatal = false;    // wrong frame size: stop the whole run
+  bool fatal = false;  // wrong frame size: stop the whole run
+  std::atomic<bool> ended{false};
+
+  void publish(cv::Mat image, Clock::time_point captured) {
+    Frame& f = buf[back];
+    f.image = std::move(image);
+    f.captured = captured;
+    f.seq = delivered.fetch_add(1, std::memory_order_relaxed) + 1;
+    back = middle.exchange(back | kFresh, std::memory_order_acq_rel) & 3;
+  }
+  // The newest frame if one arrived since the last take, else nullptr.
+  const Frame* take() {
+    if (!(middle.load(std::memory_order_acquire) & kFresh)) return nullptr;
+    front = middle.exchange(front, std::memory_order_acq_rel) & 3;
+    return &buf[front];
+  }
+  void end(std::string why, bool is_fatal) {
+    reason = std::move(why);
+    fatal = is_fatal;
+    ended.store(true, std::memory_order_release);
+  }
 };
 
-double ms_since(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
+double ms_between(Clock::time_point a, Clock::time_point b) {
+  return std::chrono::duration<double, std::milli>(b - a).count();
+}
 
 }  // namespace
 
 void request_stop() { g_stop = true; }
+
+bool EngineOptions::IsValid(std::string* why) const {
+  auto fail = [&](const std::string& m) {
+    if (why) *why = m;
+    return false;
+  };
+  if (!map.IsValid(why)) return false;
+  if (!(duration_s >= 0) || max_frames < 0 || !(fps >= 0) || !(first_frame_timeout_s > 0) || threads < 0)
+    return fail("duration, frames, fps and threads must be >= 0, the first-frame timeout > 0");
+  if (max_camera_threads < 1) return fail("max_camera_threads must be >= 1");
+  return true;
+}
 
 nlohmann::json EngineStats::to_json() const {
   nlohmann::json dropped = nlohmann::json::array();
@@ -46,13 +88,169 @@ nlohmann::json EngineStats::to_json() const {
           {"seconds", seconds},
           {"fps", fps},
           {"render_ms_mean", render_ms_mean},
-          {"latency_ms_mean", latency_ms_mean},
+          {"latency_ms", latency_ms},
           {"latency_ms_max", latency_ms_max},
+          {"oldest_frame_ms_max", oldest_frame_ms_max},
           {"camera_frames", camera_frames},
+          {"camera_fps_min", camera_fps_min},
+          {"camera_fps_max", camera_fps_max},
           {"dropped_frames", dropped_frames},
+          {"camera_threads", camera_threads},
+          {"cameras_live", cameras_live},
+          {"window",
+           {{"seconds", window.seconds},
+            {"fps", window.fps},
+            {"latency_ms", window.latency_ms},
+            {"camera_fps_min", window.camera_fps_min},
+            {"camera_fps_max", window.camera_fps_max}}},
           {"dropped_cameras", dropped},
           {"map", {{"bytes_per_pixel", map_bytes_per_pixel}, {"seconds", map_seconds}, {"from_cache", map_from_cache}}}};
 }
+
+namespace {
+
+// The camera threads: thread t serves the cameras c with c % threads == t, each when its next frame
+// is due (the source's own clock, its fps, or at once for "as fast as it can").
+class CameraThreads {
+ public:
+  CameraThreads(const Rig& rig, std::vector<std::unique_ptr<CameraSource>>& sources,
+                std::vector<std::unique_ptr<Latest>>& latest, const StoreLayout& layout, int max_threads,
+                std::function<void()> notify)
+      : rig_(rig), sources_(sources), latest_(latest), layout_(layout), notify_(std::move(notify)) {
+    const int n = int(sources.size());
+    const int want = std::min(n, std::max(1, max_threads));
+    // Start the threads first, parked until every camera has a thread; if the system refuses a
+    // thread (limits on threads or address space), the cameras share the threads that did start.
+    std::string refused;
+    threads_.reserve(want);
+    for (int t = 0; t < want; ++t) {
+      try {
+        threads_.emplace_back([this, t] { serve(t); });
+      } catch (const std::system_error& e) {
+        refused = e.what();
+        break;
+      }
+    }
+    const int got = int(threads_.size());
+    if (got == 0) {
+      for (int c = 0; c < n; ++c) latest_[c]->end("cannot start a camera thread: " + refused, false);
+      spdlog::error("no camera thread could be started: {}", refused);
+    } else if (got < want) {
+      spdlog::warn("only {} of {} camera threads could be started ({}); the {} cameras share them", got, want,
+                   refused, n);
+    }
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      threads_started_ = got;
+      released_ = true;
+    }
+    cv_.notify_all();
+  }
+  ~CameraThreads() { stop(); }
+  int count() const { return int(threads_.size()); }
+  void stop() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      stop_ = true;
+      released_ = true;
+    }
+    cv_.notify_all();
+    for (auto& t : threads_)
+      if (t.joinable()) t.join();
+  }
+
+ private:
+  struct Cam {
+    int c;
+    Clock::time_point due;
+    double fps;
+  };
+  void serve(int t) {
+    int nthreads = 0;
+    {
+      std::unique_lock<std::mutex> lock(mutex_);
+      cv_.wait(lock, [&] { return released_; });
+      if (stopping()) return;
+      nthreads = threads_started_;
+    }
+    std::vector<Cam> cams;
+    const auto now = Clock::now();
+    bool own_clocks = true;
+    for (int c = t; c < int(sources_.size()); c += nthreads) {
+      cams.push_back({c, now, sources_[c]->fps()});
+      own_clocks = own_clocks && sources_[c]->next_capture() != Clock::time_point{};
+    }
+    // Camera threads run at a lower priority than the render loop: on a busy machine a camera
+    // may deliver late (its frame is reused), but the panorama is never starved by decoding.
+    // Sources with their own clock (simulated sensors) only hand over frames that are ready, at
+    // their capture instants: they keep the normal priority, so that they wake up on time.
+    if (!own_clocks) setpriority(PRIO_PROCESS, static_cast<id_t>(::gettid()), 15);
+    while (!cams.empty() && !stopping()) {
+      // The camera due first; its own clock if it keeps one.
+      for (auto& k : cams)
+        if (const auto own = sources_[k.c]->next_capture(); own != Clock::time_point{}) k.due = own;
+      auto it = std::min_element(cams.begin(), cams.end(), [](const Cam& a, const Cam& b) { return a.due < b.due; });
+      const auto wait = it->due - Clock::now();
+      if (wait > Clock::duration::zero()) {  // (at most 20 ms: then look at `stop` again)
+        std::this_thread::sleep_for(std::min<Clock::duration>(wait, std::chrono::milliseconds(20)));
+        continue;
+      }
+      if (!read_one(it->c)) {
+        cams.erase(it);
+        continue;
+      }
+      if (it->fps > 0) {
+        it->due += std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / it->fps));
+        if (it->due < Clock::now()) it->due = Clock::now();
+      } else {
+        it->due = Clock::now();
+      }
+    }
+  }
+  // Reads one frame of camera c into its buffer; false (and the camera marked ended) at its end.
+  bool read_one(int c) {
+    CameraSource& src = *sources_[c];
+    Latest& slot = *latest_[c];
+    try {
+      cv::Mat frame;  // a new header per frame: the slot keeps a reference (sources.h)
+      if (!src.read(frame)) {
+        slot.end("ended", false);
+        notify_();
+        return false;
+      }
+      if (frame.size() != layout_.size[c]) {
+        slot.end("camera " + std::to_string(rig_.cameras[c].id) + " (" + src.describe() + "): frame is " +
+                     std::to_string(frame.cols) + "x" + std::to_string(frame.rows) + ", the rig says " +
+                     std::to_string(layout_.size[c].width) + "x" + std::to_string(layout_.size[c].height),
+                 true);
+        notify_();
+        return false;
+      }
+      const auto own = src.last_capture();
+      slot.publish(std::move(frame), own != Clock::time_point{} ? own : Clock::now());
+    } catch (const std::exception& e) {
+      slot.end(e.what(), false);
+      notify_();
+      return false;
+    }
+    notify_();
+    return true;
+  }
+  bool stopping() const { return stop_.load(std::memory_order_relaxed); }
+  const Rig& rig_;
+  std::vector<std::unique_ptr<CameraSource>>& sources_;
+  std::vector<std::unique_ptr<Latest>>& latest_;
+  StoreLayout layout_;
+  std::function<void()> notify_;
+  std::vector<std::thread> threads_;
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  int threads_started_ = 0;
+  bool released_ = false;
+  std::atomic<bool> stop_{false};
+};
+
+}  // namespace
 
 EngineStats run_engine(const Rig& rig, std::vector<std::unique_ptr<CameraSource>> sources,
                        std::vector<std::unique_ptr<Sink>>& sinks, const EngineOptions& opt) {
@@ -60,6 +258,7 @@ EngineStats run_engine(const Rig& rig, std::vector<std::unique_ptr<CameraSource>
   if (sources.size() != n)
     throw std::invalid_argument("run_engine: " + std::to_string(sources.size()) + " sources for " +
                                 std::to_string(n) + " cameras");
+  if (std::string why; !opt.IsValid(&why)) throw std::invalid_argument("run_engine: " + why);
   g_stop = false;
   EngineStats stats;
   MapOptions mopt = opt.map;
@@ -82,78 +281,49 @@ EngineStats run_engine(const Rig& rig, std::vector<std::unique_ptr<CameraSource>
   }
   std::vector<std::unique_ptr<Latest>> latest;
   for (size_t c = 0; c < n; ++c) latest.push_back(std::make_unique<Latest>());
-  std::atomic<bool> stop{false};
   std::mutex wake_mutex;
   std::condition_variable wake;
-  std::vector<std::thread> threads;
-  const StoreLayout L = map->layout;  // a copy: the map is swapped when a camera drops
-  for (size_t c = 0; c < n; ++c)
-    threads.emplace_back([&, c] {
-      // Camera threads run at a lower priority than the render loop: on a busy machine a camera
-      // may deliver late (its frame is reused), but the panorama is never starved by decoding.
-      setpriority(PRIO_PROCESS, static_cast<id_t>(::gettid()), 15);
-      CameraSource& src = *sources[c];
-      Latest& slot = *latest[c];
-      const double fps = src.fps();
-      auto next_due = Clock::now();
-      std::string reason = "ended";
-      bool fatal = false;
-      try {
-        cv::Mat frame;
-        while (!stop) {
-          if (!src.read(frame)) break;
-          if (frame.size() != L.size[c]) {
-            reason = "camera " + std::to_string(rig.cameras[c].id) + " (" + src.describe() + "): frame is " +
-                     std::to_string(frame.cols) + "x" + std::to_string(frame.rows) + ", the rig says " +
-                     std::to_string(L.size[c].width) + "x" + std::to_string(L.size[c].height);
-            fatal = true;
-            break;
-          }
-          {
-            std::lock_guard<std::mutex> lock(slot.mutex);
-            slot.frame = frame.clone();
-            slot.captured = Clock::now();
-            ++slot.seq;
-          }
-          wake.notify_one();
-          if (fps > 0) {
-            next_due += std::chrono::microseconds(long(1e6 / fps));
-            const auto now = Clock::now();
-            if (next_due < now) next_due = now;
-            while (!stop && Clock::now() < next_due)
-              std::this_thread::sleep_for(std::min<Clock::duration>(next_due - Clock::now(), std::chrono::milliseconds(20)));
-          }
-        }
-      } catch (const std::exception& e) {
-        reason = e.what();
-      }
-      {
-        std::lock_guard<std::mutex> lock(slot.mutex);
-        slot.ended = true;
-        slot.reason = reason;
-        slot.fatal = fatal;
-      }
-      wake.notify_one();
-    });
-
-  auto shutdown = [&] {
-    stop = true;
-    wake.notify_all();
-    for (auto& t : threads)
-      if (t.joinable()) t.join();
-  };
+  // A copy of the layout: the map is swapped when a camera drops.
+  // The render loop waits for new frames only when it is not paced (fps 0).
+  CameraThreads cameras(rig, sources, latest, map->layout, opt.max_camera_threads, [&wake, paced = opt.fps > 0] {
+    if (!paced) wake.notify_one();
+  });
+  stats.camera_threads = cameras.count();
 
   FrameStore store(map->layout);
   std::vector<long> used_seq(n, 0);
   std::vector<Clock::time_point> captured(n);
   std::vector<bool> live(n, true), have(n, false);
+  // Per camera: the sequence number and capture instant of its first frame, of its newest frame
+  // at the window's start and of its newest frame (rates = frames between two capture instants).
+  std::vector<long> seq_first(n, 0), seq_window(n, 0);
+  std::vector<Clock::time_point> t_first(n), t_window(n), t_last(n);
   std::future<CompiledMap> pending;
   std::vector<bool> pending_active;
   cv::Mat pano;
-  double render_ms_sum = 0, latency_sum = 0;
+  PanoramaInfo info;
+  double render_ms_sum = 0, latency_sum = 0, window_latency_sum = 0;
+  long window_frames = 0;
   const auto t0 = Clock::now();
-  auto last_progress = t0;
+  auto window_start = t0;
   auto next_frame = t0;
+  // Frames/s of the slowest and the fastest camera since (seq, t) = its window start or its first
+  // frame; live cameras, or every camera once all have ended.
+  auto camera_rates = [&](const std::vector<long>& seq, const std::vector<Clock::time_point>& t, double* lo,
+                          double* hi) {
+    *lo = 0;
+    *hi = 0;
+    bool any = false;
+    const bool all_ended = std::none_of(live.begin(), live.end(), [](bool b) { return b; });
+    for (size_t c = 0; c < n; ++c) {
+      if (!have[c] || (!live[c] && !all_ended)) continue;
+      const double s = std::chrono::duration<double>(t_last[c] - t[c]).count();
+      const double f = s > 0 ? (used_seq[c] - seq[c]) / s : 0;
+      *lo = any ? std::min(*lo, f) : f;
+      *hi = any ? std::max(*hi, f) : f;
+      any = true;
+    }
+  };
   try {
     while (!g_stop) {
       // Pace the panorama rate; otherwise wait for any new frame.
@@ -175,17 +345,21 @@ EngineStats run_engine(const Rig& rig, std::vector<std::unique_ptr<CameraSource>
       for (size_t c = 0; c < n; ++c) {
         if (!live[c]) continue;
         Latest& slot = *latest[c];
-        std::lock_guard<std::mutex> lock(slot.mutex);
-        if (slot.fatal) throw SourceError(slot.reason);
-        if (slot.seq > used_seq[c]) {
-          store.set(int(c), slot.frame);
-          stats.dropped_frames += used_seq[c] > 0 ? slot.seq - used_seq[c] - 1 : slot.seq - 1;
-          used_seq[c] = slot.seq;
-          captured[c] = slot.captured;
+        const bool ended = slot.ended.load(std::memory_order_acquire);
+        if (ended && slot.fatal) throw SourceError(slot.reason);
+        if (const Latest::Frame* f = slot.take()) {
+          store.set(int(c), f->image);
+          stats.dropped_frames += f->seq - used_seq[c] - 1;
+          if (!have[c]) {
+            seq_first[c] = seq_window[c] = f->seq;
+            t_first[c] = t_window[c] = f->captured;
+          }
+          used_seq[c] = f->seq;
+          captured[c] = t_last[c] = f->captured;
           have[c] = true;
           fresh = true;
         }
-        if (slot.ended) {
+        if (ended) {
           live[c] = false;
           newly_dead.push_back(int(c));
           stats.dropped_cameras.push_back({int(c), rig.cameras[c].id, slot.reason, stats.frames, false});
@@ -232,26 +406,51 @@ EngineStats run_engine(const Rig& rig, std::vector<std::unique_ptr<CameraSource>
       }
       const auto r0 = Clock::now();
       render(*map, store, pano, {.threads = opt.threads});
-      render_ms_sum += ms_since(r0);
-      for (auto& s : sinks) s->write(pano, store);
-      Clock::time_point oldest = Clock::now();
+      const auto done = Clock::now();
+      render_ms_sum += ms_between(r0, done);
+      // Frame ages (engine.h, "Latency").
+      info.index = stats.frames;
+      info.rendered = done;
+      info.captured.assign(n, Clock::time_point{});
+      double age_sum = 0, oldest = 0;
+      int used = 0;
       for (size_t c = 0; c < n; ++c)
-        if ((live[c] || finished) && have[c]) oldest = std::min(oldest, captured[c]);
-      const double lat = ms_since(oldest);
-      latency_sum += lat;
-      stats.latency_ms_max = std::max(stats.latency_ms_max, lat);
+        if ((live[c] || finished) && have[c]) {
+          info.captured[c] = captured[c];
+          const double age = ms_between(captured[c], done);
+          age_sum += age;
+          oldest = std::max(oldest, age);
+          ++used;
+        }
+      info.latency_ms = used > 0 ? age_sum / used : 0;
+      latency_sum += info.latency_ms;
+      window_latency_sum += info.latency_ms;
+      ++window_frames;
+      stats.latency_ms_max = std::max(stats.latency_ms_max, info.latency_ms);
+      stats.oldest_frame_ms_max = std::max(stats.oldest_frame_ms_max, oldest);
+      if (opt.on_panorama) opt.on_panorama(pano, info);
+      for (auto& s : sinks) s->write(pano, store);
       ++stats.frames;
       if (finished || (opt.max_frames > 0 && stats.frames >= opt.max_frames)) break;
-      if (std::chrono::duration<double>(Clock::now() - last_progress).count() > 0.5) {
-        last_progress = Clock::now();
+      const double window_s = std::chrono::duration<double>(Clock::now() - window_start).count();
+      if (window_s > 0.5) {
         stats.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
         stats.fps = stats.frames / stats.seconds;
-        stats.latency_ms_mean = latency_sum / stats.frames;
+        stats.latency_ms = latency_sum / stats.frames;
         stats.camera_frames = 0;
         for (size_t c = 0; c < n; ++c) stats.camera_frames += used_seq[c];
-        nlohmann::json j = stats.to_json();
-        j["latency_ms"] = stats.latency_ms_mean;
-        j["cameras_live"] = std::count(live.begin(), live.end(), true);
+        camera_rates(seq_first, t_first, &stats.camera_fps_min, &stats.camera_fps_max);
+        stats.window.seconds = window_s;
+        stats.window.fps = window_frames / window_s;
+        stats.window.latency_ms = window_latency_sum / window_frames;
+        camera_rates(seq_window, t_window, &stats.window.camera_fps_min, &stats.window.camera_fps_max);
+        stats.cameras_live = int(std::count(live.begin(), live.end(), true));
+        seq_window = used_seq;
+        t_window = t_last;
+        window_start = Clock::now();
+        window_frames = 0;
+        window_latency_sum = 0;
+        const nlohmann::json j = stats.to_json();
         for (auto& s : sinks) s->set_stats(j);
         if (opt.on_progress) opt.on_progress(j);
       }
@@ -262,12 +461,12 @@ EngineStats run_engine(const Rig& rig, std::vector<std::unique_ptr<CameraSource>
         if (!pending_active[d.index]) d.remapped = true;
     }
   } catch (...) {
-    shutdown();
+    cameras.stop();
     if (pending.valid()) pending.wait();
     for (auto& s : sinks) s->abort();
     throw;
   }
-  shutdown();
+  cameras.stop();
   stats.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
   if (stats.frames == 0) {
     for (auto& s : sinks) s->abort();
@@ -284,10 +483,12 @@ EngineStats run_engine(const Rig& rig, std::vector<std::unique_ptr<CameraSource>
   }
   for (auto& s : sinks) s->finish();
   stats.camera_frames = 0;
-  for (size_t c = 0; c < n; ++c) stats.camera_frames += latest[c]->seq;
+  for (size_t c = 0; c < n; ++c) stats.camera_frames += latest[c]->delivered.load();
   stats.fps = stats.frames / stats.seconds;
   stats.render_ms_mean = render_ms_sum / stats.frames;
-  stats.latency_ms_mean = latency_sum / stats.frames;
+  stats.latency_ms = latency_sum / stats.frames;
+  camera_rates(seq_first, t_first, &stats.camera_fps_min, &stats.camera_fps_max);
+  stats.cameras_live = int(std::count(live.begin(), live.end(), true));
   return stats;
 }
 

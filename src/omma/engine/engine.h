@@ -3,8 +3,22 @@
 // compiled map and hands the panorama to the sinks. A camera that ends or fails is dropped: the
 // map is recompiled in the background without it (its static weights renormalised among the
 // others, eq. 2.8 ff.), and until then its last frame is used, so the panorama never stalls.
+//
+// The latest-frame buffer of a camera is a lock-free triple buffer: the camera publishes a frame
+// by swapping one index, the render loop takes the newest one by swapping another, so a camera
+// delivering faster than the renderer only overwrites (it can never hold a lock the renderer
+// waits for). Cameras beyond `max_camera_threads` share threads (each thread serves its cameras
+// in the order their next frames are due).
+//
+// Latency (the `latency_ms` of EngineStats, of the progress line and of the live view's
+// /stats.json, one figure): the mean age of the camera frames a panorama is made of, on the
+// steady clock, from each frame's capture instant to the moment the panorama is rendered (before
+// the sinks encode it), averaged over the live cameras of the panorama and then over the
+// panoramas. A frame's capture instant is the source's own (sim: sources: the simulated sensor's
+// clock) or else the moment the source delivered it.
 #pragma once
 
+#include <chrono>
 #include <filesystem>
 #include <functional>
 #include <memory>
@@ -20,6 +34,24 @@
 
 namespace omma::engine {
 
+// What one panorama was made of.
+struct PanoramaInfo {
+  long index = 0;
+  Clock::time_point rendered;                // when the render finished
+  std::vector<Clock::time_point> captured;   // per rig camera: its frame's capture instant
+                                             // (time_point{} for a camera not used)
+  double latency_ms = 0;                     // mean age of the frames used (see above)
+};
+
+// Statistics over an interval of the run (the last progress interval, about 0.5 s).
+struct WindowStats {
+  double seconds = 0;
+  double fps = 0;              // panoramas/s
+  double latency_ms = 0;       // mean frame age of its panoramas
+  double camera_fps_min = 0;   // frames delivered per second by the slowest live camera
+  double camera_fps_max = 0;
+};
+
 struct EngineOptions {
   MapOptions map;
   std::filesystem::path cache_dir;  // empty: no map cache
@@ -28,8 +60,12 @@ struct EngineOptions {
   double fps = 30;                  // panorama rate (0: render whenever a camera has a new frame)
   double first_frame_timeout_s = 5; // a camera without a first frame by then is dropped
   int threads = 0;                  // renderer threads (0: all)
-  // Called about twice a second from the render loop with the running statistics.
+  int max_camera_threads = 64;      // camera threads at most; more cameras share them
+  // Called about twice a second from the render loop with the running statistics (to_json()).
   std::function<void(const nlohmann::json&)> on_progress;
+  // Called after every render (before the sinks), from the render loop (tests, measurements).
+  std::function<void(const cv::Mat& panorama, const PanoramaInfo&)> on_panorama;
+  bool IsValid(std::string* why = nullptr) const;
 };
 
 struct DroppedCamera {
@@ -45,10 +81,16 @@ struct EngineStats {
   double seconds = 0;            // wall time of the render loop
   double fps = 0;
   double render_ms_mean = 0;     // render time per panorama
-  double latency_ms_mean = 0;    // capture of the oldest frame used -> panorama done, mean
-  double latency_ms_max = 0;
+  double latency_ms = 0;         // mean frame age (see above), mean over the panoramas
+  double latency_ms_max = 0;     // the largest mean frame age of one panorama
+  double oldest_frame_ms_max = 0;  // the oldest frame used in any panorama
   long camera_frames = 0;        // frames delivered by the cameras
+  double camera_fps_min = 0;     // frames/s delivered by the slowest / fastest live camera
+  double camera_fps_max = 0;     //   (from its first to its last frame)
   long dropped_frames = 0;       // camera frames overwritten before any panorama used them
+  int camera_threads = 0;        // threads the cameras ran on
+  int cameras_live = 0;          // cameras not dropped
+  WindowStats window;            // the last interval
   std::vector<DroppedCamera> dropped_cameras;
   double map_bytes_per_pixel = 0;
   double map_seconds = 0;

@@ -15,18 +15,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// Random-texture frames for every camera of the rig (cameras disagree entirely: the hardest case
-// for a blend, so any difference in taps shows).
-std::vector<cv::Mat> random_frames(const Rig& rig, int seed) {
-  cv::RNG rng(seed);
-  std::vector<cv::Mat> frames;
-  for (const RigCamera& c : rig.cameras) {
-    cv::Mat f(c.in.height, c.in.width, CV_8UC3);
-    rng.fill(f, cv::RNG::UNIFORM, 0, 256);
-    frames.push_back(f);
-  }
-  return frames;
-}
+// engine::random_frames (synthetic.h): random-texture frames, cameras disagree entirely, the
+// hardest case for a blend, so any difference in taps shows.
 
 TEST(PanoRender, BandsGiveTheSamePanoramaAsOneMap) {
   const Rig rig = *design::builtin_rig("gigaeye-44-skip5");  // 432 x 324 per camera

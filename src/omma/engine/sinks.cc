@@ -14,6 +14,7 @@
 #include <spdlog/spdlog.h>
 
 #include "omma/core/io.h"
+#include "omma/engine/web_assets.h"
 
 namespace omma::engine {
 namespace fs = std::filesystem;
@@ -22,6 +23,16 @@ namespace {
 std::string lower(std::string s) {
   for (auto& c : s) c = char(std::tolower((unsigned char)c));
   return s;
+}
+
+// Removes a temporary file that an earlier run writing `target` left behind (it was killed before
+// it could finish), naming it in a warning.
+void remove_leftover(const fs::path& tmp, const fs::path& target) {
+  std::error_code ec;
+  if (!fs::exists(tmp, ec)) return;
+  fs::remove(tmp, ec);
+  spdlog::warn("{} the temporary file {} of an interrupted earlier run writing {}", ec ? "could not remove" : "removed",
+               tmp.string(), target.string());
 }
 
 class VideoSink : public Sink {
@@ -34,6 +45,7 @@ class VideoSink : public Sink {
     std::error_code ec;
     if (!fs::is_directory(dir, ec)) throw SinkError("cannot write video " + path.string() + ": folder " + dir.string() + " does not exist");
     tmp_ = dir / fmt::format(".{}.partial{}", path.stem().string(), ext);  // (fmt: GCC 12 -Wrestrict false positive on "." + string)
+    remove_leftover(tmp_, path_);
     if (!writer_.open(tmp_.string(), cv::CAP_FFMPEG, fourcc, fps, size, true) || !writer_.isOpened()) {
       fs::remove(tmp_, ec);
       throw SinkError("cannot write video " + path.string() + " (VideoWriter did not open; folder writable?)");
@@ -49,6 +61,13 @@ class VideoSink : public Sink {
     if (frames_ == 0) {
       fs::remove(tmp_, ec);
       throw SinkError("no frames were rendered: video " + path_.string() + " not written");
+    }
+    // VideoWriter reports no write errors: check that the file plays to its last frame before it
+    // takes the final name (a full disk leaves a file without its index, or short).
+    if (const std::string bad = check_playable(); !bad.empty()) {
+      fs::remove(tmp_, ec);
+      throw SinkError("video " + path_.string() + " could not be written completely (disk full?): " + bad +
+                      "; nothing was left under its name");
     }
     fs::rename(tmp_, path_, ec);
     if (ec) {
@@ -66,6 +85,18 @@ class VideoSink : public Sink {
   std::string describe() const override { return path_.string(); }
 
  private:
+  // Empty if the temporary file opens, holds the frames written and decodes its last one.
+  std::string check_playable() const {
+    cv::VideoCapture cap;
+    if (!cap.open(tmp_.string(), cv::CAP_FFMPEG) || !cap.isOpened()) return "it does not open";
+    const long count = long(cap.get(cv::CAP_PROP_FRAME_COUNT));
+    // Matroska gives the count from its duration (+-1 frame); MP4 and AVI exactly.
+    if (count < frames_ - 1) return fmt::format("it holds {} of {} frames", count, frames_);
+    cap.set(cv::CAP_PROP_POS_FRAMES, double(std::min(count, frames_) - 1));
+    cv::Mat last;
+    if (!cap.read(last) || last.empty()) return "its last frame does not decode";
+    return {};
+  }
   fs::path path_, tmp_;
   cv::VideoWriter writer_;
   long frames_ = 0;
@@ -78,6 +109,12 @@ class PngSink : public Sink {
     std::error_code ec;
     fs::create_directories(dir, ec);
     if (ec || !fs::is_directory(dir)) throw SinkError("cannot create PNG folder " + dir.string() + ": " + ec.message());
+    // Temporary files of frames (core/io.h: .frame_NNNNNN.tmpRANDOM.png) left by a killed run.
+    for (const auto& e : fs::directory_iterator(dir, ec)) {
+      const std::string name = e.path().filename().string();
+      if (name.rfind(".frame_", 0) == 0 && name.find(".tmp") != std::string::npos && e.path().extension() == ".png")
+        remove_leftover(e.path(), dir / name.substr(1, name.find(".tmp") - 1).append(".png"));
+    }
     // Probe that the folder is writable.
     const fs::path probe = dir / ".omma-write-probe";
     FILE* f = std::fopen(probe.c_str(), "wb");
@@ -113,40 +150,62 @@ class PassthroughSink : public Sink {
   std::unique_ptr<Sink> inner_;
 };
 
-const char* kPage = R"(<!doctype html>
-<html><head><meta charset="utf-8"><title>omma live view</title>
-<style>body{background:#111;color:#ddd;font-family:sans-serif;margin:0;text-align:center}
-img{max-width:100vw;max-height:92vh}#s{font-size:13px;padding:4px}</style></head>
-<body><img id="v" src="/stream.mjpg" alt="omma panorama"><div id="s"></div>
-<script>
-setInterval(async()=>{try{const r=await fetch('/stats.json');const j=await r.json();
-document.getElementById('s').textContent=`${j.frames} frames, ${(j.fps||0).toFixed(1)} fps, `+
-`latency ${(j.latency_ms||0).toFixed(1)} ms, ${j.cameras_live} cameras live`;}catch(e){}},1000);
-</script></body></html>
-)";
-
+// The live view (sinks.h). The page and its viewer are files of web/, embedded at build time
+// (web_assets.h).
 class HttpSink : public Sink {
  public:
-  HttpSink(int port, int quality) : port_(port), quality_(quality) {
-    server_.Get("/", [](const httplib::Request&, httplib::Response& res) { res.set_content(kPage, "text/html"); });
+  HttpSink(int port, cv::Size size, const SinkOptions& opt)
+      : port_(port), quality_(opt.jpeg_quality), max_streams_(opt.max_streams) {
+    if (max_streams_ < 1 || max_streams_ > kMaxStreams)
+      throw SinkError(fmt::format("live view: the stream limit must be 1-{}, got {}", kMaxStreams, max_streams_));
+    config_ = nlohmann::json{{"projection", to_string(opt.projection)},
+                             {"width", size.width},
+                             {"height", size.height},
+                             {"max_streams", max_streams_},
+                             {"viewer", viewer_embedded()}}
+                  .dump();
+    // Streams hold a worker each for as long as they play; the pool has `max_streams` workers for
+    // them and kSpareWorkers more, so the page, the stats and single frames always find one.
+    const size_t workers = size_t(max_streams_) + kSpareWorkers;
+    server_.new_task_queue = [workers] { return new httplib::ThreadPool(workers); };
+    server_.Get("/", [](const httplib::Request&, httplib::Response& res) { serve_asset("/live.html", res); });
+    server_.Get(R"(/viewer/([A-Za-z0-9_.-]+))", [](const httplib::Request& req, httplib::Response& res) {
+      serve_asset(fmt::format("/{}", std::string(req.matches[1])), res);  // (fmt: GCC 12 -Wrestrict)
+    });
+    server_.Get("/favicon.ico", [](const httplib::Request&, httplib::Response& res) { res.status = 204; });
+    server_.Get("/config.json", [this](const httplib::Request&, httplib::Response& res) {
+      res.set_content(config_, "application/json");
+    });
     server_.Get("/stats.json", [this](const httplib::Request&, httplib::Response& res) {
+      res.set_header("Cache-Control", "no-cache");
       std::lock_guard<std::mutex> lock(mutex_);
       res.set_content(stats_.dump(), "application/json");
     });
     server_.Get("/frame.jpg", [this](const httplib::Request&, httplib::Response& res) {
       std::unique_lock<std::mutex> lock(mutex_);
-      cv_.wait_for(lock, std::chrono::seconds(5), [&] { return seq_ > 0 || stopping_; });
+      cv_.wait_for(lock, std::chrono::seconds(2), [&] { return seq_ > 0 || stopping_; });
       if (jpeg_.empty()) {
         res.status = 503;
+        res.set_content("no frame yet", "text/plain");
         return;
       }
+      res.set_header("Cache-Control", "no-cache");
       res.set_content(std::string(jpeg_.begin(), jpeg_.end()), "image/jpeg");
     });
     server_.Get("/stream.mjpg", [this](const httplib::Request&, httplib::Response& res) {
+      if (streams_.fetch_add(1) >= max_streams_) {
+        streams_.fetch_sub(1);
+        res.status = 503;
+        res.set_header("Retry-After", "5");
+        res.set_content(fmt::format("omma live view: {} viewers are streaming already (the limit)", max_streams_),
+                        "text/plain");
+        return;
+      }
       auto last = std::make_shared<long>(0);
       res.set_header("Cache-Control", "no-cache");
       res.set_chunked_content_provider(
-          "multipart/x-mixed-replace; boundary=ommaframe", [this, last](size_t, httplib::DataSink& sink) {
+          "multipart/x-mixed-replace; boundary=ommaframe",
+          [this, last](size_t, httplib::DataSink& sink) {
             std::vector<uchar> jpeg;
             {
               std::unique_lock<std::mutex> lock(mutex_);
@@ -155,7 +214,7 @@ class HttpSink : public Sink {
                 sink.done();
                 return false;
               }
-              if (seq_ == *last) return true;  // nothing new yet; keep the connection
+              if (seq_ == *last) return sink.is_writable();  // nothing new yet; keep a live connection
               *last = seq_;
               jpeg = jpeg_;
             }
@@ -164,7 +223,8 @@ class HttpSink : public Sink {
             if (!sink.write(head.data(), head.size())) return false;
             if (!sink.write(reinterpret_cast<const char*>(jpeg.data()), jpeg.size())) return false;
             return sink.write("\r\n", 2);
-          });
+          },
+          [this](bool) { streams_.fetch_sub(1); });
     });
     server_.set_keep_alive_max_count(1);
     // SO_REUSEADDR only: httplib's default also sets SO_REUSEPORT, which would let a second server
@@ -176,29 +236,72 @@ class HttpSink : public Sink {
     if (!server_.bind_to_port("127.0.0.1", port))
       throw SinkError("cannot serve the live view on 127.0.0.1:" + std::to_string(port) +
                       " (port in use or not permitted)");
-    thread_ = std::thread([this] { server_.listen_after_bind(); });
+    thread_ = std::thread([this] {
+      try {
+        server_.listen_after_bind();
+      } catch (const std::exception& e) {  // e.g. the worker threads could not be started
+        spdlog::error("live view on 127.0.0.1:{} stopped: {}", port_, e.what());
+      }
+    });
+    try {
+      encoder_ = std::thread([this] { encode(); });
+    } catch (...) {
+      stop();
+      throw;
+    }
     spdlog::info("live view: http://127.0.0.1:{}/", port);
   }
   ~HttpSink() override { stop(); }
+  // The panorama is JPEG-encoded in the sink's own thread, so that encoding never slows the render
+  // loop; if the encoder is still busy with the previous panorama, the newer one replaces it.
   void write(const cv::Mat& pano, const FrameStore&) override {
-    std::vector<uchar> buf;
-    cv::imencode(".jpg", pano, buf, {cv::IMWRITE_JPEG_QUALITY, quality_});
     {
       std::lock_guard<std::mutex> lock(mutex_);
-      jpeg_.swap(buf);
-      ++seq_;
+      pano.copyTo(pending_);
+      has_pending_ = true;
     }
     cv_.notify_all();
   }
   void set_stats(const nlohmann::json& s) override {
     std::lock_guard<std::mutex> lock(mutex_);
     stats_ = s;
+    stats_["viewers"] = streams_.load();
   }
   void finish() override { stop(); }
   void abort() override { stop(); }
   std::string describe() const override { return "http://127.0.0.1:" + std::to_string(port_) + "/"; }
 
  private:
+  static constexpr int kSpareWorkers = 4;
+  static constexpr int kMaxStreams = 256;  // each stream is a thread
+  static void serve_asset(const std::string& path, httplib::Response& res) {
+    const WebAsset* a = find_web_asset(path);
+    if (!a) {
+      res.status = 404;
+      return;
+    }
+    res.set_content(std::string(a->data), std::string(a->type));
+  }
+  void encode() {
+    cv::Mat pano;
+    std::vector<uchar> buf;
+    for (;;) {
+      {
+        std::unique_lock<std::mutex> lock(mutex_);
+        cv_.wait(lock, [&] { return has_pending_ || stopping_; });
+        if (stopping_) return;
+        cv::swap(pano, pending_);
+        has_pending_ = false;
+      }
+      cv::imencode(".jpg", pano, buf, {cv::IMWRITE_JPEG_QUALITY, quality_});
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        jpeg_.swap(buf);
+        ++seq_;
+      }
+      cv_.notify_all();
+    }
+  }
   void stop() {
     {
       std::lock_guard<std::mutex> lock(mutex_);
@@ -208,15 +311,20 @@ class HttpSink : public Sink {
     cv_.notify_all();
     server_.stop();
     if (thread_.joinable()) thread_.join();
+    if (encoder_.joinable()) encoder_.join();
   }
-  int port_, quality_;
+  int port_, quality_, max_streams_;
+  std::string config_;
   httplib::Server server_;
-  std::thread thread_;
+  std::thread thread_, encoder_;
   std::mutex mutex_;
   std::condition_variable cv_;
-  std::vector<uchar> jpeg_;
+  cv::Mat pending_;          // the newest panorama, not encoded yet
+  bool has_pending_ = false;
+  std::vector<uchar> jpeg_;  // the newest encoded one, number seq_
   long seq_ = 0;
   bool stopping_ = false;
+  std::atomic<int> streams_{0};
   nlohmann::json stats_ = nlohmann::json::object();
 };
 
@@ -242,9 +350,9 @@ std::unique_ptr<Sink> open_sink(const std::string& spec, const Rig& rig, cv::Siz
       throw SinkError("sink '" + spec + "': the live view serves on 127.0.0.1 only");
     std::string port = rest.substr(colon + 1);
     if (!port.empty() && port.back() == '/') port.pop_back();
-    return std::make_unique<HttpSink>(parse_port(spec, port), opt.jpeg_quality);
+    return std::make_unique<HttpSink>(parse_port(spec, port), pano_size, opt);
   }
-  if (spec.rfind("http:", 0) == 0) return std::make_unique<HttpSink>(parse_port(spec, spec.substr(5)), opt.jpeg_quality);
+  if (spec.rfind("http:", 0) == 0) return std::make_unique<HttpSink>(parse_port(spec, spec.substr(5)), pano_size, opt);
   if (spec.rfind("cam:", 0) == 0) {
     const std::string rest = spec.substr(4);
     const size_t colon = rest.find(':');

@@ -1,15 +1,24 @@
 // Sinks of the live engine (issue 5 point 3). Sink specs (`omma run --sink`):
 //   FILE.mp4 | FILE.mkv | FILE.avi   video file (OpenCV VideoWriter: mp4v in mp4, MJPG in mkv/avi),
-//                                    written to a temporary file renamed into place at the end
+//                                    written to a temporary file (.NAME.partial.EXT beside it),
+//                                    checked (it opens and holds every frame) and renamed into
+//                                    place at the end; a failed check (full disk) removes it
 //   png:DIR  or  DIR/                PNG sequence DIR/frame_000000.png ... (each written atomically)
 //   cam:ID:SINK                      camera ID's own frames passed through to SINK (a video file or
 //                                    PNG folder) instead of the panorama: the ASIC's output
 //                                    multiplexer (thesis §6.3)
-//   http:PORT  or  http://127.0.0.1:PORT   live view on 127.0.0.1: `/` an HTML page showing the
-//                                    video, `/stream.mjpg` the MJPEG stream, `/frame.jpg` the latest
-//                                    frame, `/stats.json` the running statistics
+//   http:PORT  or  http://127.0.0.1:PORT   live view on 127.0.0.1: `/` a 360-degree viewer page
+//                                    (Pannellum, embedded in the binary: web/), `/stream.mjpg` the
+//                                    MJPEG stream, `/frame.jpg` the latest frame, `/stats.json` the
+//                                    running statistics, `/config.json` projection and size.
+//                                    At most `max_streams` viewers stream at once (the next one gets
+//                                    503); they have their own worker threads, so they never block
+//                                    the page, the stats or a single frame.
 // Opening a sink checks that it can be written (folder creatable, writer opens, port free) and
-// throws SinkError otherwise; a failed or aborted run leaves no partial video file behind.
+// throws SinkError otherwise; a failed or aborted run leaves no partial video file behind. An
+// interrupted run (SIGINT, SIGTERM: `omma run` stops cleanly) leaves a playable file; one killed
+// outright leaves only the temporary file, which the next run writing that output removes (with
+// a warning naming it).
 #pragma once
 
 #include <memory>
@@ -19,6 +28,7 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 
+#include "omma/core/grid.h"
 #include "omma/core/rig.h"
 #include "omma/engine/compiled_map.h"
 
@@ -43,8 +53,10 @@ class Sink {
 };
 
 struct SinkOptions {
-  double fps = 30;       // frame rate written into video files
+  double fps = 30;        // frame rate written into video files
   int jpeg_quality = 80;  // live view
+  int max_streams = 8;    // live view: concurrent /stream.mjpg viewers (the page is one)
+  Projection projection = Projection::kVr180;  // live view: how the viewer shows the panorama
 };
 
 // Opens one sink. `pano_size` is the panorama size; the rig gives camera sizes for cam:ID sinks.

@@ -15,11 +15,10 @@
 
 #include "omma/core/frames.h"
 #include "omma/core/io.h"
+#include "omma/engine/sim_loop.h"
 #include "omma/engine/synthetic.h"
 #include "omma/isp/isp.h"
 #include "omma/isp/link.h"
-#include "omma/sim/render.h"
-#include "omma/sim/scene.h"
 
 namespace omma::engine {
 namespace fs = std::filesystem;
@@ -151,51 +150,6 @@ class PanoView : public CameraSource {
   std::string spec_;
 };
 
-// The simulator (sim/): the dome moving through a scene; each camera renders its own view at the
-// pose of the moment it is read (colon: along the tube axis at `speed` mm/s; other scenes: turning
-// about the dome axis at `speed` deg/s).
-struct SimScene {
-  std::unique_ptr<sim::Scene> scene;
-  bool translate = false;
-  double speed = 5;
-  sim::CameraEffects effects = sim::CameraEffects::ideal(1);
-  bool raw = false;  // deliver the 12-bit raw mosaic (SourceOptions::raw)
-  std::chrono::steady_clock::time_point t0 = std::chrono::steady_clock::now();
-};
-
-class SimView : public CameraSource {
- public:
-  SimView(std::shared_ptr<SimScene> s, RigCamera cam, double fps, std::string spec)
-      : scene_(std::move(s)), cam_(std::move(cam)), fps_(fps), spec_(std::move(spec)) {}
-  bool read(cv::Mat& frame) override {
-    const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - scene_->t0).count();
-    sim::DomePose pose;
-    if (scene_->translate) {
-      pose.translation_mm = Vec3(0, 0, scene_->speed * t);
-    } else {
-      const double a = deg2rad(scene_->speed * t);
-      pose.rotation = Eigen::AngleAxisd(a, Vec3::UnitZ()).toRotationMatrix();
-    }
-    sim::CameraEffects fx = scene_->effects;
-    fx.seed = ++n_;
-    if (scene_->raw) {
-      frame = sim::render_camera(*scene_->scene, cam_, pose, fx, true).raw;
-      return true;
-    }
-    frame = sim::render_camera(*scene_->scene, cam_, pose, fx, false).image;
-    return true;
-  }
-  double fps() const override { return fps_; }
-  std::string describe() const override { return spec_ + " camera " + std::to_string(cam_.id); }
-
- private:
-  std::shared_ptr<SimScene> scene_;
-  RigCamera cam_;
-  double fps_;
-  std::string spec_;
-  uint64_t n_ = 0;
-};
-
 // A raw sensor-link file (isp/link.h, chips packed 8 per byte) of one camera: the link decoder
 // runs in a background thread into a small queue; each frame's damaged rows are concealed and the
 // ISP (isp/isp.h) develops it to 8-bit BGR.
@@ -208,7 +162,11 @@ class LinkFile : public CameraSource {
     if (!in) throw SourceError("cannot open sensor-link file " + path.string());
     bytes_.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
     if (bytes_.empty()) throw SourceError("sensor-link file " + path.string() + " is empty");
-    thread_ = std::thread([this] { decode(); });
+    try {
+      thread_ = std::thread([this] { decode(); });
+    } catch (const std::system_error& e) {
+      throw SourceError("cannot start the decoder thread of sensor-link file " + path.string() + ": " + e.what());
+    }
   }
   ~LinkFile() override {
     {
@@ -354,24 +312,9 @@ std::vector<std::unique_ptr<CameraSource>> open_sources(const Rig& rig, const st
     return out;
   }
   if (specs.size() == 1 && specs[0].rfind("sim:", 0) == 0) {
-    std::string spec = specs[0].substr(4);
-    auto scene = std::make_shared<SimScene>();
-    const bool colon = spec.rfind("colon", 0) == 0;
-    scene->translate = colon;
-    scene->speed = split_rate(spec, specs[0], "sim:SCENE@SPEED").value_or(colon ? 5.0 : 10.0);
-    if (opt.raw) {
-      scene->raw = true;
-      scene->effects = sim::CameraEffects{};
-      scene->effects.supersample = 1;
-      scene->effects.bits = 12;
-    }
-    try {
-      scene->scene = sim::make_scene(spec);
-    } catch (const std::exception& e) {
-      throw SourceError("source '" + specs[0] + "': " + e.what());
-    }
-    for (size_t c = 0; c < n; ++c) out.push_back(std::make_unique<SimView>(scene, rig.cameras[c], opt.fps, specs[0]));
-    return out;
+    std::string scene = specs[0].substr(4);
+    const auto speed = split_rate(scene, specs[0], "sim:SCENE@SPEED");
+    return std::make_shared<SimLoop>(rig, scene, speed, opt.sim)->sources();
   }
   if (specs.size() == 1 && specs[0].rfind("pano:", 0) == 0) {
     std::string path = specs[0].substr(5);
