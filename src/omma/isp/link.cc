@@ -1,7 +1,6 @@
 #include "omma/isp/link.h"
 
 #include <algorithm>
-#include <cmath>
 #include <random>
 #include <stdexcept>
 
@@ -83,6 +82,9 @@ ChipStream impair_link(const ChipStream& in, double flip_rate, double drop_rate,
 
 namespace {
 
+// floor(a / b) for b > 0.
+int64_t floor_div(int64_t a, int64_t b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
+
 class Decoder {
  public:
   Decoder(const uint8_t* data, size_t size, const LinkConfig& cfg,
@@ -94,7 +96,7 @@ class Decoder {
     long_enabled_ = cfg.resync_pp >= 4;
     long_thresh_ = size_t(cfg.row_gap_pp + cfg.resync_pp / 2) * cpp_;
     row_chips_ = cfg.row_chips();
-    anchor_pos_ = double(size_t(cfg.row_gap_pp) * cpp_);
+    anchor_pos_ = int64_t(size_t(cfg.row_gap_pp) * cpp_);
     anchor_idx_ = 0;
     stats_.bytes = size;
     row_.resize(size_t(cfg.width));
@@ -110,7 +112,7 @@ class Decoder {
         if (in_const) {
           // End of the end-of-frame + configuration run: row 0 follows the resync pattern.
           in_const = false;
-          anchor_pos_ = double(i) + double(size_t(cfg_.resync_pp + cfg_.row_gap_pp) * cpp_);
+          anchor_pos_ = int64_t(i) + int64_t(size_t(cfg_.resync_pp + cfg_.row_gap_pp) * cpp_);
           anchor_idx_ = 0;
           synced_ = true;
         }
@@ -188,22 +190,25 @@ class Decoder {
   size_t take_row(size_t q, size_t run) {
     if (long_enabled_ && run >= long_thresh_) {  // the resynchronisation pattern: a new frame
       finish_frame();
-      anchor_pos_ = double(q);
+      anchor_pos_ = int64_t(q);
       anchor_idx_ = 0;
       synced_ = true;
     }
-    // Row indices come from timing relative to a known row. Until the stream is synchronised
-    // (its first row sits in a row slot counted from the stream start, or a frame boundary /
-    // resynchronisation run has been seen),
-    // rows are skipped: a capture that starts mid-frame must not misplace them.
+    // Row indices come from timing relative to a known row: the distance d to it in chips, rounded
+    // to whole row periods (round half up, exact integers: hw/rtl/frontend/link_deser.sv makes the
+    // same decision with a counter).
+    const int64_t d = int64_t(q) - anchor_pos_, rp = int64_t(row_chips_);
+    const int64_t slot = floor_div(2 * d + rp, 2 * rp);  // floor(d / rp + 1/2)
+    // Until the stream is synchronised (its first row sits in a row slot counted from the stream
+    // start, or a frame boundary / resynchronisation run has been seen), rows are skipped: a
+    // capture that starts mid-frame must not misplace them.
     if (!synced_ && !any_row_) {  // the first row: in a row slot from the stream start (+-1 PP)?
-      const double slots = (double(q) - anchor_pos_) / double(row_chips_);
-      if (std::fabs(slots - std::floor(slots + 0.5)) * double(row_chips_) <= double(cpp_)) synced_ = true;
+      const int64_t off = d - slot * rp;
+      if (off <= int64_t(cpp_) && -off <= int64_t(cpp_)) synced_ = true;
     }
     any_row_ = true;
-    const double rel = (double(q) - anchor_pos_) / double(row_chips_);
-    const double idx_d = double(anchor_idx_) + std::floor(rel + 0.5);
-    const bool in_frame = synced_ && idx_d >= 0 && idx_d < double(cfg_.height);
+    const int64_t idx_d = int64_t(anchor_idx_) + slot;
+    const bool in_frame = synced_ && idx_d >= 0 && idx_d < int64_t(cfg_.height);
     const int idx = in_frame ? int(idx_d) : -1;
 
     const size_t clocks = size_t(cfg_.clocks_per_pp());
@@ -245,7 +250,7 @@ class Decoder {
         std::copy(row_.begin(), row_.end(), frame_.pixels.begin() + long(idx) * cfg_.width);
         if (!frame_.row_ok[size_t(idx)]) stored_rows_.push_back(idx);
         frame_.row_ok[size_t(idx)] = 1;
-        anchor_pos_ = double(q);
+        anchor_pos_ = int64_t(q);
         anchor_idx_ = idx;
       }
     }
@@ -258,7 +263,7 @@ class Decoder {
   const std::function<void(const LinkFrame&)>& on_frame_;
   size_t cpp_, row_thresh_, const_thresh_, long_thresh_, row_chips_;
   bool long_enabled_;
-  double anchor_pos_;
+  int64_t anchor_pos_;  // chip where the anchor row starts (or is expected)
   int anchor_idx_;
   LinkFrame frame_;
   std::vector<uint16_t> row_;     // the row being decoded
