@@ -19,6 +19,12 @@ void print_json(const nlohmann::json& j);
 // progress output is silenced.
 void set_json_mode(bool on);
 
+// Thrown by a command that fails on a process whose error another process reports (ranks other
+// than 0 under mpirun): main exits with `code` and prints nothing.
+struct ExitSilently {
+  int code = 1;
+};
+
 using AddCommand = void (*)(CLI::App& root);
 struct CommandEntry {
   const char* name;

@@ -57,6 +57,8 @@ int main(int argc, char** argv) {
     if (e.get_exit_code() == static_cast<int>(CLI::ExitCodes::Success)) return app.exit(e);
     std::fprintf(stderr, "omma: error: %s\nRun with --help for more information.\n", e.what());
     return 1;
+  } catch (const omma::app::ExitSilently& e) {
+    return e.code;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "omma: error: %s\n", e.what());
     return 1;

@@ -1,8 +1,12 @@
-// omma render: large panoramas (Giga-Eye, 21.6 / 82.3 MP) from a frames folder or a recording.
+// omma render: large panoramas (Giga-Eye, 21.6 / 82.3 MP) from a frames folder or a recording, as one
+// process or distributed under mpirun (omma/dist: frame sets as items of a job, or one panorama split by bands).
 #include <chrono>
 #include <filesystem>
 #include <iostream>
 #include <memory>
+#include <optional>
+
+#include <tbb/global_control.h>
 
 #include <fmt/format.h>
 #include <opencv2/imgcodecs.hpp>
@@ -13,6 +17,9 @@
 #include "omma/core/log.h"
 #include "omma/core/progress.h"
 #include "omma/design/prototype.h"
+#include "omma/dist/comm.h"
+#include "omma/dist/job.h"
+#include "omma/dist/split_render.h"
 #include "omma/engine/pano_render.h"
 #include "omma/engine/tiff_writer.h"
 #include "omma/pano/quality.h"
@@ -24,8 +31,9 @@ namespace fs = std::filesystem;
 struct RenderArgs {
   std::string input, rig, size = "9000x2400", projection = "equirect-100", method = "mrf", out, sets, truth;
   std::string demosaic = "hybrid", awb = "grayworld";
-  int band_rows = 256, repeat = 1, bits = 12;
-  bool no_cache = false, stream_maps = false, json = false, raw = false;
+  std::string split = "sets", manifest, rank0 = "works";
+  int band_rows = 256, repeat = 1, bits = 12, threads = 0, window = 0;
+  bool no_cache = false, stream_maps = false, json = false, raw = false, no_resume = false;
 };
 
 // "pano_{set}.tif" -> "pano_00012.tif"; a name without {set} gets "_00012" before the extension
@@ -40,112 +48,288 @@ fs::path set_path(const std::string& pattern, int64_t set, bool many) {
   return p.replace_filename(p.stem().string() + fmt::format("_{:05d}", set) + p.extension().string());
 }
 
-void run_render(const RenderArgs& a) {
-  set_json_mode(a.json);
+// One input (a recording or a frames folder) rendered frame set by frame set: the work of
+// dist::run_job (one item per frame set), of --split tiles (every rank on one set) and of --repeat.
+class RenderJob : public dist::Job {
+ public:
+  RenderJob(const RenderArgs& a, const engine::PanoRenderOptions& o, const isp::IspOptions& iso)
+      : a_(a), o_(o), iso_(iso) {}
+
+  void open() override {
+    recording_ = fs::exists(fs::path(a_.input) / "manifest.json");
+    if (!recording_ && !fs::is_directory(a_.input))
+      throw IoError("input '" + a_.input + "' is neither a recording nor a frames folder");
+    if (recording_) {
+      rec_ = std::make_unique<engine::RecordingReader>(a_.input);
+      const Rig& rr = rec_->manifest().rig;
+      rig_ = a_.rig.empty() ? rr : design::load_rig_or_builtin(a_.rig);
+      if (rig_.cameras.size() != rr.cameras.size())
+        throw std::invalid_argument(
+            fmt::format("--rig has {} cameras, the recording {}", rig_.cameras.size(), rr.cameras.size()));
+      for (size_t c = 0; c < rig_.cameras.size(); ++c)
+        if (rig_.cameras[c].in.width != rr.cameras[c].in.width || rig_.cameras[c].in.height != rr.cameras[c].in.height)
+          throw std::invalid_argument(fmt::format("--rig camera {} is {}x{}, the recording's {}x{} (another sensor mode)",
+                                                  rig_.cameras[c].id, rig_.cameras[c].in.width,
+                                                  rig_.cameras[c].in.height, rr.cameras[c].in.width,
+                                                  rr.cameras[c].in.height));
+    } else {
+      const fs::path rig_path = a_.rig.empty() ? fs::path(a_.input) / "rig.json" : fs::path(a_.rig);
+      rig_ = a_.rig.empty() ? load_rig(rig_path) : design::load_rig_or_builtin(a_.rig);
+    }
+    // Which frame sets.
+    first_ = 0;
+    last_ = recording_ ? rec_->frame_sets() - 1 : 0;
+    if (!a_.sets.empty()) {
+      const auto colon = a_.sets.find(':');
+      try {
+        first_ = std::stoll(a_.sets.substr(0, colon));
+        last_ = colon == std::string::npos ? first_ : std::stoll(a_.sets.substr(colon + 1)) - 1;
+      } catch (const std::exception&) {
+        throw std::invalid_argument("--sets must be I or A:B (frame sets A..B-1)");
+      }
+    }
+    if (!recording_ && (first_ != 0 || last_ != 0)) throw std::invalid_argument("--sets needs a recording");
+    if (recording_ && (first_ < 0 || last_ < first_ || last_ >= rec_->frame_sets()))
+      throw std::invalid_argument(
+          fmt::format("--sets {} outside the recording's {} frame sets", a_.sets, rec_->frame_sets()));
+  }
+  int64_t items() const override { return last_ - first_ + 1; }
+  fs::path output(int64_t i) const override { return set_path(a_.out, first_ + i, last_ > first_); }
+  std::string item_name(int64_t i) const override {
+    return recording_ ? fmt::format("frame set {}", first_ + i) : "the panorama";
+  }
+  nlohmann::json parameters() const override {
+    std::error_code ec;
+    const fs::path input = fs::weakly_canonical(a_.input, ec);
+    return {{"input", input.string()}, {"rig", a_.rig},          {"size", a_.size},         {"projection", a_.projection},
+            {"method", a_.method},     {"band_rows", a_.band_rows}, {"demosaic", a_.demosaic}, {"awb", a_.awb},
+            {"bits", a_.bits},         {"raw", a_.raw},           {"min_weight", o_.min_weight}};
+  }
+  void setup() override { renderer_ = std::make_unique<engine::PanoRenderer>(rig_, o_); }
+  // Reads and develops frame set i into the renderer (read and develop times).
+  dist::ItemTimes load(int64_t i) {
+    dist::ItemTimes t;
+    if (recording_) {
+      engine::FrameSetTimes ft;
+      renderer_->set_frames(engine::develop_frame_set(*rec_, first_ + i, iso_, &ft));
+      t.read = ft.read;
+      t.develop = ft.develop;
+    } else {
+      const auto t0 = clock::now();
+      std::vector<cv::Mat> frames = a_.raw ? load_raw_frames(a_.input, rig_) : load_frames(a_.input, rig_);
+      const auto t1 = clock::now();
+      if (a_.raw) frames = isp::develop_all(frames, iso_);
+      renderer_->set_frames(frames);
+      t.read = seconds(t0, t1);
+      t.develop = seconds(t1, clock::now());
+    }
+    return t;
+  }
+  dist::ItemTimes run(int64_t i) override {
+    dist::ItemTimes t = load(i);
+    const auto t0 = clock::now();
+    t.render = engine::render_to_file(*renderer_, output(i));
+    t.write = seconds(t0, clock::now()) - t.render;
+    return t;
+  }
+  bool recording() const { return recording_; }
+  engine::PanoRenderer& renderer() { return *renderer_; }
+
+ private:
+  using clock = std::chrono::steady_clock;
+  static double seconds(clock::time_point a, clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
+  const RenderArgs& a_;
+  engine::PanoRenderOptions o_;
+  isp::IspOptions iso_;
+  bool recording_ = false;
+  std::unique_ptr<engine::RecordingReader> rec_;
+  Rig rig_;
+  int64_t first_ = 0, last_ = 0;
+  std::unique_ptr<engine::PanoRenderer> renderer_;
+};
+
+void render(dist::Comm& comm, const RenderArgs& a) {
   using clock = std::chrono::steady_clock;
   const auto t_start = clock::now();
-  if (a.out.empty()) throw std::invalid_argument("--out is required");
-  const Size2 size = parse_size(a.size, /*banded=*/true);
-  if (a.band_rows < 1) throw std::invalid_argument("--band-rows must be >= 1");
-  if (a.repeat < 1 || a.repeat > 10000) throw std::invalid_argument("--repeat must be 1..10000");
+  const bool root = comm.rank() == 0;
+  // Options: the same on every rank, so an error here is every rank's (given once).
   engine::PanoRenderOptions o;
-  o.grid = PanoGrid{parse_projection(a.projection), size.width, size.height};
-  if (a.method == "hq") {
-    o.offline = true;
-    o.method = pano::Method::kLinear;
-  } else {
-    o.method = pano::parse_method(a.method);
-  }
-  o.band_rows = a.band_rows;
-  o.resident_maps = !a.stream_maps;
-  if (a.no_cache) o.cache_dir.clear();
-  o.progress = !a.json;
   isp::IspOptions iso;
-  iso.demosaic = isp::parse_demosaic(a.demosaic);
-  iso.awb = isp::parse_awb(a.awb);
-  iso.srgb = true;
-  iso.bits = a.bits;  // a recording's own bit depth replaces it (render_frame_set)
-  const bool recording = fs::exists(fs::path(a.input) / "manifest.json");
-  if (!recording && !fs::is_directory(a.input))
-    throw IoError("input '" + a.input + "' is neither a recording nor a frames folder");
-  std::unique_ptr<engine::RecordingReader> rec;
-  Rig rig;
-  if (recording) {
-    rec = std::make_unique<engine::RecordingReader>(a.input);
-    rig = a.rig.empty() ? rec->manifest().rig : design::load_rig_or_builtin(a.rig);
-    if (rig.cameras.size() != rec->manifest().rig.cameras.size())
-      throw std::invalid_argument(fmt::format("--rig has {} cameras, the recording {}", rig.cameras.size(),
-                                              rec->manifest().rig.cameras.size()));
-    for (size_t c = 0; c < rig.cameras.size(); ++c)
-      if (rig.cameras[c].in.width != rec->manifest().rig.cameras[c].in.width ||
-          rig.cameras[c].in.height != rec->manifest().rig.cameras[c].in.height)
-        throw std::invalid_argument(fmt::format("--rig camera {} is {}x{}, the recording's {}x{} (another sensor mode)",
-                                                rig.cameras[c].id, rig.cameras[c].in.width, rig.cameras[c].in.height,
-                                                rec->manifest().rig.cameras[c].in.width,
-                                                rec->manifest().rig.cameras[c].in.height));
-  } else {
-    const fs::path rig_path = a.rig.empty() ? fs::path(a.input) / "rig.json" : fs::path(a.rig);
-    rig = a.rig.empty() ? load_rig(rig_path) : design::load_rig_or_builtin(a.rig);
-  }
-  // Which frame sets.
-  int64_t first = 0, last = recording ? rec->frame_sets() - 1 : 0;
-  if (!a.sets.empty()) {
-    const auto colon = a.sets.find(':');
-    try {
-      first = std::stoll(a.sets.substr(0, colon));
-      last = colon == std::string::npos ? first : std::stoll(a.sets.substr(colon + 1)) - 1;
-    } catch (const std::exception&) {
-      throw std::invalid_argument("--sets must be I or A:B (frame sets A..B-1)");
+  Size2 size{0, 0};
+  dist::Rank0 rank0 = dist::Rank0::kWorks;
+  std::string error;
+  try {
+    if (a.out.empty()) throw std::invalid_argument("--out is required");
+    size = parse_size(a.size, /*banded=*/true);
+    if (a.band_rows < 1) throw std::invalid_argument("--band-rows must be >= 1");
+    if (a.repeat < 1 || a.repeat > 10000) throw std::invalid_argument("--repeat must be 1..10000");
+    if (a.repeat > 1 && comm.size() > 1)
+      throw std::invalid_argument("--repeat measures one process's speed: run it without mpirun");
+    if (a.split != "sets" && a.split != "tiles") throw std::invalid_argument("--split must be sets or tiles");
+    if (a.threads < 0) throw std::invalid_argument("--threads must be >= 0");
+    rank0 = dist::parse_rank0(a.rank0);
+    o.grid = PanoGrid{parse_projection(a.projection), size.width, size.height};
+    if (a.method == "hq") {
+      o.offline = true;
+      o.method = pano::Method::kLinear;
+    } else {
+      o.method = pano::parse_method(a.method);
     }
+    o.band_rows = a.band_rows;
+    o.resident_maps = !a.stream_maps;
+    if (a.no_cache) o.cache_dir.clear();
+    o.progress = !a.json && root;
+    iso.demosaic = isp::parse_demosaic(a.demosaic);
+    iso.awb = isp::parse_awb(a.awb);
+    iso.srgb = true;
+    iso.bits = a.bits;  // a recording's own bit depth replaces it (develop_frame_set)
+  } catch (const std::exception& e) {
+    error = e.what();
   }
-  if (!recording && (first != 0 || last != 0)) throw std::invalid_argument("--sets needs a recording");
-  if (recording && (first < 0 || last < first || last >= rec->frame_sets()))
-    throw std::invalid_argument(fmt::format("--sets {} outside the recording's {} frame sets", a.sets, rec->frame_sets()));
+  dist::check_all_ranks(comm, error);
   cv::Mat truth;
-  if (!a.truth.empty()) {
+  if (root && !a.truth.empty()) {
     truth = read_image(a.truth, cv::IMREAD_COLOR);
     if (truth.cols != size.width || truth.rows != size.height)
-      throw std::invalid_argument(fmt::format("--truth is {}x{}, the panorama {}x{}", truth.cols, truth.rows, size.width,
-                                              size.height));
+      throw std::invalid_argument(fmt::format("--truth is {}x{}, the panorama {}x{}", truth.cols, truth.rows,
+                                              size.width, size.height));
   }
-  std::vector<cv::Mat> frames;
-  if (!recording) frames = a.raw ? isp::develop_all(load_raw_frames(a.input, rig), iso) : load_frames(a.input, rig);
-  engine::PanoRenderer renderer(rig, o);
-  const auto mem = renderer.memory();
-  const bool many = last > first;
-  double render_s = 0, develop_s = 0, read_s = 0;
-  int64_t rendered = 0;
+
+  RenderJob job(a, o, iso);
+  double render_s = 0, develop_s = 0, read_s = 0, write_s = 0;
+  int64_t rendered = 0, reused = 0;
   fs::path last_out;
-  Progress progress("render", size_t((last - first + 1) * a.repeat), !a.json && (many || a.repeat > 1));
-  for (int64_t s = first; s <= last; ++s)
-    for (int r = 0; r < a.repeat; ++r) {
-      last_out = set_path(a.out, s, many);
-      if (recording) {
-        const auto t = engine::render_frame_set(*rec, s, renderer, iso, last_out);
-        render_s += t.render;
-        develop_s += t.develop;
-        read_s += t.read;
-      } else {
-        if (r == 0 && s == first) renderer.set_frames(frames);
-        render_s += engine::render_to_file(renderer, last_out);
+  nlohmann::json dist_json = nullptr;
+  if (a.repeat > 1) {
+    // Speed of one process: the frame sets rendered --repeat times each (no manifest).
+    job.open();
+    job.setup();
+    Progress progress("render", size_t(job.items() * a.repeat), !a.json);
+    for (int64_t i = 0; i < job.items(); ++i) {
+      const dist::ItemTimes t = job.load(i);
+      read_s += t.read;
+      develop_s += t.develop;
+      for (int r = 0; r < a.repeat; ++r) {
+        last_out = job.output(i);
+        render_s += engine::render_to_file(job.renderer(), last_out);
+        ++rendered;
+        progress.step();
       }
-      ++rendered;
-      progress.step();
     }
-  progress.finish();
+    progress.finish();
+  } else if (a.split == "sets") {
+    dist::RunOptions ro;
+    ro.manifest = a.manifest.empty() ? fs::path(a.out).parent_path() / "render-manifest.json" : fs::path(a.manifest);
+    ro.resume = !a.no_resume;
+    ro.rank0 = rank0;
+    ro.progress = !a.json;
+    ro.label = "frame sets";
+    const dist::RunSummary sum = dist::run_job(comm, job, ro);
+    if (!root) return;
+    rendered = sum.made;
+    reused = sum.reused;
+    render_s = sum.totals.render;
+    develop_s = sum.totals.develop;
+    read_s = sum.totals.read;
+    write_s = sum.totals.write + sum.checksum_seconds;
+    last_out = job.output(job.items() - 1);
+    const double work_s = sum.seconds - sum.setup_seconds;
+    dist_json = {{"split", "sets"},
+                 {"ranks", sum.ranks},
+                 {"mpi", sum.mpi},
+                 {"rank0", dist::rank0_name(sum.rank0)},
+                 {"manifest", ro.manifest.string()},
+                 {"made", sum.made},
+                 {"reused", sum.reused},
+                 {"setup_seconds", sum.setup_seconds},
+                 {"work_seconds", work_s},
+                 {"frame_sets_per_s", work_s > 0 ? sum.made / work_s : 0},
+                 {"seconds_per_stage",
+                  {{"read", sum.totals.read},
+                   {"develop", sum.totals.develop},
+                   {"render", sum.totals.render},
+                   {"write", sum.totals.write},
+                   {"checksum", sum.checksum_seconds}}},
+                 {"cpu_seconds", sum.cpu_seconds}};
+  } else {
+    // --split tiles: every rank opens and prepares, then each frame set is split by bands.
+    error.clear();
+    try {
+      job.open();
+    } catch (const std::exception& e) {
+      error = e.what();
+    }
+    dist::check_all_ranks(comm, error);
+    error.clear();
+    if (root) try {
+        job.setup();  // first: fills the map cache the others read
+      } catch (const std::exception& e) {
+        error = e.what();
+      }
+    dist::check_all_ranks(comm, error);
+    error.clear();
+    if (!root) try {
+        job.setup();
+      } catch (const std::exception& e) {
+        error = e.what();
+      }
+    dist::check_all_ranks(comm, error);
+    dist::SplitOptions so;
+    so.window = a.window;
+    so.rank0 = rank0;
+    double wall = 0, load_wall = 0;
+    int max_held = 0;
+    std::vector<int> per_rank;
+    for (int64_t i = 0; i < job.items(); ++i) {
+      error.clear();
+      const auto tl = clock::now();
+      try {
+        const dist::ItemTimes t = job.load(i);
+        read_s += t.read;  // rank 0's; every rank reads and develops the whole set
+        develop_s += t.develop;
+      } catch (const std::exception& e) {
+        error = e.what();
+      }
+      dist::check_all_ranks(comm, error, job.item_name(i) + ": ");
+      load_wall += std::chrono::duration<double>(clock::now() - tl).count();
+      last_out = job.output(i);
+      const dist::SplitSummary s = dist::render_split(comm, job.renderer(), last_out, so);
+      render_s += s.render_seconds;
+      write_s += s.write_seconds;
+      wall += s.seconds;
+      max_held = std::max(max_held, s.max_held);
+      if (per_rank.empty()) per_rank.assign(s.bands_per_rank.size(), 0);
+      for (size_t r = 0; r < s.bands_per_rank.size(); ++r) per_rank[r] += s.bands_per_rank[r];
+      ++rendered;
+    }
+    if (!root) return;
+    dist_json = {{"split", "tiles"},
+                 {"ranks", comm.size()},
+                 {"mpi", comm.is_mpi()},
+                 {"rank0", dist::rank0_name(comm.size() == 1 ? dist::Rank0::kWorks : rank0)},
+                 {"bands", job.renderer().bands()},
+                 {"bands_per_rank", per_rank},
+                 {"max_bands_held", max_held},
+                 {"load_seconds", load_wall},
+                 {"split_seconds", wall}};
+  }
+
   nlohmann::json q = nullptr;
   if (!truth.empty()) {
     const std::string ext = last_out.extension().string();
     const cv::Mat pano = (ext == ".tif" || ext == ".tiff") ? engine::read_tiff_rows(last_out) : read_image(last_out, cv::IMREAD_COLOR);
     q = {{"psnr_db", pano::psnr_db(pano, truth)}, {"ssim", pano::ssim(pano, truth)}};
   }
+  engine::PanoRenderer& renderer = job.renderer();
+  const auto mem = renderer.memory();
   const double total = std::chrono::duration<double>(clock::now() - t_start).count();
-  const double per = render_s / rendered;
+  const double per = rendered > 0 ? render_s / rendered : 0;
   if (a.json) {
     print_json({{"input", a.input},
-                {"recording", recording},
+                {"recording", job.recording()},
                 {"out", last_out.string()},
                 {"panoramas", rendered},
+                {"reused", reused},
                 {"width", size.width},
                 {"height", size.height},
                 {"megapixels", size.width * double(size.height) / 1e6},
@@ -157,23 +341,52 @@ void run_render(const RenderArgs& a) {
                 {"panoramas_per_s", per > 0 ? 1 / per : 0},
                 {"develop_seconds", develop_s},
                 {"read_seconds", read_s},
+                {"write_seconds", write_s},
                 {"memory",
                  {{"store_bytes", mem.store_bytes},
                   {"maps_bytes", mem.maps_bytes},
                   {"band_bytes", mem.band_bytes},
                   {"total_bytes", mem.total()}}},
+                {"distributed", dist_json},
                 {"quality", q},
                 {"seconds", total}});
   } else {
     std::cout << fmt::format(
-        "{}: {} panorama(s) {}x{} ({:.1f} MP, {}) from {}; maps {:.2f} s ({} of {} bands from the cache); render "
+        "{}: {} panorama(s) {}x{} ({:.1f} MP, {}) from {}{}; maps {:.2f} s ({} of {} bands from the cache); render "
         "{:.3f} s per panorama ({:.2f}/s); memory {:.0f} MB (store {:.0f}, maps {:.0f}, band {:.0f})\n",
         last_out.string(), rendered, size.width, size.height, size.width * double(size.height) / 1e6, a.method,
-        a.input, renderer.maps_seconds(), renderer.maps_from_cache(), renderer.bands(), per, per > 0 ? 1 / per : 0,
+        a.input, reused > 0 ? fmt::format(" ({} more verified from an earlier run)", reused) : "",
+        renderer.maps_seconds(), renderer.maps_from_cache(), renderer.bands(), per, per > 0 ? 1 / per : 0,
         mem.total() / 1e6, mem.store_bytes / 1e6, mem.maps_bytes / 1e6, mem.band_bytes / 1e6);
+    if (!dist_json.is_null() && comm.size() > 1)
+      std::cout << fmt::format("  {} ranks, split by {}{}\n", comm.size(), a.split,
+                               a.split == "sets" ? ", manifest " + dist_json["manifest"].get<std::string>() : "");
     if (!q.is_null())
       std::cout << fmt::format("  against {}: PSNR {:.2f} dB, SSIM {:.4f}\n", a.truth, q["psnr_db"].get<double>(),
                                q["ssim"].get<double>());
+  }
+}
+
+void run_render(const RenderArgs& a) {
+  // Under mpirun every rank runs this; only rank 0 prints (progress, logs, the summary).
+  auto comm = dist::make_comm();
+  const bool root = comm->rank() == 0;
+  set_json_mode(a.json || !root);
+  if (!root) spdlog::set_level(spdlog::level::warn);
+  std::optional<tbb::global_control> threads;
+  if (a.threads > 0) threads.emplace(tbb::global_control::max_allowed_parallelism, a.threads);
+  try {
+    render(*comm, a);
+  } catch (const dist::JobError& e) {
+    if (e.quiet()) throw ExitSilently{1};  // rank 0 reports it
+    throw;
+  } catch (const std::exception& e) {
+    if (comm->size() > 1) {
+      // A failure the other ranks cannot know of (outside the checked phases): stop them all.
+      std::fprintf(stderr, "omma: error: rank %d: %s\n", comm->rank(), e.what());
+      comm->abort(1);
+    }
+    throw;
   }
 }
 
@@ -186,7 +399,10 @@ void add_render_command(CLI::App& root) {
       "Render large panoramas (Giga-Eye: 9000x2400 = 21.6 MP, 17700x4650 = 82.3 MP over 360x100 deg) from a\n"
       "frames folder (cam_XX.png, rig.json) or a recording (omma record: raw frame sets, developed by the ISP),\n"
       "band by band from cached maps. .tif/.tiff outputs are BigTIFF (any size, memory = one band); other\n"
-      "formats hold the whole image. Methods: the engine's, or hq (offline: every tap in double precision).");
+      "formats hold the whole image. Methods: the engine's, or hq (offline: every tap in double precision).\n"
+      "On a cluster: mpirun -np K omma render REC --out DIR/pano_{set}.tif hands the frame sets out to the K\n"
+      "ranks as they ask; each output is written atomically and listed in a manifest, and a rerun makes only\n"
+      "what is missing. --split tiles splits each panorama by bands across the ranks instead.");
   cmd->add_option("INPUT", a.input, "Frames folder or recording folder")->required();
   cmd->add_option("--rig", a.rig, "Rig file or built-in rig (default: INPUT/rig.json or the recording's rig)");
   cmd->add_option("--out", a.out, "Output image; with several frame sets a pattern with {set}, e.g. pano_{set}.tif")
@@ -204,6 +420,19 @@ void add_render_command(CLI::App& root) {
   cmd->add_option("--awb", a.awb, "ISP white balance of raw frames")->capture_default_str();
   cmd->add_option("--truth", a.truth, "Ground-truth panorama of the same size: report PSNR and SSIM");
   cmd->add_option("--repeat", a.repeat, "Render each frame set N times (speed measurement)")->capture_default_str();
+  cmd->add_option("--split", a.split,
+                  "Under mpirun: sets (each rank renders whole frame sets, handed out as it asks) or tiles (all\n"
+                  "ranks render one panorama at a time, split by bands; rank 0 writes the .tif)")
+      ->capture_default_str();
+  cmd->add_option("--manifest", a.manifest,
+                  "Manifest of the outputs (size, checksum, rank, seconds per stage); default: render-manifest.json\n"
+                  "beside the outputs. A rerun skips the outputs it lists that still verify");
+  cmd->add_flag("--no-resume", a.no_resume, "Make every output again, even those an earlier run verified");
+  cmd->add_option("--rank0", a.rank0, "Under mpirun: rank 0 works (renders too) or serves (only hands out work)")
+      ->capture_default_str();
+  cmd->add_option("--window", a.window, "--split tiles: bands rank 0 may hold waiting for their turn (0: 2 x ranks)")
+      ->capture_default_str();
+  cmd->add_option("--threads", a.threads, "Threads per process (0: all cores)")->capture_default_str();
   cmd->add_flag("--json", a.json, "Print one JSON summary on stdout");
   cmd->callback([] { run_render(a); });
 }

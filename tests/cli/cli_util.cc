@@ -20,9 +20,13 @@ static std::string slurp(const fs::path& p) {
 }
 
 RunResult run_omma(const std::string& args, int timeout_s) {
+  return run_command(OMMA_BINARY " " + args, timeout_s);
+}
+
+RunResult run_command(const std::string& command, int timeout_s) {
   const fs::path dir = temp_dir("run");
-  const std::string cmd = "timeout " + std::to_string(timeout_s) + " " OMMA_BINARY " " + args +
-                          " >" + (dir / "out").string() + " 2>" + (dir / "err").string() + " </dev/null";
+  const std::string cmd = "timeout " + std::to_string(timeout_s) + " " + command + " >" + (dir / "out").string() +
+                          " 2>" + (dir / "err").string() + " </dev/null";
   const int status = std::system(cmd.c_str());
   RunResult r;
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);

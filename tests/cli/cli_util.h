@@ -15,6 +15,9 @@ struct RunResult {
   nlohmann::json json() const;  // parses `out` as exactly one JSON object (throws otherwise)
 };
 
+// Runs a shell command line with a time limit in seconds (stdin closed).
+RunResult run_command(const std::string& command, int timeout_s = 300);
+
 // Runs `omma ARGS` (ARGS is passed to /bin/sh, quote as needed) with a time limit in seconds.
 RunResult run_omma(const std::string& args, int timeout_s = 300);
 

@@ -82,22 +82,26 @@ const CompiledMap& PanoRenderer::band_map(int i, std::unique_ptr<CompiledMap>& s
   return *scratch;
 }
 
+void PanoRenderer::render_band(int i, cv::Mat& out) {
+  const cv::Rect b = band(i);
+  if (opt_.offline) {
+    MapOptions mo;
+    mo.grid = opt_.grid;
+    mo.method = opt_.method;
+    mo.params = opt_.params;
+    mo.window = b;
+    out = reference_render(rig_, mo, frames_);
+  } else {
+    std::unique_ptr<CompiledMap> scratch;
+    engine::render(band_map(i, scratch), store_, out, opt_.render);
+  }
+}
+
 void PanoRenderer::render(const BandSink& sink) {
   cv::Mat out;
   for (int i = 0; i < bands(); ++i) {
-    const cv::Rect b = band(i);
-    if (opt_.offline) {
-      MapOptions mo;
-      mo.grid = opt_.grid;
-      mo.method = opt_.method;
-      mo.params = opt_.params;
-      mo.window = b;
-      out = reference_render(rig_, mo, frames_);
-    } else {
-      std::unique_ptr<CompiledMap> scratch;
-      engine::render(band_map(i, scratch), store_, out, opt_.render);
-    }
-    sink(b.y, out);
+    render_band(i, out);
+    sink(band(i).y, out);
   }
 }
 
@@ -141,14 +145,12 @@ double render_to_file(PanoRenderer& renderer, const std::filesystem::path& path)
   return seconds;
 }
 
-FrameSetTimes render_frame_set(const RecordingReader& recording, int64_t set, PanoRenderer& renderer,
-                               isp::IspOptions iso, const std::filesystem::path& path) {
+std::vector<cv::Mat> develop_frame_set(const RecordingReader& recording, int64_t set, isp::IspOptions iso,
+                                       FrameSetTimes* times) {
   using clock = std::chrono::steady_clock;
-  FrameSetTimes t;
   auto t0 = clock::now();
   std::vector<cv::Mat> raws = recording.read_frame_set(set);
   auto t1 = clock::now();
-  t.read = std::chrono::duration<double>(t1 - t0).count();
   iso.bits = recording.manifest().bits;
   std::vector<size_t> present;
   std::vector<cv::Mat> have;
@@ -163,8 +165,19 @@ FrameSetTimes render_frame_set(const RecordingReader& recording, int64_t set, Pa
   for (size_t c = 0; c < raws.size(); ++c)
     frames[c] = cv::Mat::zeros(rig.cameras[c].in.height, rig.cameras[c].in.width, CV_8UC3);
   for (size_t k = 0; k < present.size(); ++k) frames[present[k]] = developed[k];
+  if (times) {
+    times->read = std::chrono::duration<double>(t1 - t0).count();
+    times->develop = std::chrono::duration<double>(clock::now() - t1).count();
+  }
+  return frames;
+}
+
+FrameSetTimes render_frame_set(const RecordingReader& recording, int64_t set, PanoRenderer& renderer,
+                               isp::IspOptions iso, const std::filesystem::path& path) {
+  using clock = std::chrono::steady_clock;
+  FrameSetTimes t;
+  std::vector<cv::Mat> frames = develop_frame_set(recording, set, iso, &t);
   auto t2 = clock::now();
-  t.develop = std::chrono::duration<double>(t2 - t1).count();
   renderer.set_frames(frames);
   t.render = render_to_file(renderer, path);
   t.write = std::chrono::duration<double>(clock::now() - t2).count() - t.render;

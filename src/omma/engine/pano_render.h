@@ -67,6 +67,9 @@ class PanoRenderer {
   void set_frames(const std::vector<cv::Mat>& frames);
   // Renders the frames last set, band by band, into `sink`.
   void render(const BandSink& sink);
+  // Renders band i only (rows band(i)) into `out` (CV_8UC3): the unit a distributed renderer splits
+  // one panorama into (dist/split_render.h).
+  void render_band(int i, cv::Mat& out);
   // The whole panorama in memory (small grids, tests).
   cv::Mat render_image();
   PanoRenderMemory memory() const;
@@ -99,6 +102,10 @@ double render_to_file(PanoRenderer& renderer, const std::filesystem::path& path)
 struct FrameSetTimes {
   double read = 0, develop = 0, render = 0, write = 0;
 };
+// Frame set `set` read and developed (the first half of render_frame_set): one CV_8UC3 frame per
+// camera, black where the set lacks the camera; times->read and ->develop filled when given.
+std::vector<cv::Mat> develop_frame_set(const RecordingReader& recording, int64_t set, isp::IspOptions iso,
+                                       FrameSetTimes* times = nullptr);
 FrameSetTimes render_frame_set(const RecordingReader& recording, int64_t set, PanoRenderer& renderer,
                                isp::IspOptions iso, const std::filesystem::path& path);
 
