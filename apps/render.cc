@@ -22,6 +22,7 @@
 #include "omma/dist/split_render.h"
 #include "omma/engine/pano_render.h"
 #include "omma/engine/tiff_writer.h"
+#include "omma/isp/photometric.h"
 #include "omma/pano/quality.h"
 
 namespace omma::app {
@@ -33,7 +34,7 @@ struct RenderArgs {
   std::string demosaic = "hybrid", awb = "grayworld";
   std::string split = "sets", manifest, rank0 = "works";
   int band_rows = 256, repeat = 1, bits = 12, threads = 0, window = 0;
-  bool no_cache = false, stream_maps = false, json = false, raw = false, no_resume = false;
+  bool no_cache = false, stream_maps = false, json = false, raw = false, no_resume = false, no_photometric = false;
 };
 
 // "pano_{set}.tif" -> "pano_00012.tif"; a name without {set} gets "_00012" before the extension
@@ -76,6 +77,9 @@ class RenderJob : public dist::Job {
       const fs::path rig_path = a_.rig.empty() ? fs::path(a_.input) / "rig.json" : fs::path(a_.rig);
       rig_ = a_.rig.empty() ? load_rig(rig_path) : design::load_rig_or_builtin(a_.rig);
     }
+    // The rig's photometric model (vignetting, colour gains), once: raw frames are developed with it
+    // in place of the white balance, developed frames are corrected (isp/photometric.h).
+    if (!a_.no_photometric) gains_ = isp::flat_gains_from_rig(rig_);
     // Which frame sets.
     first_ = 0;
     last_ = recording_ ? rec_->frame_sets() - 1 : 0;
@@ -103,7 +107,7 @@ class RenderJob : public dist::Job {
     const fs::path input = fs::weakly_canonical(a_.input, ec);
     return {{"input", input.string()}, {"rig", a_.rig},          {"size", a_.size},         {"projection", a_.projection},
             {"method", a_.method},     {"band_rows", a_.band_rows}, {"demosaic", a_.demosaic}, {"awb", a_.awb},
-            {"bits", a_.bits},         {"raw", a_.raw},           {"min_weight", o_.min_weight}};
+            {"bits", a_.bits},         {"raw", a_.raw}, {"photometric", !a_.no_photometric},           {"min_weight", o_.min_weight}};
   }
   void setup() override { renderer_ = std::make_unique<engine::PanoRenderer>(rig_, o_); }
   // Reads and develops frame set i into the renderer (read and develop times).
@@ -111,14 +115,15 @@ class RenderJob : public dist::Job {
     dist::ItemTimes t;
     if (recording_) {
       engine::FrameSetTimes ft;
-      renderer_->set_frames(engine::develop_frame_set(*rec_, first_ + i, iso_, &ft));
+      renderer_->set_frames(engine::develop_frame_set(*rec_, first_ + i, iso_, &ft, gains_));
       t.read = ft.read;
       t.develop = ft.develop;
     } else {
       const auto t0 = clock::now();
       std::vector<cv::Mat> frames = a_.raw ? load_raw_frames(a_.input, rig_) : load_frames(a_.input, rig_);
       const auto t1 = clock::now();
-      if (a_.raw) frames = isp::develop_all(frames, iso_);
+      if (a_.raw) frames = isp::develop_with_model(frames, iso_, gains_);
+      else if (!a_.no_photometric) frames = isp::correct_frames(rig_, frames);
       renderer_->set_frames(frames);
       t.read = seconds(t0, t1);
       t.develop = seconds(t1, clock::now());
@@ -145,6 +150,7 @@ class RenderJob : public dist::Job {
   std::unique_ptr<engine::RecordingReader> rec_;
   Rig rig_;
   int64_t first_ = 0, last_ = 0;
+  std::vector<cv::Mat> gains_;  // flat-gain maps of the rig's photometric model (empty: none)
   std::unique_ptr<engine::PanoRenderer> renderer_;
 };
 
@@ -414,6 +420,9 @@ void add_render_command(CLI::App& root) {
   cmd->add_option("--band-rows", a.band_rows, "Rows per band map")->capture_default_str();
   cmd->add_flag("--stream-maps", a.stream_maps, "Keep one band map in memory at a time (loaded from the cache)");
   cmd->add_flag("--no-cache", a.no_cache, "Do not read or write the map cache");
+  cmd->add_flag("--no-photometric", a.no_photometric,
+                "Ignore the rig's photometric model (by default cameras with one are developed with its vignetting\n"
+                "and colour gains instead of the white balance; developed frames are corrected)");
   cmd->add_flag("--raw", a.raw, "Frames folder: develop cam_XX_raw.png with the ISP instead of cam_XX.png");
   cmd->add_option("--bits", a.bits, "Bit depth of the raw frames of a frames folder (--raw)")->capture_default_str();
   cmd->add_option("--demosaic", a.demosaic, "ISP demosaicing of raw frames")->capture_default_str();

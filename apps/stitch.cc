@@ -161,16 +161,7 @@ void run_stitch(const StitchArgs& a) {
     if (photometric && a.flat.empty()) {
       // The rig's photometric model replaces the flat field and the white balance: per camera a
       // flat-gain map 1 / (gain_c V) on the raw mosaic (isp/photometric.h).
-      frames.resize(raws.size());
-      tbb::parallel_for(size_t{0}, raws.size(), [&](size_t i) {
-        isp::IspOptions o = iso;
-        const RigCamera& c = rig.cameras[i];
-        if (c.photometric) {
-          o.flat_gain = isp::flat_gain_from_model(*c.photometric, c.in.width, c.in.height);
-          o.awb = isp::Awb::kNone;
-        }
-        frames[i] = isp::develop(raws[i], o);
-      });
+      frames = isp::develop_with_model(raws, iso, isp::flat_gains_from_rig(rig));
     } else {
       frames = isp::develop_all(raws, iso);
     }

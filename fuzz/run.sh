@@ -18,7 +18,7 @@ root=$PWD
 out=build-fuzz
 flags=(-std=c++20 -O1 -g -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined -Isrc
        -isystem /usr/include/eigen3 -isystem /usr/include/opencv4)
-core=(src/omma/core/{rig,camera,geometry,io,limits,frames,checksum}.cc)
+core=(src/omma/core/{rig,camera,geometry,io,limits,frames,checksum,photometric}.cc)
 libs=(-lfmt -lopencv_core -lopencv_imgproc -lopencv_imgcodecs -lz)
 mkdir -p "$out"
 

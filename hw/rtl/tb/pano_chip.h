@@ -23,7 +23,7 @@
 #include "omma/hw/pipeline.h"
 #include "omma/hw/regmap.h"
 #include "omma/isp/link.h"
-#include "omma/pano/test_scene.h"
+#include "omma/sim/test_scenes.h"
 #include "omma/sim/scene.h"
 #include "omma/sim/simulate.h"
 #include "verilated.h"
@@ -50,9 +50,9 @@ inline const std::vector<cv::Mat>& colon_frames() {
 
 inline const std::vector<cv::Mat>& louvre_frames() {
   static const std::vector<cv::Mat> frames = [] {
-    const cv::Mat tex = pano::testing::photo_texture(std::string(OMMA_DATA_DIR) + "/louvre.jpg", 1440);
+    const cv::Mat tex = sim::testing::photo_texture(std::string(OMMA_DATA_DIR) + "/louvre.jpg", 1440);
     std::vector<cv::Mat> out;
-    for (const cv::Mat& f : pano::testing::render_frames(rig24(), tex)) out.push_back(to_u8(f));
+    for (const cv::Mat& f : sim::testing::render_frames(rig24(), tex)) out.push_back(to_u8(f));
     return out;
   }();
   return frames;

@@ -497,7 +497,9 @@ std::optional<CompiledMap> parse_map_for(const uint8_t* data, size_t n, const Ri
   if (!m) return m;
   // The header against the rig and the options (the file name says the key, the file may not).
   if (key != map_key(rig, opt)) return fail("written for another rig or other options (key " + key + ")");
-  if (m->width != opt.grid.width || m->height != opt.grid.height || m->method != opt.method ||
+  const int want_w = opt.window.empty() ? opt.grid.width : opt.window.width;  // a band map: its window
+  const int want_h = opt.window.empty() ? opt.grid.height : opt.window.height;
+  if (m->width != want_w || m->height != want_h || m->method != opt.method ||
       m->sad_epsilon != static_cast<float>(opt.params.sad_epsilon))
     return fail("size, method or sad epsilon differ from the options");
   const StoreLayout want = StoreLayout::for_rig(rig);

@@ -9,6 +9,7 @@
 #include "omma/core/log.h"
 #include "omma/core/progress.h"
 #include "omma/engine/tiff_writer.h"
+#include "omma/isp/photometric.h"
 
 namespace omma::engine {
 
@@ -36,13 +37,7 @@ PanoRenderer::PanoRenderer(const Rig& rig, const PanoRenderOptions& options) : r
   map_files_.resize(n);
   Progress progress("band maps", n, opt_.progress);
   for (int i = 0; i < n; ++i) {
-    MapOptions mo;
-    mo.grid = opt_.grid;
-    mo.method = opt_.method;
-    mo.params = opt_.params;
-    mo.min_weight = opt_.min_weight;
-    mo.window = band(i);
-    MapLoad ml = compile_map_cached(rig_, mo, opt_.cache_dir);
+    MapLoad ml = compile_map_cached(rig_, band_options(i), opt_.cache_dir);
     maps_from_cache_ += ml.from_cache;
     map_files_[i] = ml.file;
     const size_t bytes = ml.map.bytes();
@@ -55,6 +50,16 @@ PanoRenderer::PanoRenderer(const Rig& rig, const PanoRenderOptions& options) : r
 }
 
 PanoRenderer::~PanoRenderer() = default;
+
+MapOptions PanoRenderer::band_options(int i) const {
+  MapOptions mo;
+  mo.grid = opt_.grid;
+  mo.method = opt_.method;
+  mo.params = opt_.params;
+  mo.min_weight = opt_.min_weight;
+  mo.window = band(i);
+  return mo;
+}
 
 int PanoRenderer::bands() const { return (opt_.grid.height + opt_.band_rows - 1) / opt_.band_rows; }
 
@@ -76,8 +81,9 @@ void PanoRenderer::set_frames(const std::vector<cv::Mat>& frames) {
 
 const CompiledMap& PanoRenderer::band_map(int i, std::unique_ptr<CompiledMap>& scratch) const {
   if (maps_[i]) return *maps_[i];
-  auto m = load_map(map_files_[i]);
-  if (!m) throw std::runtime_error("render: the cached map '" + map_files_[i].string() + "' disappeared");
+  std::string why;
+  auto m = load_map(map_files_[i], rig_, band_options(i), &why);
+  if (!m) throw std::runtime_error("render: the cached map '" + map_files_[i].string() + "' cannot be used: " + why);
   scratch = std::make_unique<CompiledMap>(std::move(*m));
   return *scratch;
 }
@@ -146,25 +152,16 @@ double render_to_file(PanoRenderer& renderer, const std::filesystem::path& path)
 }
 
 std::vector<cv::Mat> develop_frame_set(const RecordingReader& recording, int64_t set, isp::IspOptions iso,
-                                       FrameSetTimes* times) {
+                                       FrameSetTimes* times, const std::vector<cv::Mat>& gains) {
   using clock = std::chrono::steady_clock;
   auto t0 = clock::now();
   std::vector<cv::Mat> raws = recording.read_frame_set(set);
   auto t1 = clock::now();
   iso.bits = recording.manifest().bits;
-  std::vector<size_t> present;
-  std::vector<cv::Mat> have;
-  for (size_t c = 0; c < raws.size(); ++c)
-    if (!raws[c].empty()) {
-      present.push_back(c);
-      have.push_back(raws[c]);
-    }
-  std::vector<cv::Mat> developed = isp::develop_all(have, iso);
-  std::vector<cv::Mat> frames(raws.size());
+  std::vector<cv::Mat> frames = isp::develop_with_model(raws, iso, gains);
   const Rig& rig = recording.manifest().rig;
   for (size_t c = 0; c < raws.size(); ++c)
-    frames[c] = cv::Mat::zeros(rig.cameras[c].in.height, rig.cameras[c].in.width, CV_8UC3);
-  for (size_t k = 0; k < present.size(); ++k) frames[present[k]] = developed[k];
+    if (frames[c].empty()) frames[c] = cv::Mat::zeros(rig.cameras[c].in.height, rig.cameras[c].in.width, CV_8UC3);
   if (times) {
     times->read = std::chrono::duration<double>(t1 - t0).count();
     times->develop = std::chrono::duration<double>(clock::now() - t1).count();

@@ -82,6 +82,7 @@ class PanoRenderer {
   PanoRenderOptions opt_;
   FrameStore store_;
   std::vector<cv::Mat> frames_;  // offline: the developed frames
+  MapOptions band_options(int i) const;  // the map of band i: the panorama's grid, band(i) as window
   std::vector<std::unique_ptr<CompiledMap>> maps_;
   std::vector<std::filesystem::path> map_files_;
   size_t largest_map_ = 0, all_maps_ = 0;
@@ -104,8 +105,10 @@ struct FrameSetTimes {
 };
 // Frame set `set` read and developed (the first half of render_frame_set): one CV_8UC3 frame per
 // camera, black where the set lacks the camera; times->read and ->develop filled when given.
+// `gains`: the rig's photometric model as flat-gain maps (isp::flat_gains_from_rig, computed once
+// per rig): cameras with a model are developed with it instead of the white balance; empty: none.
 std::vector<cv::Mat> develop_frame_set(const RecordingReader& recording, int64_t set, isp::IspOptions iso,
-                                       FrameSetTimes* times = nullptr);
+                                       FrameSetTimes* times = nullptr, const std::vector<cv::Mat>& gains = {});
 FrameSetTimes render_frame_set(const RecordingReader& recording, int64_t set, PanoRenderer& renderer,
                                isp::IspOptions iso, const std::filesystem::path& path);
 

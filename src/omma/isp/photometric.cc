@@ -129,4 +129,31 @@ cv::Mat flat_gain_from_model(const Photometric& p, int width, int height) {
   return g;
 }
 
+std::vector<cv::Mat> flat_gains_from_rig(const Rig& rig) {
+  std::vector<cv::Mat> gains(rig.cameras.size());
+  tbb::parallel_for(size_t{0}, gains.size(), [&](size_t i) {
+    const RigCamera& c = rig.cameras[i];
+    if (c.photometric) gains[i] = flat_gain_from_model(*c.photometric, c.in.width, c.in.height);
+  });
+  return gains;
+}
+
+std::vector<cv::Mat> develop_with_model(const std::vector<cv::Mat>& raws, const IspOptions& options,
+                                        const std::vector<cv::Mat>& gains) {
+  if (!gains.empty() && gains.size() != raws.size())
+    throw std::invalid_argument("develop_with_model: " + std::to_string(gains.size()) + " gain maps for " +
+                                std::to_string(raws.size()) + " frames");
+  std::vector<cv::Mat> out(raws.size());
+  tbb::parallel_for(size_t{0}, raws.size(), [&](size_t i) {
+    if (raws[i].empty()) return;
+    IspOptions o = options;
+    if (!gains.empty() && !gains[i].empty()) {
+      o.flat_gain = gains[i];
+      o.awb = Awb::kNone;
+    }
+    out[i] = develop(raws[i], o);
+  });
+  return out;
+}
+
 }  // namespace omma::isp

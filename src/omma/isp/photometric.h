@@ -14,6 +14,7 @@
 #include <opencv2/core.hpp>
 
 #include "omma/core/photometric.h"
+#include "omma/isp/isp.h"
 #include "omma/core/rig.h"
 
 namespace omma::isp {
@@ -63,5 +64,13 @@ std::vector<cv::Mat> correct_frames(const Rig& rig, const std::vector<cv::Mat>& 
 // mosaic): 1 / (gain_c * V(px)) with c the CFA colour of the raw pixel, clamped to [0, 65535].
 // With it, develop() needs no white balance (Awb::kNone): the gains are the model's.
 cv::Mat flat_gain_from_model(const Photometric& p, int width, int height);
+
+// Raw frames (rig order) developed with the rig's photometric model: a camera with a model gets its
+// flat_gain_from_model() and no white balance (its gains are the model's), a camera without one the
+// options as given. `gains` (flat_gains_from_rig) may be computed once for many frame sets. Empty
+// raw frames stay empty (a camera missing from a frame set). In parallel over the frames.
+std::vector<cv::Mat> flat_gains_from_rig(const Rig& rig);  // empty Mats for cameras without a model
+std::vector<cv::Mat> develop_with_model(const std::vector<cv::Mat>& raws, const IspOptions& options,
+                                        const std::vector<cv::Mat>& gains);
 
 }  // namespace omma::isp
