@@ -16,6 +16,8 @@
 #include "omma/core/progress.h"
 #include "omma/core/rig.h"
 #include "omma/hw/export.h"
+#include "omma/hw/tables.h"
+#include "omma/isp/photometric.h"
 #include "omma/hw/memory.h"
 #include "omma/hw/pipeline.h"
 #include "omma/hw/sweep.h"
@@ -103,9 +105,15 @@ nlohmann::json histogram_json(const std::array<uint64_t, 9>& h) {
 struct SimArgs {
   std::string rig, frames, method = "linear", projection = "vr180", size, out, config, dump_hex;
   std::vector<std::string> sets;
-  bool boundary = false, json = false, no_reference = false;
+  bool boundary = false, json = false, no_reference = false, no_photometric = false;
   double clock_mhz = 120;
 };
+
+double memory_exponent(const std::string& encoding) {
+  if (encoding == "srgb") return hw::kSrgbVignettingExponent;
+  if (encoding == "linear") return 1.0;
+  throw std::invalid_argument("--memory-encoding must be srgb or linear, not '" + encoding + "'");
+}
 
 void run_simulate(const SimArgs& a) {
   set_json_mode(a.json);
@@ -118,7 +126,13 @@ void run_simulate(const SimArgs& a) {
   hw::check_grid(cfg, grid);
   if (a.out.empty() && a.dump_hex.empty() && !a.json) spdlog::warn("hw simulate: no --out given, the panorama is not written");
   const std::vector<cv::Mat> frames = load_frames(a.frames, rig);
-  hw::Pipeline pipe(cfg, rig, grid);
+  // The rig's photometric model in the vignetting memory (sRGB frames: the power-law approximation,
+  // hw/tables.h); the float reference then stitches the frames corrected exactly (isp/photometric.h).
+  const bool photometric = !a.no_photometric && has_photometric(rig);
+  const hw::VignettingTables vig =
+      hw::make_vignetting_tables(cfg, rig, photometric ? hw::vignetting_from_rig(rig, hw::kSrgbVignettingExponent)
+                                                       : hw::VignettingModel{});
+  hw::Pipeline pipe(cfg, rig, grid, &vig);
   pipe.load_frames(frames);
   auto t0 = Clock::now();
   const hw::PipelineResult r = pipe.render(method, a.boundary, true);
@@ -138,12 +152,14 @@ void run_simulate(const SimArgs& a) {
   j["dropped_by_encoder_pixels"] = r.stats.dropped_by_encoder;
   j["mrf_fallback_pixels"] = r.stats.mrf_fallback_pixels;
   j["model_ms"] = hw_ms;
+  j["photometric"] = photometric;
   j["config"] = hw::config_to_json(cfg);
   if (!a.no_reference) {
     pano::StitchOptions so;
     so.method = method;
     so.grid = grid;
-    const std::vector<cv::Mat> ref_frames = hw::rgb565_frames(frames);
+    std::vector<cv::Mat> ref_frames = hw::rgb565_frames(frames);
+    if (photometric) ref_frames = isp::correct_frames(rig, ref_frames);
     t0 = Clock::now();
     const cv::Mat ref = to_u8(pano::stitch(rig, ref_frames, so));
     j["float_ms"] = ms_since(t0);
@@ -372,9 +388,9 @@ void run_memory(MemArgs a) {
 
 // ------------------------------------------------------------------------------------ export / import
 struct ExArgs {
-  std::string rig, dir, method = "linear", projection = "vr180", size, config;
+  std::string rig, dir, method = "linear", projection = "vr180", size, config, memory_encoding = "srgb";
   std::vector<std::string> sets;
-  bool boundary = false, json = false;
+  bool boundary = false, json = false, no_photometric = false;
 };
 
 void run_export(const ExArgs& a) {
@@ -384,15 +400,19 @@ void run_export(const ExArgs& a) {
   o.grid = make_grid(a.projection, a.size);
   o.method = hw_method(a.method);
   o.boundary = a.boundary;
-  // Vignetting: the rig has no photometric model yet; unit tables (hw::VignettingModel is the hook).
+  // Vignetting: the rig's photometric model when it has one (hw/tables.h), else unit tables.
   const Rig rig = load_rig(a.rig);
+  const double exponent = memory_exponent(a.memory_encoding);
+  const bool photometric = !a.no_photometric && has_photometric(rig);
+  if (photometric) o.vignetting = hw::vignetting_from_rig(rig, exponent);
   const hw::ExportSummary s = hw::export_chip(rig, o, a.dir);
   nlohmann::json j = {{"dir", a.dir}, {"files", s.files}, {"cameras", rig.cameras.size()},
                       {"words", {{"reg", s.reg_words}, {"pix_pos", s.pix_pos_words}, {"cam_search", s.cam_search_words},
                                  {"pix_val", s.pix_val_words}}},
                       {"angle_registers", {{"theta_min", s.chip.angles.theta_min}, {"k_theta", s.chip.angles.k_theta},
                                            {"phi_min", s.chip.angles.phi_min}, {"k_phi", s.chip.angles.k_phi}}},
-                      {"vignetting", "unit tables (no photometric model in the rig)"}};
+                      {"vignetting", photometric ? "the rig's photometric model (" + a.memory_encoding + " frame memories)"
+                                                 : std::string("unit tables (no photometric model)")}};
   if (a.json)
     print_json(j);
   else
@@ -456,6 +476,9 @@ void add_hw_command(CLI::App& root) {
   sim->add_option("--dump-hex", sa.dump_hex, "Also write the RTL testbench files: frame_XX.hex, expected_rgb888.hex "
                                              "and the export files");
   sim->add_flag("--no-reference", sa.no_reference, "Skip the float reference (no psnr_vs_float_db)");
+  sim->add_flag("--no-photometric", sa.no_photometric,
+                "Unit vignetting tables even when the rig has a photometric model (by default its model is loaded\n"
+                "into the vignetting memory and the float reference corrects the frames exactly)");
   add_cfg(sim, sa.config, sa.sets);
   sim->add_flag("--json", sa.json, "Print one JSON object on stdout");
   sim->callback([] { run_simulate(sa); });
@@ -510,6 +533,11 @@ void add_hw_command(CLI::App& root) {
   ex->add_option("--projection", ea.projection, "vr180 (default), equirect, equirect-full");
   ex->add_option("--size", ea.size, "Panorama WxH");
   ex->add_flag("--boundary", ea.boundary, "Enable the object boundary unit");
+  ex->add_flag("--no-photometric", ea.no_photometric, "Unit vignetting tables even when the rig has a photometric model");
+  ex->add_option("--memory-encoding", ea.memory_encoding,
+                 "What the frame memories hold: srgb (omma's frames; the vignetting gains are (1/V)^(1/2.2)) or\n"
+                 "linear (the thesis's front end; 1/V)")
+      ->capture_default_str();
   add_cfg(ex, ea.config, ea.sets);
   ex->add_flag("--json", ea.json, "Print one JSON object on stdout");
   ex->callback([] { run_export(ea); });

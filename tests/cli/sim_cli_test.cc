@@ -91,11 +91,11 @@ TEST(SimCli, BadInputGivesClearErrorsAndNoOutput) {
       {rig + " --scene sky" + o, "unknown scene"},
       {rig + " --scene photo:/no/such/photo.jpg" + o, "does not exist"},
       {rig + " --scene colon --truth-size 100" + o, "WxH"},
-      {rig + " --scene colon --truth-size 0x10" + o, "WxH"},
+      {rig + " --scene colon --truth-size 0x10" + o, "out of range"},
       {rig + " --scene colon --projection fisheye" + o, "unknown projection"},
       {rig + " --scene colon --perturb tilt=3" + o, "perturb"},
       {rig + " --scene colon --perturb orient=abc" + o, "not a number"},
-      {" --rig " + (dir / "none.json").string() + " --scene colon" + o, "does not exist"},
+      {" --rig " + (dir / "none.json").string() + " --scene colon" + o, "neither a rig file nor a built-in rig"},
       {rig + " --scene colon --supersample 0" + o, "supersample"},
   };
   for (const auto& c : cases) {

@@ -267,12 +267,12 @@ TEST(Pto, PhotometricModelRoundTripsUnderHuginsNames) {
   EXPECT_FALSE(import_pto(plain).rig.cameras[0].photometric.has_value());
   // Va scales the model (folded into the gains); a non-positive Va or a falloff that reaches zero
   // is an error.
-  const PtoImportResult va = import_pto("i w250 h250 f0 v60 Va2 Vb-0.4 Vm5 Eev0 Er1 Eb1 n\"x.png\"\n");
+  const PtoImportResult va = import_pto("i w250 h250 f0 v60 y0 p0 r0 Va2 Vb-0.4 Vm5 Eev0 Er1 Eb1 n\"x.png\"\n");
   ASSERT_TRUE(va.rig.cameras[0].photometric.has_value());
   EXPECT_NEAR(va.rig.cameras[0].photometric->vignetting[0], -0.2, 1e-12);
   EXPECT_NEAR(va.rig.cameras[0].photometric->gains[1], 2, 1e-12);
-  EXPECT_THROW(import_pto("i w250 h250 f0 v60 Va1 Vb-1.5 Vm5 n\"x.png\"\n"), PtoError);
-  EXPECT_THROW(import_pto("i w250 h250 f0 v60 Va0 Vb-0.4 Vm5 n\"x.png\"\n"), PtoError);
+  EXPECT_THROW(import_pto("i w250 h250 f0 v60 y0 p0 r0 Va1 Vb-1.5 Vm5 n\"x.png\"\n"), PtoError);
+  EXPECT_THROW(import_pto("i w250 h250 f0 v60 y0 p0 r0 Va0 Vb-0.4 Vm5 n\"x.png\"\n"), PtoError);
 }
 
 // The real peer with photometric correction: frames darkened and tinted by each camera's model,

@@ -1,5 +1,7 @@
 #include "omma/hw/tables.h"
 
+#include "omma/core/photometric.h"
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -136,6 +138,35 @@ VignettingTables make_vignetting_tables(const HwConfig& cfg, const Rig& rig, con
     }
   }
   return vt;
+}
+
+VignettingModel vignetting_from_rig(const Rig& rig, double exponent) {
+  if (!has_photometric(rig)) return {};
+  // The same r_max as make_vignetting_tables: the farthest corner from the principal point.
+  std::vector<double> rmax(rig.cameras.size());
+  for (size_t i = 0; i < rig.cameras.size(); ++i) {
+    const Intrinsics& in = rig.cameras[i].in;
+    rmax[i] = std::max(1.0, std::hypot(std::max(in.cu, in.width - in.cu), std::max(in.cv, in.height - in.cv)));
+  }
+  VignettingModel m;
+  m.radial = [rig, rmax, exponent](int cam, double rho) {
+    const RigCamera& c = rig.cameras[static_cast<size_t>(cam)];
+    if (!c.photometric) return 1.0;
+    const Photometric& p = *c.photometric;
+    // Along +x from the model's centre (W/2 + x, H/2 + y): V depends on the radius only.
+    const double col = c.in.width / 2.0 + p.center_px.x() + rho * rmax[static_cast<size_t>(cam)];
+    const double row = c.in.height / 2.0 + p.center_px.y();
+    const double v = std::max(vignetting_falloff(p, c.in.width, c.in.height, col, row), 0.02);
+    return std::pow(1.0 / v, exponent);
+  };
+  m.channel_gain = [rig, exponent](int cam) {
+    const RigCamera& c = rig.cameras[static_cast<size_t>(cam)];
+    if (!c.photometric) return std::array<double, 3>{1.0, 1.0, 1.0};
+    const auto& g = c.photometric->gains;  // B, G, R
+    return std::array<double, 3>{std::pow(1 / g[2], exponent), std::pow(1 / g[1], exponent),
+                                 std::pow(1 / g[0], exponent)};
+  };
+  return m;
 }
 
 }  // namespace omma::hw
