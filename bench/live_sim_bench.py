@@ -176,7 +176,9 @@ def main():
         "samples": samples,
     }
     summary["targets"] = {
-        "camera_fps_min >= 44": summary["camera_fps_min"] >= 44 - 1e-6,
+        # A camera at exactly 44 fps (rates are rounded to whole frames per loop) measures 44 up to the
+        # jitter of its capture instants (0.5 ms by default): 3 sigma of one instant over the window.
+        "camera_fps_min >= 44": summary["camera_fps_min"] >= 44 * (1 - 3 * 0.0005 / max(wall, 1.0)),
         "panorama_fps >= 25": summary["panorama_fps"] >= 25,
         "latency_ms < 50": summary["latency_ms"] < 50,
         "no growth (last minute <= first minute + 10 ms)":
