@@ -23,7 +23,8 @@ struct CalibrateArgs {
   std::vector<std::string> frames;
   std::string rig, out, flat, scene = "auto", focal = "per-camera", center = "per-camera",
                                 distortion = "per-camera", loss = "auto";
-  int radial_terms = 1, max_iterations = 50, min_matches = 30, upsample = 2, threads = 2;
+  int radial_terms = 1, max_iterations = 50, min_matches = 30, upsample = 2, threads = 2,
+      dense_rounds = calib::CalibrationOptions{}.dense_rounds;
   double loss_scale = 1.0, ransac_px = 5, prior_deg = 5, prior_mean_focal = 0.002, tube = 0;
   bool json = false, photometric = false, no_geometric = false;
 };
@@ -74,6 +75,10 @@ void add_calibrate_command(CLI::App& root) {
                   "near field, and scene points on its wall are constrained to it (its axis offset and tilt are "
                   "estimated); default 0 = a scene of unknown shape");
   cmd->add_option("--max-iterations", a.max_iterations, "Ceres iterations per solve (default 50)");
+  cmd->add_option("--dense-rounds", a.dense_rounds,
+                  "Near field: rounds of dense patch alignment and re-solve after the first solve")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 10));
   cmd->add_option("--threads", a.threads,
                   "Ceres threads (default 2); 1 = reproducible to the last digit (near-field results move by "
                   "~0.2 deg with the summation order of a multi-threaded solve)")
@@ -119,6 +124,7 @@ void add_calibrate_command(CLI::App& root) {
     if (a.prior_mean_focal < 0) throw std::invalid_argument("--prior-mean-focal must be >= 0");
     opt.prior_mean_focal = a.prior_mean_focal;
     opt.max_iterations = a.max_iterations;
+    opt.dense_rounds = a.dense_rounds;
     if (a.tube < 0) throw std::invalid_argument("--tube must be a diameter in mm (> 0), or 0 for none");
     opt.tube_diameter_mm = a.tube;
     if (a.tube > 0) opt.scene = calib::SceneModel::kNear;

@@ -1,6 +1,9 @@
 #include "omma/engine/bench.h"
 
 #include <chrono>
+#include <condition_variable>
+#include <mutex>
+#include <thread>
 #include <cstring>
 #include <ctime>
 #include <stdexcept>
@@ -99,29 +102,80 @@ Workload omma_depth_workload(const Rig& rig, const MapOptions& opt, const std::v
   return w;
 }
 
+namespace {
+// A camera thread of the live engine (engine.cc) for the bench: on each job it makes camera c's
+// frame ready (corrected by its photometric table, or copied) while the caller renders.
+class CameraWorker {
+ public:
+  explicit CameraWorker(std::vector<isp::PhotometricTable> tables) : tables_(std::move(tables)) {
+    thread_ = std::thread([this] { loop(); });
+  }
+  ~CameraWorker() {
+    {
+      std::lock_guard<std::mutex> l(m_);
+      quit_ = true;
+    }
+    cv_.notify_all();
+    thread_.join();
+  }
+  void start(const cv::Mat* frame, size_t c) {
+    std::lock_guard<std::mutex> l(m_);
+    frame_ = frame, camera_ = c, busy_ = true;
+    cv_.notify_all();
+  }
+  const cv::Mat& wait() {
+    std::unique_lock<std::mutex> l(m_);
+    cv_.wait(l, [this] { return !busy_; });
+    return ready_;
+  }
+
+ private:
+  void loop() {
+    std::unique_lock<std::mutex> l(m_);
+    for (;;) {
+      cv_.wait(l, [this] { return quit_ || (busy_ && frame_); });
+      if (quit_) return;
+      l.unlock();
+      if (!tables_.empty()) tables_[camera_].apply(*frame_, ready_);  // the correction ...
+      else frame_->copyTo(ready_);                                      // ... or the plain hand-over
+      l.lock();
+      busy_ = false, frame_ = nullptr;
+      cv_.notify_all();
+    }
+  }
+  std::vector<isp::PhotometricTable> tables_;
+  std::thread thread_;
+  std::mutex m_;
+  std::condition_variable cv_;
+  const cv::Mat* frame_ = nullptr;
+  size_t camera_ = 0;
+  bool busy_ = false, quit_ = false;
+  cv::Mat ready_;
+};
+}  // namespace
+
 Workload omma_live_workload(const Rig& rig, const MapOptions& opt, const std::vector<cv::Mat>& frames,
                             bool photometric) {
   auto map = std::make_shared<CompiledMap>(compile_map(rig, opt));
   auto store = std::make_shared<FrameStore>(map->layout);
   for (size_t c = 0; c < frames.size(); ++c) store->set(int(c), frames[c]);
-  auto tables = std::make_shared<std::vector<isp::PhotometricTable>>();
+  std::vector<isp::PhotometricTable> tables;
   if (photometric) {
     Rig modelled = rig;
     for (RigCamera& c : modelled.cameras) c.photometric = sim::true_photometric(c, sim::CameraEffects{});
-    *tables = isp::photometric_tables(modelled);
+    tables = isp::photometric_tables(modelled);
   }
+  auto worker = std::make_shared<CameraWorker>(std::move(tables));
   auto fr = std::make_shared<std::vector<cv::Mat>>(frames);
   auto out = std::make_shared<cv::Mat>();
   auto next = std::make_shared<size_t>(0);
   Workload w;
   w.name = "omma-" + pano::to_string(opt.method) + (photometric ? "-photometric-" : "-store-") + size_tag(opt.grid);
-  w.run = [map, store, tables, fr, out, next] {
+  w.run = [map, store, worker, fr, out, next] {
     const size_t c = (*next)++ % fr->size();
-    cv::Mat ready;
-    if (!tables->empty()) (*tables)[c].apply((*fr)[c], ready);  // the camera thread's work ...
-    else ready = (*fr)[c].clone();
-    store->set(int(c), ready);                                     // ... and the render loop's
-    render(*map, *store, *out, {});
+    worker->start(&(*fr)[c], c);               // the camera thread, concurrently with ...
+    render(*map, *store, *out, {});            // ... the render loop's panorama
+    store->set(int(c), worker->wait());        // then the new frame enters the store
   };
   w.info = {{"bytes_per_pixel", map->bytes_per_pixel()}, {"camera_frames_per_panorama", 1},
             {"photometric", photometric}};
@@ -348,11 +402,13 @@ nlohmann::json BenchRatio::to_json() const {
   if (name.rfind("omma-mrf-1080x1080", 0) == 0) j["target_400fps_met"] = fps >= 400;
   if (vs_static > 0) j["vs_static"] = vs_static;
   if (name == "omma-mrf-depth-1080x1080") j["target_25fps_met"] = fps >= 25;
-  if (vs_plain > 0) {
-    j["vs_plain_render"] = vs_plain, j["target_drop_at_most_10pct_met"] = vs_plain >= 0.9;
-    j["vs_plain_render_rounds"] = vs_plain_rounds;
+  // Issue 13 point 5: what the correction costs is the photometric workload against the same frame
+  // entry without it (store); against the plain render (no frames entering at all) for reference.
+  if (vs_plain > 0) j["vs_plain_render"] = vs_plain, j["vs_plain_render_rounds"] = vs_plain_rounds;
+  if (vs_store > 0) {
+    j["vs_store_without_photometric"] = vs_store, j["vs_store_rounds"] = vs_store_rounds;
+    j["target_drop_at_most_10pct_met"] = vs_store >= 0.9;
   }
-  if (vs_store > 0) j["vs_store_without_photometric"] = vs_store, j["vs_store_rounds"] = vs_store_rounds;
   return j;
 }
 

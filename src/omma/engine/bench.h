@@ -37,14 +37,15 @@ Workload omma_workload(const Rig& rig, const MapOptions& opt, int threads, const
 // "omma-<method>-depth-<W>x<H>".
 Workload omma_depth_workload(const Rig& rig, const MapOptions& opt, const std::vector<cv::Mat>& frames);
 
-// Our renderer with frames arriving as in the live engine (engine.h): per panorama, one camera's
-// new frame (round robin over the cameras) is made ready as the engine's camera thread does it
-// (photometric: corrected by that camera's table, isp/photometric.h; otherwise copied) and set
-// into the frame store, then the panorama is rendered. The tables are the simulator's model of
-// the default sensor (sim::true_photometric: 50 % cos^4 vignetting, gains in [0.9, 1.1]). Named
+// Our renderer with frames arriving as in the live engine (engine.h): per panorama one camera's new
+// frame (round robin over the cameras) is made ready on a camera thread, as the engine's camera
+// threads do it (photometric: corrected by that camera's table, isp/photometric.h; otherwise
+// copied), concurrently with the render of the panorama on the render threads, and then set into
+// the frame store. The tables are the simulator's model of the default sensor
+// (sim::true_photometric: 50 % cos^4 vignetting, gains in [0.9, 1.1]). Named
 // "omma-<method>-photometric-<W>x<H>" / "omma-<method>-store-<W>x<H>". One camera frame per
-// panorama is about twice the live load (24 cameras at 30 fps = 720 frames/s against ~1400
-// panoramas/s), so the drop it shows is an upper bound.
+// panorama at ~1200 panoramas/s is the thesis's whole camera load (24 cameras at 44-56 frames/s);
+// the live engine renders only 30 of those panoramas per second.
 Workload omma_live_workload(const Rig& rig, const MapOptions& opt, const std::vector<cv::Mat>& frames,
                             bool photometric);
 

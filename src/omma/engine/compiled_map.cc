@@ -1,6 +1,7 @@
 #include "omma/engine/compiled_map.h"
 
 #include <algorithm>
+#include <fmt/format.h>
 #include <array>
 #include <chrono>
 #include <cmath>
@@ -239,7 +240,11 @@ bool MapOptions::IsValid(std::string* why) const {
       check_image_size(grid.width, grid.height, "panorama size");
     } else {
       check_banded_size(grid.width, grid.height, "panorama size");
-      check_image_size(window.width, window.height, "map window");
+      // A band spans the panorama's width (up to kMaxBandedSide) but holds at most an image's pixels.
+      check_banded_size(window.width, window.height, "map window");
+      if (int64_t(window.width) * window.height > kMaxImagePixels)
+        return fail(fmt::format("map window {}x{} holds more than {} pixels", window.width, window.height,
+                                kMaxImagePixels));
     }
   } catch (const std::invalid_argument& e) {
     return fail(e.what());

@@ -81,7 +81,8 @@ bool CompiledMap::IsValid(std::string* why) const {
     if (why) *why = m;
     return false;
   };
-  if (width <= 0 || height <= 0 || int64_t(width) * height > kMaxImagePixels || width > kMaxImageSide ||
+  // A whole panorama's map or one band of a larger one (as wide as the panorama, core/limits.h).
+  if (width <= 0 || height <= 0 || int64_t(width) * height > kMaxImagePixels || width > kMaxBandedSide ||
       height > kMaxImageSide)
     return fail("map size out of range");
   if (method != pano::Method::kNearest && method != pano::Method::kLinear && method != pano::Method::kGaussian &&
