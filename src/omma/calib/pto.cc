@@ -468,7 +468,12 @@ PtoImportResult import_pto(const std::string& text, const fs::path& base_dir) {
     }
     // Photometry (see pto.h): only what differs from "no correction" makes a model.
     {
-      const int vm = static_cast<int>(value(i, "Vm", 0));
+      // Vm: Hugin's vignetting mode flags (1 radial, 2 flat field, 4 and 8 options), a whole number.
+      const double vm_value = value(i, "Vm", 0);
+      if (!(vm_value >= 0 && vm_value <= 63 && vm_value == std::floor(vm_value)))
+        throw PtoError(fmt::format("PTO image {} (line {}): Vm{} is not a vignetting mode (a whole number 0..63)", i,
+                                   images[i]["_line"], vm_value));
+      const int vm = static_cast<int>(vm_value);
       const double va = value(i, "Va", 1), eev = value(i, "Eev", 0), er = value(i, "Er", 1), eb = value(i, "Eb", 1);
       Photometric ph;
       if (vm & 1) {

@@ -273,6 +273,10 @@ TEST(Pto, PhotometricModelRoundTripsUnderHuginsNames) {
   EXPECT_NEAR(va.rig.cameras[0].photometric->gains[1], 2, 1e-12);
   EXPECT_THROW(import_pto("i w250 h250 f0 v60 y0 p0 r0 Va1 Vb-1.5 Vm5 n\"x.png\"\n"), PtoError);
   EXPECT_THROW(import_pto("i w250 h250 f0 v60 y0 p0 r0 Va0 Vb-0.4 Vm5 n\"x.png\"\n"), PtoError);
+  // Found by the fuzzer: a vignetting mode beyond int (UB when narrowed) or not whole.
+  EXPECT_THROW(import_pto("i w250 h250 f0 v60 y0 p0 r0 Vm57777777777777777777777777777777777777777777777 n\"x.png\"\n"),
+               PtoError);
+  EXPECT_THROW(import_pto("i w250 h250 f0 v60 y0 p0 r0 Vm1.5 Vb-0.4 n\"x.png\"\n"), PtoError);
 }
 
 // The real peer with photometric correction: frames darkened and tinted by each camera's model,
