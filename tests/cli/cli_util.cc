@@ -1,5 +1,7 @@
 #include "tests/cli/cli_util.h"
 
+#include <gtest/gtest.h>
+
 #include <fstream>
 #include <random>
 #include <sstream>
@@ -11,13 +13,6 @@ namespace omma::test {
 namespace fs = std::filesystem;
 
 nlohmann::json RunResult::json() const { return nlohmann::json::parse(out); }
-
-static std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
 
 RunResult run_omma(const std::string& args, int timeout_s) {
   return run_command(OMMA_BINARY " " + args, timeout_s);
@@ -53,6 +48,25 @@ fs::path louvre_frames_folder(const std::string& tag) {
   sim::testing::write_frames_folder(dir, rig, sim::testing::render_frames(rig, tex),
                                      sim::testing::render_truth(grid, tex));
   return dir;
+}
+
+double eval_psnr(const std::filesystem::path& pano, const std::filesystem::path& truth) {
+  const RunResult e = run_omma("eval --pano " + pano.string() + " --truth " + truth.string() + " --json");
+  EXPECT_EQ(e.exit_code, 0) << e.err;
+  return e.exit_code == 0 ? e.json().at("psnr_db").get<double>() : 0.0;
+}
+
+std::string slurp(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+int count(const std::string& s, const std::string& what) {
+  int n = 0;
+  for (size_t at = s.find(what); at != std::string::npos; at = s.find(what, at + 1)) ++n;
+  return n;
 }
 
 }  // namespace omma::test

@@ -30,4 +30,13 @@ std::string data_dir();  // ../shared/data beside the source tree
 // on a 5 mm dome, sim/test_scenes.h) and truth.png (vr180 128x128) of the far-field louvre.jpg.
 std::filesystem::path louvre_frames_folder(const std::string& tag);
 
+// `omma eval --pano PANO --truth TRUTH --json`: its PSNR (dB); a failing eval fails the test.
+double eval_psnr(const std::filesystem::path& pano, const std::filesystem::path& truth);
+
+// The whole file as bytes ("" if it cannot be read).
+std::string slurp(const std::filesystem::path& path);
+
+// How often `what` occurs in `s` (overlapping occurrences count).
+int count(const std::string& s, const std::string& what);
+
 }  // namespace omma::test

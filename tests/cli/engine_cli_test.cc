@@ -242,11 +242,6 @@ TEST(EngineCli, BadInputGivesClearErrorsAndLeavesNoOutput) {
   fs::remove_all(dir);
 }
 
-std::string slurp(const fs::path& p) {
-  std::ifstream f(p);
-  return std::string(std::istreambuf_iterator<char>(f), {});
-}
-
 // Starts `PREFIX omma ARGS` in the background (stdout, stderr to DIR/out, DIR/err); its pid is omma's
 // (the shell execs it).
 pid_t spawn_omma(const std::string& args, const fs::path& dir, const std::string& prefix = "") {

@@ -16,12 +16,6 @@ namespace omma::test {
 namespace {
 namespace fs = std::filesystem;
 
-double eval_psnr(const fs::path& pano, const fs::path& truth) {
-  const RunResult e = run_omma("eval --pano " + pano.string() + " --truth " + truth.string() + " --json");
-  EXPECT_EQ(e.exit_code, 0) << e.err;
-  return e.json().at("psnr_db").get<double>();
-}
-
 TEST(PhotometricCli, CalibratedPhotometryBringsTheStitchToIdealFrames) {
   const fs::path d = temp_dir("photometric");
   const std::string scene = " --scene photo:" + data_dir() + "/lake.jpg --projection vr180 --truth-size 256x256 ";

@@ -12,12 +12,6 @@ namespace omma::test {
 namespace {
 namespace fs = std::filesystem;
 
-double eval_psnr(const fs::path& pano, const fs::path& truth) {
-  const RunResult e = run_omma("eval --pano " + pano.string() + " --truth " + truth.string() + " --json");
-  EXPECT_EQ(e.exit_code, 0) << e.err;
-  return e.json().at("psnr_db").get<double>();
-}
-
 TEST(RawStitchCli, IspDevelopedFramesMatchTheRgbPath) {
   const fs::path d = temp_dir("rawstitch");
   save_rig(sim::testing::small_rig(64), d / "rig.json");

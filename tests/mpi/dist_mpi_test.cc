@@ -22,18 +22,6 @@ using json = nlohmann::json;
 // As root, OpenMPI wants --allow-run-as-root; --oversubscribe: more ranks than the 2 cores.
 const std::string kMpirun = std::string(OMMA_MPIEXEC) + " --allow-run-as-root --oversubscribe";
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-int count(const std::string& s, const std::string& what) {
-  int n = 0;
-  for (size_t at = s.find(what); at != std::string::npos; at = s.find(what, at + 1)) ++n;
-  return n;
-}
 
 // item_NNNN.bin -> contents, and every other file name (temporaries, journals).
 struct Folder {

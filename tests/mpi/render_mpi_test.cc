@@ -23,18 +23,6 @@ using json = nlohmann::json;
 const std::string kMpirun = std::string(OMMA_MPIEXEC) + " --allow-run-as-root --oversubscribe";
 constexpr int kSets = 6;
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-int count(const std::string& s, const std::string& what) {
-  int n = 0;
-  for (size_t at = s.find(what); at != std::string::npos; at = s.find(what, at + 1)) ++n;
-  return n;
-}
 
 // A recording of 12 Giga-Eye cameras (skip-5 mode, 432 x 324) and kSets frame sets of smooth
 // 12-bit patterns that differ per camera and set.
