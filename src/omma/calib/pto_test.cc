@@ -34,6 +34,16 @@ Rig perturbed_k1_rig() {
   return testing::perturb(testing::test_dome(), p, 11);  // fu = fv, k1 only, shifted centres
 }
 
+// nona's output: its alpha channel (if any) is returned as the coverage mask and removed from
+// `image`, which becomes BGR; without alpha every pixel counts as covered.
+cv::Mat split_alpha(cv::Mat& image) {
+  if (image.channels() != 4) return cv::Mat(image.size(), CV_8U, cv::Scalar(255));
+  cv::Mat alpha;
+  cv::extractChannel(image, alpha, 3);
+  cv::cvtColor(image, image, cv::COLOR_BGRA2BGR);
+  return alpha;
+}
+
 TEST(Pto, YawPitchRollConventions) {
   // y = p = r = 0 looks along dome -x with image right = +y, image down = -z.
   PtoCamera p;
@@ -197,13 +207,7 @@ TEST(Pto, NonaRendersOurExportLikeOurNearestNeighbourStitch) {
   std::printf("nona output %dx%d, %d channels\n", nona.cols, nona.rows, nona.channels());
   ASSERT_EQ(nona.cols, 1440);
   ASSERT_EQ(nona.rows, 360);
-  cv::Mat nona_mask;
-  if (nona.channels() == 4) {
-    cv::extractChannel(nona, nona_mask, 3);
-    cv::cvtColor(nona, nona, cv::COLOR_BGRA2BGR);
-  } else {
-    nona_mask = cv::Mat(nona.size(), CV_8U, cv::Scalar(255));
-  }
+  cv::Mat nona_mask = split_alpha(nona);
   cv::flip(nona, nona, 1);  // PanoTools' longitude runs against omma's phi (pto.h)
   cv::flip(nona_mask, nona_mask, 1);
   const PanoGrid grid{Projection::kEquirect, 1440, 360};
@@ -320,13 +324,7 @@ TEST(Pto, NonaAppliesOurPhotometricModelLikeWeDo) {
   cv::Mat nona = cv::imread((dir / "nona_out.png").string(), cv::IMREAD_UNCHANGED);
   ASSERT_FALSE(nona.empty());
   ASSERT_EQ(nona.depth(), CV_16U);
-  cv::Mat nona_mask;
-  if (nona.channels() == 4) {
-    cv::extractChannel(nona, nona_mask, 3);
-    cv::cvtColor(nona, nona, cv::COLOR_BGRA2BGR);
-  } else {
-    nona_mask = cv::Mat(nona.size(), CV_8U, cv::Scalar(255));
-  }
+  cv::Mat nona_mask = split_alpha(nona);
   cv::flip(nona, nona, 1);
   cv::flip(nona_mask, nona_mask, 1);
   // Linear 16-bit -> sRGB 8-bit.
