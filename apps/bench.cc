@@ -46,7 +46,7 @@ void add_bench_command(CLI::App& root) {
                 "\"vs_opencv_multiband\", \"memcpy_bound_over_ours\", targets met}]} on stdout");
   cmd->callback([] {
     set_json_mode(o.json);
-    const Rig rig = o.rig.empty() ? design::thesis_prototype_rig() : load_rig(o.rig);
+    const Rig rig = o.rig.empty() ? design::thesis_prototype_rig() : design::load_rig_or_builtin(o.rig);
     if (!o.save_rig.empty()) save_rig(rig, o.save_rig);
     engine::BenchOptions bo;
     bo.min_seconds = o.seconds;

@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include "apps/command.h"
+#include "omma/design/prototype.h"
 #include "omma/calib/calibrate.h"
 #include "omma/calib/photometric.h"
 #include "omma/core/frames.h"
@@ -97,7 +98,7 @@ void add_calibrate_command(CLI::App& root) {
   cmd->add_flag("--json", a.json, "Print one JSON object on stdout");
   cmd->callback([] {
     set_json_mode(a.json);
-    const Rig nominal = load_rig(a.rig);
+    const Rig nominal = design::load_rig_or_builtin(a.rig);
     const bool photometric = a.photometric || !a.flat.empty();
     if (a.no_geometric && !photometric)
       throw std::invalid_argument("--no-geometric leaves nothing to do: add --photometric or --flat DIR");

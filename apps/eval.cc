@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "apps/command.h"
+#include "omma/design/prototype.h"
 #include "omma/core/grid.h"
 #include "omma/core/io.h"
 #include "omma/core/rig.h"
@@ -46,7 +47,7 @@ void run_eval(const EvalArgs& a) {
                                               pano_img.cols, pano_img.rows));
     seam = pano::seam_mask(m, true);
   } else if (!a.rig.empty()) {
-    const Rig rig = load_rig(a.rig);
+    const Rig rig = design::load_rig_or_builtin(a.rig);
     const PanoGrid grid{parse_projection(a.projection), pano_img.cols, pano_img.rows};
     seam = pano::seam_mask(pano::coverage_map(rig, grid), false);
   }

@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "apps/command.h"
+#include "omma/design/prototype.h"
 #include "omma/core/frames.h"
 #include "omma/core/io.h"
 #include "omma/core/log.h"
@@ -90,7 +91,7 @@ pano::Method hw_method(const std::string& name) {
 }
 
 Rig rig_for(const std::string& rig_path, const std::string& frames) {
-  if (!rig_path.empty()) return load_rig(rig_path);
+  if (!rig_path.empty()) return design::load_rig_or_builtin(rig_path);
   if (!frames.empty() && fs::exists(fs::path(frames) / "rig.json")) return load_rig(fs::path(frames) / "rig.json");
   throw std::invalid_argument("--rig is required (or a frames folder with rig.json)");
 }
@@ -300,7 +301,7 @@ void run_throughput(ThArgs a) {
   if (!a.rig.empty()) {
     // Beyond the thesis: the cycles the bit-accurate pipeline counts on this rig and grid
     // (contributors per pixel decide the search and pixel value Th).
-    const Rig rig = load_rig(a.rig);
+    const Rig rig = design::load_rig_or_builtin(a.rig);
     const hw::HwConfig cfg = load_config(a.config, {});
     PanoGrid g{parse_projection(a.projection), s.width, s.height};
     hw::Pipeline p(cfg, rig, g);
@@ -341,7 +342,7 @@ struct MemArgs {
 void run_memory(MemArgs a) {
   set_json_mode(a.json);
   if (!a.rig.empty()) {
-    const Rig rig = load_rig(a.rig);
+    const Rig rig = design::load_rig_or_builtin(a.rig);
     a.o.cameras = static_cast<int>(rig.cameras.size());
     a.frame = fmt::format("{}x{}", rig.cameras[0].in.width, rig.cameras[0].in.height);
   }
@@ -401,7 +402,7 @@ void run_export(const ExArgs& a) {
   o.method = hw_method(a.method);
   o.boundary = a.boundary;
   // Vignetting: the rig's photometric model when it has one (hw/tables.h), else unit tables.
-  const Rig rig = load_rig(a.rig);
+  const Rig rig = design::load_rig_or_builtin(a.rig);
   const double exponent = memory_exponent(a.memory_encoding);
   const bool photometric = !a.no_photometric && has_photometric(rig);
   if (photometric) o.vignetting = hw::vignetting_from_rig(rig, exponent);
@@ -437,7 +438,7 @@ void run_import(const ImArgs& a) {
   nlohmann::json j = {{"rig", a.rig_out}, {"cameras", r.rig.cameras.size()}, {"method", pano::to_string(r.chip.method)},
                       {"grid", {{"projection", to_string(r.grid.projection)}, {"width", r.grid.width}, {"height", r.grid.height}}},
                       {"quantisation_bound", diff_json(b)}};
-  if (!a.compare.empty()) j["difference"] = diff_json(hw::rig_difference(load_rig(a.compare), r.rig));
+  if (!a.compare.empty()) j["difference"] = diff_json(hw::rig_difference(design::load_rig_or_builtin(a.compare), r.rig));
   if (a.json)
     print_json(j);
   else

@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include "apps/command.h"
+#include "omma/design/prototype.h"
 #include "omma/calib/pto.h"
 #include "omma/core/io.h"
 #include "omma/core/log.h"
@@ -32,7 +33,7 @@ void add_pto_command(CLI::App& root) {
   ex->add_flag("--json", json_ex, "Print one JSON object on stdout");
   ex->callback([] {
     set_json_mode(json_ex);
-    const Rig rig = load_rig(rig_path);
+    const Rig rig = design::load_rig_or_builtin(rig_path);
     calib::PtoExportOptions opt;
     // Hugin resolves image names relative to the project file's folder.
     if (!frames.empty()) {

@@ -45,7 +45,7 @@ void run_resolution(const ResolutionArgs& a) {
   const Size2 size = parse_size(a.size);
   if (!(a.distance > 5 && a.distance < 1000)) throw std::invalid_argument("--distance must be 5..1000 mm");
   if (!(a.contrast > 0 && a.contrast < 1)) throw std::invalid_argument("--contrast must be in (0, 1)");
-  const Rig rig = a.rig.empty() ? design::thesis_prototype_rig() : load_rig(a.rig);
+  const Rig rig = a.rig.empty() ? design::thesis_prototype_rig() : design::load_rig_or_builtin(a.rig);
   if (rig.cameras.empty()) throw RigError("the rig has no cameras");
   const auto scene = sim::make_usaf_scene(a.distance);
   sim::SimulateOptions o;

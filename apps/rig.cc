@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include "apps/command.h"
+#include "omma/design/prototype.h"
 #include "omma/core/rig.h"
 
 namespace omma::app {
@@ -18,7 +19,7 @@ void add_rig_command(CLI::App& root) {
   check->add_flag("--json", json, "Print one JSON object on stdout");
   check->callback([] {
     set_json_mode(json);
-    const Rig rig = load_rig(path);
+    const Rig rig = design::load_rig_or_builtin(path);
     double min_aov = 1e9, max_aov = 0;
     for (const auto& c : rig.cameras) {
       min_aov = std::min(min_aov, rad2deg(c.in.aov));

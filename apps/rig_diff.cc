@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include "apps/command.h"
+#include "omma/design/prototype.h"
 #include "omma/calib/rig_diff.h"
 
 namespace omma::app {
@@ -23,7 +24,7 @@ void add_rig_diff_command(CLI::App& root) {
   cmd->add_flag("--json", json, "Print one JSON object on stdout");
   cmd->callback([] {
     set_json_mode(json);
-    const calib::RigDiff d = calib::diff_rigs(load_rig(a_path), load_rig(b_path), align);
+    const calib::RigDiff d = calib::diff_rigs(design::load_rig_or_builtin(a_path), design::load_rig_or_builtin(b_path), align);
     auto stat = [](const calib::Stat& s) { return nlohmann::json{{"median", s.median}, {"max", s.max}, {"mean", s.mean}}; };
     if (json) {
       const double align_deg = rad2deg(Eigen::AngleAxisd(d.alignment).angle());

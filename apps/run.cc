@@ -8,6 +8,7 @@
 #include <opencv2/core/utility.hpp>
 
 #include "apps/command.h"
+#include "omma/design/prototype.h"
 #include "omma/core/grid.h"
 #include "omma/core/progress.h"
 #include "omma/core/rig.h"
@@ -113,7 +114,7 @@ void add_run_command(CLI::App& root) {
   cmd->add_flag("--json", o.json, "Print only the JSON summary on stdout (no progress line)");
   cmd->callback([] {
     set_json_mode(o.json);
-    const Rig rig = load_rig(o.rig);
+    const Rig rig = design::load_rig_or_builtin(o.rig);
     engine::EngineOptions eo;
     eo.map.method = pano::parse_method(o.method);
     const Size2 size = parse_size(o.size);

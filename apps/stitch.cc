@@ -14,6 +14,7 @@
 #include <tbb/parallel_for.h>
 
 #include "apps/command.h"
+#include "omma/design/prototype.h"
 #include "omma/core/frames.h"
 #include "omma/core/grid.h"
 #include "omma/core/io.h"
@@ -147,7 +148,7 @@ void run_stitch(const StitchArgs& a) {
     grid.height = s.height;
   }
   if (a.threshold < 0 || a.threshold > 1) throw std::invalid_argument("--threshold must be in [0, 1]");
-  const Rig rig = load_rig(a.rig);
+  const Rig rig = design::load_rig_or_builtin(a.rig);
   if (rig.cameras.empty()) throw std::invalid_argument("rig " + a.rig + " has no cameras");
   const bool photometric = has_photometric(rig) && !a.no_photometric;
   std::vector<cv::Mat> frames;

@@ -95,7 +95,7 @@ TEST(SimCli, BadInputGivesClearErrorsAndNoOutput) {
       {rig + " --scene colon --projection fisheye" + o, "unknown projection"},
       {rig + " --scene colon --perturb tilt=3" + o, "perturb"},
       {rig + " --scene colon --perturb orient=abc" + o, "not a number"},
-      {" --rig " + (dir / "none.json").string() + " --scene colon" + o, "neither a rig file nor a built-in rig"},
+      {" --rig " + (dir / "none.json").string() + " --scene colon" + o, "does not exist"},
       {rig + " --scene colon --supersample 0" + o, "supersample"},
   };
   for (const auto& c : cases) {

@@ -204,7 +204,9 @@ std::vector<std::string> builtin_rig_names() {
 }
 
 Rig load_rig_or_builtin(const std::string& spec) {
-  if (std::filesystem::exists(spec)) return load_rig(spec);
+  // A path (a folder separator or a .json name) is a file: its own error if it cannot be read.
+  const bool path_like = spec.find('/') != std::string::npos || std::filesystem::path(spec).extension() == ".json";
+  if (path_like || std::filesystem::exists(spec)) return load_rig(spec);
   if (auto r = builtin_rig(spec)) return *r;
   throw RigError(fmt::format("'{}' is neither a rig file nor a built-in rig ({})", spec,
                              fmt::join(builtin_rig_names(), ", ")));

@@ -4,6 +4,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -24,7 +25,8 @@ bool SweepOptions::IsValid(std::string* why) const {
   if (!(near_mm > 0) || !std::isfinite(near_mm)) return fail("near distance must be a positive number of mm");
   if (!(far_mm > near_mm)) return fail(fmt::format("far distance {} mm must exceed near {} mm", far_mm, near_mm));
   // far_mm may be +infinity (the last candidate is then the scene at infinity, s = 0)
-  if (steps < 2 || steps > 256) return fail(fmt::format("steps must be 2..256, got {}", steps));
+  if (steps < 2 || steps > kMaxSteps)
+    return fail(fmt::format("steps must be 2..{}, got {}", kMaxSteps, steps));
   if (factor < 0 || factor > 64) return fail(fmt::format("coarse factor must be 0..64, got {}", factor));
   if (factor == 0 && !(pitch_deg > 0)) return fail("coarse pitch must be positive");
   if (window < 1 || window > 8) return fail(fmt::format("patch radius must be 1..8, got {}", window));
@@ -348,10 +350,12 @@ DepthEstimate DepthSweep::estimate(const std::vector<cv::Mat>& frames_in, const 
     // candidate index), at most `fill`: the cost curve is continued flat, so that neither end of the
     // overlap (nearer: overlaps shrink; farther: at infinity the footprints of a far-field scene's
     // cameras part at the edge of the coverage) pulls the winner towards it.
-    std::vector<float> ext(K, fill);
+    std::array<float, kMaxSteps> ext;  // on the stack: this runs for every coarse pixel of every frame
+    std::fill_n(ext.begin(), K, fill);
     if (best != std::numeric_limits<float>::max()) {
       int below = -1;
-      std::vector<int> nearest(K, -1);
+      std::array<int, kMaxSteps> nearest;
+      std::fill_n(nearest.begin(), K, -1);
       for (int k = 0; k < K; ++k) {
         if (den[size_t(k) * N + u] >= kEvidence) below = k;
         nearest[k] = below;

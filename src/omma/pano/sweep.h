@@ -73,12 +73,14 @@
 
 namespace omma::pano {
 
+inline constexpr int kMaxSteps = 256;  // candidates per sweep at most (SweepOptions::steps)
+
 struct SweepOptions {
   double near_mm = 8;      // nearest candidate distance from q, mm (must lie outside the dome)
   // Farthest candidate, mm; +infinity (the default) makes the last candidate the scene at infinity.
   // A 5 mm dome still sees 2 pixels of parallax at 300 mm: far-field scenes need infinity.
   double far_mm = std::numeric_limits<double>::infinity();
-  int steps = 96;          // number of candidates (uniform in 1/D)
+  int steps = 96;          // number of candidates (uniform in 1/D), 2 .. kMaxSteps
   // Coarse grid = output / factor; 0: the factor that makes its pitch closest to pitch_deg.
   int factor = 0;
   double pitch_deg = 1.33;  // about 5 pixels of the prototype's cameras (0.26 deg/pixel)
