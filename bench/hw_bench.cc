@@ -21,7 +21,7 @@ struct Fixture {
   PanoGrid grid{Projection::kVr180, 1080, 1080};
   Fixture() {
     const cv::Mat tex = sim::testing::photo_texture(std::string(OMMA_DATA_DIR) + "/louvre.jpg", 1440);
-    for (const cv::Mat& f : sim::testing::render_frames(rig, tex)) frames.push_back(to_u8(f));
+    frames = sim::testing::render_frames_u8(rig, tex);
   }
 };
 const Fixture& fixture() {

@@ -50,10 +50,8 @@ inline const std::vector<cv::Mat>& colon_frames() {
 
 inline const std::vector<cv::Mat>& louvre_frames() {
   static const std::vector<cv::Mat> frames = [] {
-    const cv::Mat tex = sim::testing::photo_texture(std::string(OMMA_DATA_DIR) + "/louvre.jpg", 1440);
-    std::vector<cv::Mat> out;
-    for (const cv::Mat& f : sim::testing::render_frames(rig24(), tex)) out.push_back(to_u8(f));
-    return out;
+    return sim::testing::render_frames_u8(
+        rig24(), sim::testing::photo_texture(std::string(OMMA_DATA_DIR) + "/louvre.jpg", 1440));
   }();
   return frames;
 }

@@ -32,10 +32,8 @@ const Rig& rig24() {
 
 const std::vector<cv::Mat>& louvre_frames() {
   static const std::vector<cv::Mat> frames = [] {
-    const cv::Mat tex = sim::testing::photo_texture(std::string(OMMA_DATA_DIR) + "/louvre.jpg", 1440);
-    std::vector<cv::Mat> out;
-    for (const cv::Mat& f : sim::testing::render_frames(rig24(), tex)) out.push_back(to_u8(f));
-    return out;
+    return sim::testing::render_frames_u8(
+        rig24(), sim::testing::photo_texture(std::string(OMMA_DATA_DIR) + "/louvre.jpg", 1440));
   }();
   return frames;
 }
@@ -111,7 +109,7 @@ TEST(Pipeline, PhotometricModelInTheVignettingMemory) {
   const VignettingTables unit = make_vignetting_tables(cfg, rig);
   {
     const RigCamera& c = rig.cameras[5];
-    const double rmax = std::hypot(std::max(c.in.cu, c.in.width - c.in.cu), std::max(c.in.cv, c.in.height - c.in.cv));
+    const double rmax = vignetting_rmax(c.in);
     const int e = cfg.vig_entries() / 2;
     const double rho = std::sqrt((e + 0.5) * std::ldexp(1.0, vt.vig_shift)) / rmax;
     const double v = vignetting_falloff(*c.photometric, c.in.width, c.in.height,

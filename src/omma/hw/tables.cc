@@ -107,6 +107,10 @@ RigCamera camera_from_regs(const HwConfig& cfg, const CameraRegs& r, int id) {
   return cam;
 }
 
+double vignetting_rmax(const Intrinsics& in) {
+  return std::max(1.0, std::hypot(std::max(in.cu, in.width - in.cu), std::max(in.cv, in.height - in.cv)));
+}
+
 VignettingTables make_vignetting_tables(const HwConfig& cfg, const Rig& rig, const VignettingModel& model) {
   VignettingTables vt;
   // Largest squared radius (pixels) of any camera: the farthest corner from the principal point.
@@ -115,7 +119,7 @@ VignettingTables make_vignetting_tables(const HwConfig& cfg, const Rig& rig, con
   for (size_t i = 0; i < rig.cameras.size(); ++i) {
     const Intrinsics& in = rig.cameras[i].in;
     const double dx = std::max(in.cu, in.width - in.cu), dy = std::max(in.cv, in.height - in.cv);
-    rmax[i] = std::max(1.0, std::hypot(dx, dy));
+    rmax[i] = vignetting_rmax(in);
     r2max = std::max(r2max, dx * dx + dy * dy);
   }
   vt.vig_shift = 0;
@@ -142,19 +146,13 @@ VignettingTables make_vignetting_tables(const HwConfig& cfg, const Rig& rig, con
 
 VignettingModel vignetting_from_rig(const Rig& rig, double exponent) {
   if (!has_photometric(rig)) return {};
-  // The same r_max as make_vignetting_tables: the farthest corner from the principal point.
-  std::vector<double> rmax(rig.cameras.size());
-  for (size_t i = 0; i < rig.cameras.size(); ++i) {
-    const Intrinsics& in = rig.cameras[i].in;
-    rmax[i] = std::max(1.0, std::hypot(std::max(in.cu, in.width - in.cu), std::max(in.cv, in.height - in.cv)));
-  }
   VignettingModel m;
-  m.radial = [rig, rmax, exponent](int cam, double rho) {
+  m.radial = [rig, exponent](int cam, double rho) {
     const RigCamera& c = rig.cameras[static_cast<size_t>(cam)];
     if (!c.photometric) return 1.0;
     const Photometric& p = *c.photometric;
     // Along +x from the model's centre (W/2 + x, H/2 + y): V depends on the radius only.
-    const double col = c.in.width / 2.0 + p.center_px.x() + rho * rmax[static_cast<size_t>(cam)];
+    const double col = c.in.width / 2.0 + p.center_px.x() + rho * vignetting_rmax(c.in);
     const double row = c.in.height / 2.0 + p.center_px.y();
     const double v = std::max(vignetting_falloff(p, c.in.width, c.in.height, col, row), 0.02);
     return std::pow(1.0 / v, exponent);

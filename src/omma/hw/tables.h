@@ -34,6 +34,10 @@ struct VignettingModel {
   std::function<std::array<double, 3>(int camera)> channel_gain;
 };
 
+// r_max of a camera (pixels, at least 1): the distance from its principal point to the farthest
+// image corner, the radius that the vignetting table's rho = 1 stands for.
+double vignetting_rmax(const Intrinsics& in);
+
 // Fills the vignetting memory: vig_shift = the smallest shift that maps the largest squared radius
 // of any camera (corner to principal point) below 2^vig_addr_bits; entry i holds the gain at
 // rho = sqrt((i + 0.5) * 2^vig_shift) / r_max (uQ2.14, saturated at 4 - 2^-14).

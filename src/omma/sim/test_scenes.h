@@ -124,6 +124,13 @@ inline std::vector<cv::Mat> render_frames(const Rig& rig, const cv::Mat& tex,
   return frames;
 }
 
+// The same frames as 8-bit images (to_u8), as a camera delivers them (the hardware model's input).
+inline std::vector<cv::Mat> render_frames_u8(const Rig& rig, const cv::Mat& tex) {
+  std::vector<cv::Mat> out;
+  for (const cv::Mat& f : render_frames(rig, tex)) out.push_back(to_u8(f));
+  return out;
+}
+
 // The ideal panorama seen from the dome centre, CV_32FC3 [0,1].
 inline cv::Mat render_truth(const PanoGrid& grid, const cv::Mat& tex,
                             const std::optional<NearSphere>& sphere = std::nullopt) {
