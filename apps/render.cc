@@ -78,8 +78,8 @@ class RenderJob : public dist::Job {
       rig_ = a_.rig.empty() ? load_rig(rig_path) : design::load_rig_or_builtin(a_.rig);
     }
     // The rig's photometric model (vignetting, colour gains), once: raw frames are developed with it
-    // in place of the white balance, developed frames are corrected (isp/photometric.h).
-    if (!a_.no_photometric) gains_ = isp::flat_gains_from_rig(rig_);
+    // in place of the white balance (these gain maps); developed frames are corrected in load().
+    if (!a_.no_photometric && (recording_ || a_.raw)) gains_ = isp::flat_gains_from_rig(rig_);
     // Which frame sets.
     first_ = 0;
     last_ = recording_ ? rec_->frame_sets() - 1 : 0;
