@@ -181,22 +181,23 @@ TEST(PanoDepth, ColonTruthAndEstimate) {
       const PanoGrid grid = p == Projection::kVr180 ? PanoGrid{p, 270, 270} : PanoGrid{p, 480, 128};
       const ColonFigures f = colon_figures(grid, seed);
       // Measured on seeds 1, 2, 3 (vr180 270x270): truth - inf = 6.3 / 6.7 / 5.8 dB, truth - sphere:22 =
-      // 2.0 / 2.5 / 1.7 dB, estimate - sphere:22 = +1.62 / +0.71 / +1.32 dB, i.e. the estimate closes
-      // 81 / 28 / 80 % of the gap between the best sphere and the truth (seam band 81 / 30 / 83 %): the
-      // issue's 70 % holds on seeds 1 and 3, not on 2 (README "Depth": where the wall is nearer than
-      // the cameras' overlap no pair measures it). Median relative depth error 2.9 / 3.2 / 2.1 %.
-      // Boundaries (best F1 over th_ob): the depth's own jumps recall 0.66 / 0.72 / 0.56 of the true
-      // occlusion boundaries against 0.58 / 0.30 / 0.09 for the thesis's L_ob at infinity.
+      // 2.0 / 2.5 / 1.7 dB; the estimate closes 88 / 77 / 82 % of the gap between the best sphere and the
+      // truth (seam band the same; equirect 480x128: 93 / 83 / 88 %). Before the band-pass of the matched
+      // gray levels (sweep.h "Cost") seed 2 closed 28 %: the vignetting ramp at the image edges matched.
+      // Median relative depth error 2.1 / 1.8 / 1.7 %. Boundaries (best F1 over th_ob): the depth's own
+      // jumps F1 0.16 / 0.29 / 0.25 against 0.13 / 0.21 / 0.11 for the thesis's L_ob at infinity
+      // (equirect 0.30 / 0.44 / 0.52 against 0.21 / 0.22 / 0.23, where L_ob is best marking everything:
+      // recall 1.0, so recall alone would not compare them).
       EXPECT_GT(f.truth.psnr_db, f.inf.psnr_db + 4.0);
       EXPECT_GT(f.truth.psnr_db, f.sphere.psnr_db + 1.0);
       const double closed = (f.estimate.psnr_db - f.sphere.psnr_db) / (f.truth.psnr_db - f.sphere.psnr_db);
       const double closed_seam =
           (f.estimate.seam_psnr_db - f.sphere.seam_psnr_db) / (f.truth.seam_psnr_db - f.sphere.seam_psnr_db);
-      EXPECT_GT(f.estimate.psnr_db, f.sphere.psnr_db + 0.4);
-      EXPECT_GT(closed, 0.2);
-      EXPECT_GT(closed_seam, 0.2);
-      EXPECT_LT(f.depth.median_rel, 0.05);
-      EXPECT_GT(f.from_depth.recall, f.thesis.recall);
+      EXPECT_GT(f.estimate.psnr_db, f.sphere.psnr_db + 0.8);
+      EXPECT_GT(closed, 0.7);  // the target
+      EXPECT_GT(closed_seam, 0.7);
+      EXPECT_LT(f.depth.median_rel, 0.04);
+      EXPECT_GT(f.from_depth.f1, f.thesis.f1);
     }
 }
 

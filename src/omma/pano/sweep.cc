@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <limits>
+#include <utility>
 #include <stdexcept>
 
 #include <opencv2/imgproc.hpp>
@@ -30,6 +31,7 @@ bool SweepOptions::IsValid(std::string* why) const {
   if (factor < 0 || factor > 64) return fail(fmt::format("coarse factor must be 0..64, got {}", factor));
   if (factor == 0 && !(pitch_deg > 0)) return fail("coarse pitch must be positive");
   if (window < 1 || window > 8) return fail(fmt::format("patch radius must be 1..8, got {}", window));
+  if (band_ratio != 0 && !(band_ratio > 1)) return fail("band-pass ratio must be 0 (none) or > 1");
   if (paths != 4 && paths != 8) return fail("paths must be 4 or 8");
   if (!(noise_sigma > 0) || !(w0 > 0) || !(p1 >= 0) || !(p2 >= p1) || !(edge_gray > 0) || !(margin_scale > 0) ||
       !(fill_sigma > 0) || !(fill_lambda > 0) || !(prior_mm >= 0) || !(temporal_weight >= 0))
@@ -48,6 +50,17 @@ struct Layer {
   cv::Mat valid;         // CV_8UC1
   bool empty() const { return rect.area() == 0; }
 };
+
+// The angles a projection's width and height span (grid.h), degrees.
+std::pair<double, double> span_deg(Projection p) {
+  switch (p) {
+    case Projection::kEquirect: return {360, 90};
+    case Projection::kVr180: return {180, 180};
+    case Projection::kEquirectFull: return {360, 180};
+    case Projection::kEquirect100: return {360, 100};
+  }
+  return {360, 180};
+}
 
 // Sums over the (2r+1)^2 window around every pixel (zero outside), separable running sums.
 void box_sum(const float* in, int w, int h, int r, float* tmp, float* out) {
@@ -83,6 +96,7 @@ struct DepthSweep::Impl {
   std::vector<Vec3> dirs;       // per coarse pixel
   std::vector<double> inv;      // per candidate, 1/mm
   std::vector<double> sigma;    // per camera: blur to the coarse pitch, camera pixels
+  std::vector<int> level;       // per camera: pyramid level the gray levels are computed at (see estimate)
   bool cached = false;
   std::vector<Layer> layers;    // [k * cameras + i] when cached
   int cams() const { return static_cast<int>(rig.cameras.size()); }
@@ -155,6 +169,7 @@ Layer DepthSweep::Impl::make_layer(int k, int i) const {
   L.map_x.create(L.rect.size(), CV_32FC1);
   L.map_y.create(L.rect.size(), CV_32FC1);
   L.valid.create(L.rect.size(), CV_8UC1);
+  const double scale = 1.0 / (1 << level[i]);
   int any = 0;
   for (int r = 0; r < L.rect.height; ++r)
     for (int c = 0; c < L.rect.width; ++c) {
@@ -164,8 +179,10 @@ Layer DepthSweep::Impl::make_layer(int k, int i) const {
       if (cam.sees(ray)) px = cam.project(ray);
       const bool ok = px && cam.inside(*px);
       L.valid.at<uint8_t>(r, c) = ok ? 255 : 0;
-      L.map_x.at<float>(r, c) = ok ? static_cast<float>(px->x() - 0.5) : -1.f;
-      L.map_y.at<float>(r, c) = ok ? static_cast<float>(px->y() - 0.5) : -1.f;
+      // cv::remap's convention (centres at integers) at the camera's pyramid level: pyrDown's pixel j
+      // is centred on its source's pixel 2j.
+      L.map_x.at<float>(r, c) = ok ? static_cast<float>((px->x() - 0.5) * scale) : -1.f;
+      L.map_y.at<float>(r, c) = ok ? static_cast<float>((px->y() - 0.5) * scale) : -1.f;
       any += ok;
     }
   if (any == 0) L.rect = cv::Rect();
@@ -190,12 +207,8 @@ DepthSweep::DepthSweep(const Rig& rig, const PanoGrid& grid, const SweepOptions&
   m.opt = opt;
   int factor = opt.factor;
   if (factor == 0) {
-    double out_pitch = 0;  // output grid pitch, degrees
-    switch (grid.projection) {
-      case Projection::kEquirect: out_pitch = std::max(360.0 / grid.width, 90.0 / grid.height); break;
-      case Projection::kVr180: out_pitch = std::max(180.0 / grid.width, 180.0 / grid.height); break;
-      case Projection::kEquirectFull: out_pitch = std::max(360.0 / grid.width, 180.0 / grid.height); break;
-    }
+    const auto [span_x, span_y] = span_deg(grid.projection);
+    const double out_pitch = std::max(span_x / grid.width, span_y / grid.height);  // degrees
     factor = std::clamp(static_cast<int>(std::lround(opt.pitch_deg / out_pitch)), 1, 64);
   }
   m.coarse = PanoGrid{grid.projection, std::max(1, (grid.width + factor / 2) / factor),
@@ -208,13 +221,17 @@ DepthSweep::DepthSweep(const Rig& rig, const PanoGrid& grid, const SweepOptions&
     m.inv.push_back((1 - t) / opt.near_mm + t / opt.far_mm);
   }
   // Coarse pitch (rad): the larger of the two axes' spacing.
-  double pitch = 0;
-  switch (grid.projection) {
-    case Projection::kEquirect: pitch = std::max(2 * kPi / m.coarse.width, kPi / 2 / m.coarse.height); break;
-    case Projection::kVr180: pitch = std::max(kPi / m.coarse.width, kPi / m.coarse.height); break;
-    case Projection::kEquirectFull: pitch = std::max(2 * kPi / m.coarse.width, kPi / m.coarse.height); break;
+  const auto [span_x, span_y] = span_deg(grid.projection);
+  const double pitch = std::max(span_x / m.coarse.width, span_y / m.coarse.height) * kPi / 180;
+  for (const auto& c : rig.cameras) {
+    m.sigma.push_back(0.5 * pitch * std::max(c.in.fu, c.in.fv));
+    // The blur to the coarse pitch makes full resolution unnecessary: each halving (cv::pyrDown, a
+    // binomial blur of sigma 1 source pixel) is taken while 2^level stays under sigma / 1.5, so that a
+    // blurred pixel still spans under 1/1.5 of the final sigma (the engine's 2 deg grid: level 1).
+    int l = 0;
+    while (l < 4 && double(2 << l) <= m.sigma.back() / 1.5) ++l;
+    m.level.push_back(l);
   }
-  for (const auto& c : rig.cameras) m.sigma.push_back(0.5 * pitch * std::max(c.in.fu, c.in.fv));
   // Cache the layers when they are small (the engine's coarse grids); else build them per call.
   const double px_per_layer = double(m.coarse.width) * m.coarse.height * 0.15;
   const double bytes = px_per_layer * 9 * opt.steps * m.cams();
@@ -241,14 +258,27 @@ DepthEstimate DepthSweep::estimate(const std::vector<cv::Mat>& frames_in, const 
   const int W = m.coarse.width, H = m.coarse.height, K = o.steps, N = W * H, nc = m.cams();
   if (!previous.empty() && (previous.type() != CV_32FC1 || previous.cols != W || previous.rows != H))
     throw std::invalid_argument("depth sweep: the previous estimate is not on this sweep's coarse grid");
-  // Gray levels, blurred to the coarse pitch.
-  std::vector<cv::Mat> gray(nc);
+  // Gray levels, blurred to the coarse pitch (the guide of the edge-aware penalty), and their band-pass
+  // (minus a blur band_ratio times wider: the signal that is matched).
+  std::vector<cv::Mat> gray(nc), band(nc);
   tbb::parallel_for(0, nc, [&](int i) {
     cv::Mat f = frames_in[i], g;
     if (f.channels() == 3) cv::cvtColor(f, f, cv::COLOR_BGR2GRAY);  // BT.601 luma
     f.convertTo(g, CV_32F, f.depth() == CV_8U ? 1 / 255.0 : f.depth() == CV_16U ? 1 / 65535.0 : 1.0);
-    if (m.sigma[i] > 0.3) cv::GaussianBlur(g, g, cv::Size(), m.sigma[i]);
+    // sigma (camera pixels) = the pyramid's (pyrDown: sigma^2 = (4^level - 1) / 3) + the rest.
+    const int lv = m.level[i];
+    for (int l = 0; l < lv; ++l) cv::pyrDown(g, g);
+    const double at = 1.0 / (1 << lv);  // camera pixels -> pixels of the level
+    const double rest = std::sqrt(std::max(0.0, m.sigma[i] * m.sigma[i] - ((1 << 2 * lv) - 1) / 3.0)) * at;
+    if (rest > 0.3) cv::GaussianBlur(g, g, cv::Size(), rest);
     gray[i] = g;
+    if (o.band_ratio > 0) {
+      cv::Mat lo;
+      cv::GaussianBlur(g, lo, cv::Size(), std::max(1.0, m.sigma[i]) * o.band_ratio * at);
+      band[i] = g - lo;
+    } else {
+      band[i] = g;
+    }
   });
   // Cost volume, candidate-major while it is filled: num = sum w (1 - zncc), den = sum w.
   std::vector<float> num(size_t(K) * N, 0.f), den(size_t(K) * N, 0.f);
@@ -271,12 +301,14 @@ DepthEstimate DepthSweep::estimate(const std::vector<cv::Mat>& frames_in, const 
     std::vector<cv::Mat> val(nc);
     for (int i = 0; i < nc; ++i)
       if (!lay[i]->empty())
-        cv::remap(gray[i], val[i], lay[i]->map_x, lay[i]->map_y, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+        cv::remap(band[i], val[i], lay[i]->map_x, lay[i]->map_y, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
     if (k == kmid)
       for (int i = 0; i < nc; ++i) {
         if (lay[i]->empty()) continue;
+        cv::Mat gv;
+        cv::remap(gray[i], gv, lay[i]->map_x, lay[i]->map_y, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
         cv::Mat gs = guide_sum(lay[i]->rect), gn = guide_n(lay[i]->rect);
-        cv::add(gs, val[i], gs, lay[i]->valid);
+        cv::add(gs, gv, gs, lay[i]->valid);
         cv::add(gn, cv::Scalar(1), gn, lay[i]->valid);
       }
     float* nk = num.data() + size_t(k) * N;
@@ -285,19 +317,38 @@ DepthEstimate DepthSweep::estimate(const std::vector<cv::Mat>& frames_in, const 
     for (int i = 0; i < nc; ++i)
       for (int j = i + 1; j < nc; ++j) {
         if (lay[i]->empty() || lay[j]->empty()) continue;
-        const cv::Rect I = lay[i]->rect & lay[j]->rect;
-        if (I.area() == 0) continue;
+        const cv::Rect R = lay[i]->rect & lay[j]->rect;
+        if (R.area() == 0) continue;
+        // The pixels both cameras see lie in a box much smaller than the two footprints' common
+        // rectangle (which spans the whole width where a footprint wraps round or holds a pole):
+        // everything below runs on that box I (outside it the channels are zero).
+        int bx0 = R.width, by0 = R.height, bx1 = -1, by1 = -1;
+        for (int y = 0; y < R.height; ++y) {
+          const uint8_t* vi = lay[i]->valid.ptr<uint8_t>(R.y - lay[i]->rect.y + y) + (R.x - lay[i]->rect.x);
+          const uint8_t* vj = lay[j]->valid.ptr<uint8_t>(R.y - lay[j]->rect.y + y) + (R.x - lay[j]->rect.x);
+          for (int x = 0; x < R.width; ++x)
+            if (vi[x] & vj[x]) {
+              bx0 = std::min(bx0, x);
+              bx1 = std::max(bx1, x);
+              by0 = std::min(by0, y);
+              by1 = y;
+            }
+        }
+        if (bx1 < 0) continue;
+        const cv::Rect I(R.x + bx0, R.y + by0, bx1 - bx0 + 1, by1 - by0 + 1);
         const int w = I.width, h = I.height, n = w * h;
         for (auto& v : ch) v.assign(n, 0.f);
         for (auto& v : sum) v.resize(n);
         tmp.resize(n);
         const cv::Point oi = I.tl() - lay[i]->rect.tl(), oj = I.tl() - lay[j]->rect.tl();
-        int both = 0;
-        for (int y = 0; y < h; ++y)
+        for (int y = 0; y < h; ++y) {
+          const uint8_t* vi = lay[i]->valid.ptr<uint8_t>(y + oi.y) + oi.x;
+          const uint8_t* vj = lay[j]->valid.ptr<uint8_t>(y + oj.y) + oj.x;
+          const float* ai = val[i].ptr<float>(y + oi.y) + oi.x;
+          const float* bj = val[j].ptr<float>(y + oj.y) + oj.x;
           for (int x = 0; x < w; ++x) {
-            if (!lay[i]->valid.at<uint8_t>(y + oi.y, x + oi.x) || !lay[j]->valid.at<uint8_t>(y + oj.y, x + oj.x))
-              continue;
-            const float a = val[i].at<float>(y + oi.y, x + oi.x), b = val[j].at<float>(y + oj.y, x + oj.x);
+            if (!(vi[x] & vj[x])) continue;
+            const float a = ai[x], b = bj[x];
             const int p = y * w + x;
             ch[0][p] = 1;
             ch[1][p] = a;
@@ -305,9 +356,8 @@ DepthEstimate DepthSweep::estimate(const std::vector<cv::Mat>& frames_in, const 
             ch[3][p] = a * a;
             ch[4][p] = b * b;
             ch[5][p] = a * b;
-            ++both;
           }
-        if (both == 0) continue;
+        }
         for (int c = 0; c < 6; ++c) box_sum(ch[c].data(), w, h, r, tmp.data(), sum[c].data());
         for (int y = 0; y < h; ++y)
           for (int x = 0; x < w; ++x) {

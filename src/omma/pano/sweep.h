@@ -16,9 +16,15 @@
 // (the parallax of a camera at baseline b is b * s, so equal steps in s are equal steps in pixels).
 //
 // Cost (per coarse pixel u and candidate k). Every camera i that sees the surface point
-// X = q + D_k w_u (contributors.h) is sampled there, as gray level Y (BT.601 luma of the frame's
-// values in [0,1]) of the frame blurred to the coarse grid's pitch (Gaussian, sigma = half a coarse
-// pixel in camera pixels), into the layer L_ik. For every pair of cameras (i, j) that both see u at
+// X = q + D_k w_u (contributors.h) is sampled there, as the band-pass of the gray level Y (BT.601
+// luma of the frame's values in [0,1]): Y blurred to the coarse grid's pitch (Gaussian, sigma = half
+// a coarse pixel in camera pixels) minus that blurred again with band_ratio times the sigma, into the
+// layer L_ik. The band-pass removes what ZNCC's per-patch gain and offset cannot: the vignetting's
+// ramp across a patch near the image edge, which two cameras share and which otherwise "matches" at
+// whatever candidate puts both patches at their image edges (measured, colon vr180 270x270, mrf,
+// seeds 1-5: seed 2's border band went to the far end, 20 % of the gap closed; with band_ratio 2 and
+// noise_sigma 0.005 the eight colon cases close 78-97 %, band_ratio 3: 71-96 %, none: 20-93 %;
+// noise_sigma 0.0025-0.005 alike, 0.01 worse, 0.02 fails, since the band-pass holds less variance). For every pair of cameras (i, j) that both see u at
 // D_k, over the (2 window + 1)^2 patch of coarse pixels P around u where both see the surface:
 //     ZNCC_ij = cov(L_i, L_j) / sqrt(var L_i var L_j)   (zero-mean normalised cross-correlation:
 //               invariant to a gain and an offset per camera and patch, i.e. to the colour gains
@@ -85,7 +91,8 @@ struct SweepOptions {
   int factor = 0;
   double pitch_deg = 1.33;  // about 5 pixels of the prototype's cameras (0.26 deg/pixel)
   int window = 2;          // patch radius, coarse pixels (patch 5x5)
-  double noise_sigma = 0.01;   // sigma_n: gray-level noise for the texture weight
+  double band_ratio = 2;   // band-pass of the matched gray levels (see "Cost"); 0 = none
+  double noise_sigma = 0.005;  // sigma_n: gray-level noise of the band-pass for the texture weight
   double w0 = 0.2;             // evidence of the neutral cost
   double unknown_cost = 0.25;  // cap of an unknown candidate's cost above the pixel's best (see above)
   double neutral_cost = 0.5;   // cost where no pair of cameras gives evidence (see below)
