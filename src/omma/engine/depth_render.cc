@@ -42,9 +42,10 @@ bool DepthRenderOptions::IsValid(std::string* why) const {
 
 namespace {
 
-// One tap: the direction in the camera's frame (unnormalised w.u, w.v, w.t), w.b, the weight.
+// One tap: the pixel numerators at infinity p_u, p_v, w.t, w.b (depth_render.h), the weight.
 struct DTap {
-  float wu, wv, wt, wb;
+  float pu, pv;  // cu w.t + fu w.u, cv w.t + fv w.v: the pixel's numerators at infinity (eq. 5.21-5.22)
+  float wt, wb;
   float weight;
   uint16_t cam;
   uint16_t pad;
@@ -54,6 +55,9 @@ struct DTap {
 struct DCam {
   float bu, bv, bt, bb, cos2;
   float fu, fv, cu, cv;
+  float pu, pv;        // cu b.t + fu b.u, cv b.t + fv b.v (DTap::pu, pv for b)
+  float xmax, ymax;    // width - 1, height - 1
+  size_t base;         // the camera's first byte in the frame store
   int width, height;
   bool distort;
   std::array<double, 5> k;
@@ -70,7 +74,10 @@ struct DepthRenderer::Impl {
   DepthRenderOptions opt;
   StoreLayout layout;
   std::vector<DCam> cams;
-  std::vector<uint32_t> first, ffirst;  // per pixel + 1: first tap, first fallback tap
+  // Pixels in render order: tile by tile (compiled_map.h's kTileW x kTileH), row by row inside a
+  // tile, so that a render streams the taps and their index in order.
+  std::vector<uint32_t> first, ffirst;  // per pixel in that order + 1: first tap, first fallback tap
+  std::vector<uint32_t> tile_first;     // per tile: its first pixel in that order
   std::vector<DTap> taps, fallbacks;
   std::unique_ptr<pano::DepthSweep> sweep;
   std::unique_ptr<tbb::task_arena> arena;
@@ -103,6 +110,11 @@ DepthRenderer::DepthRenderer(const Rig& rig, const DepthRenderOptions& opt) : im
     d.cv = float(c.in.cv);
     d.width = c.in.width;
     d.height = c.in.height;
+    d.pu = float(c.in.cu * b.dot(c.frame.t) + c.in.fu * b.dot(c.frame.u));
+    d.pv = float(c.in.cv * b.dot(c.frame.t) + c.in.fv * b.dot(c.frame.v));
+    d.xmax = float(c.in.width - 1);
+    d.ymax = float(c.in.height - 1);
+    d.base = m.layout.offset(int(m.cams.size()), 0, 0);
     d.distort = c.in.has_distortion();
     d.k = c.in.k;
     m.cams.push_back(d);
@@ -115,7 +127,8 @@ DepthRenderer::DepthRenderer(const Rig& rig, const DepthRenderOptions& opt) : im
   auto make_tap = [&](int cam, const Vec3& w, double weight) {
     const RigCamera& c = rig.cameras[cam];
     const Vec3 b = q - c.position_mm;
-    return DTap{float(w.dot(c.frame.u)), float(w.dot(c.frame.v)), float(w.dot(c.frame.t)), float(w.dot(b)),
+    const double wt = w.dot(c.frame.t), wu = w.dot(c.frame.u), wv = w.dot(c.frame.v);
+    return DTap{float(c.in.cu * wt + c.in.fu * wu), float(c.in.cv * wt + c.in.fv * wv), float(wt), float(w.dot(b)),
                 float(weight), uint16_t(cam), 0};
   };
   std::vector<std::vector<std::vector<int>>> cams_of(g.height);  // per row, per pixel: cameras with taps
@@ -160,25 +173,38 @@ DepthRenderer::DepthRenderer(const Rig& rig, const DepthRenderOptions& opt) : im
   });
   m.first.assign(npx + 1, 0);
   m.ffirst.assign(npx + 1, 0);
-  size_t n = 0, nf = 0;
-  for (int r = 0; r < g.height; ++r)
-    for (int c = 0; c < g.width; ++c) {
-      m.first[size_t(r) * g.width + c] = uint32_t(n);
-      m.ffirst[size_t(r) * g.width + c] = uint32_t(nf);
-      n += cams_of[r][c].size();
-      nf += pix[r][c].size() - cams_of[r][c].size();
-    }
+  const int tiles_x = (g.width + kTileW - 1) / kTileW, tiles_y = (g.height + kTileH - 1) / kTileH;
+  m.tile_first.assign(size_t(tiles_x) * tiles_y, 0);
+  auto tile_rect = [&](int tile) {
+    const int c0 = (tile % tiles_x) * kTileW, r0 = (tile / tiles_x) * kTileH;
+    return cv::Rect(c0, r0, std::min(g.width, c0 + kTileW) - c0, std::min(g.height, r0 + kTileH) - r0);
+  };
+  size_t n = 0, nf = 0, qi = 0;
+  for (int tile = 0; tile < tiles_x * tiles_y; ++tile) {
+    const cv::Rect t = tile_rect(tile);
+    m.tile_first[tile] = uint32_t(qi);
+    for (int r = t.y; r < t.y + t.height; ++r)
+      for (int c = t.x; c < t.x + t.width; ++c, ++qi) {
+        m.first[qi] = uint32_t(n);
+        m.ffirst[qi] = uint32_t(nf);
+        n += cams_of[r][c].size();
+        nf += pix[r][c].size() - cams_of[r][c].size();
+      }
+  }
   m.first[npx] = uint32_t(n);
   m.ffirst[npx] = uint32_t(nf);
   m.taps.resize(n);
   m.fallbacks.resize(nf);
-  tbb::parallel_for(0, g.height, [&](int r) {
-    size_t k = m.first[size_t(r) * g.width], f = m.ffirst[size_t(r) * g.width];
-    for (int c = 0; c < g.width; ++c) {
-      const size_t nm = cams_of[r][c].size();
-      for (size_t i = 0; i < pix[r][c].size(); ++i)
-        (i < nm ? m.taps[k++] : m.fallbacks[f++]) = pix[r][c][i];
-    }
+  tbb::parallel_for(0, tiles_x * tiles_y, [&](int tile) {
+    const cv::Rect t = tile_rect(tile);
+    const size_t q0 = m.tile_first[tile];
+    size_t k = m.first[q0], f = m.ffirst[q0];
+    for (int r = t.y; r < t.y + t.height; ++r)
+      for (int c = t.x; c < t.x + t.width; ++c) {
+        const size_t nm = cams_of[r][c].size();
+        for (size_t i = 0; i < pix[r][c].size(); ++i)
+          (i < nm ? m.taps[k++] : m.fallbacks[f++]) = pix[r][c][i];
+      }
   });
   m.sweep = std::make_unique<pano::DepthSweep>(rig, g, opt.sweep);
   m.compile_s = ms_since(t0) / 1000;
@@ -216,7 +242,7 @@ DepthFrameStats DepthRenderer::render(const FrameStore& store, const std::vector
     const auto t1 = std::chrono::steady_clock::now();
     out.create(g.height, g.width, CV_8UC3);
     const uint8_t* data = store.data();
-    const StoreLayout& L = m.layout;
+    const size_t stride = m.layout.stride_bytes();
     const DTap* tap = m.taps.data();
     const DTap* fb = m.fallbacks.data();
     const uint32_t* first = m.first.data();
@@ -228,11 +254,11 @@ DepthFrameStats DepthRenderer::render(const FrameStore& store, const std::vector
     tbb::parallel_for(0, tiles_x * tiles_y, [&](int tile) {
       const int c0 = (tile % tiles_x) * kTileW, r0 = (tile / tiles_x) * kTileH;
       const int c1 = std::min(g.width, c0 + kTileW), r1 = std::min(g.height, r0 + kTileH);
+      size_t p = m.tile_first[tile];  // render order (Impl::first)
       for (int row = r0; row < r1; ++row) {
         const float* srow = m.inverse_full.ptr<float>(row);
         uint8_t* o = out.ptr<uint8_t>(row);
-        for (int col = c0; col < c1; ++col) {
-          const size_t p = size_t(row) * g.width + col;
+        for (int col = c0; col < c1; ++col, ++p) {
           const float s = srow[col];
           float acc0 = 0, acc1 = 0, acc2 = 0, wsum = 0;
           auto taps = [&](const DTap* t0, const DTap* t1) {
@@ -245,24 +271,26 @@ DepthFrameStats DepthRenderer::render(const FrameStore& store, const std::vector
               const float r2 = 1 + 2 * s * t.wb + s * s * c.bb;
               if (z * z < c.cos2 * r2) continue;
               const float iz = 1 / z;
-              float x = (t.wu + s * c.bu) * iz, y = (t.wv + s * c.bv) * iz;
-              if (c.distort) {  // eq. 5.23-5.26
-                const Vec2 d = distort(c.k, Vec2(x, y));
-                x = float(d.x());
-                y = float(d.y());
+              // eq. 5.21-5.22 folded into the ray: px = cu + fu x = (t.pu + s c.pu) / z
+              float px = (t.pu + s * c.pu) * iz, py = (t.pv + s * c.pv) * iz;
+              if (c.distort) {  // eq. 5.23-5.26 on the undistorted x = (px - cu) / fu
+                const Vec2 d = distort(c.k, Vec2((px - c.cu) / c.fu, (py - c.cv) / c.fv));
+                px = c.cu + c.fu * float(d.x());
+                py = c.cv + c.fv * float(d.y());
               }
-              const float px = c.cu + c.fu * x, py = c.cv + c.fv * y;  // eq. 5.21-5.22
               if (!(px >= 0 && py >= 0 && px < c.width && py < c.height)) continue;
               // Bilinear, centres at +0.5, edges replicated: the row pair at (x0, y0) holds the 2x2.
-              const float xx = std::clamp(px - 0.5f, 0.f, float(c.width - 1));
-              const float yy = std::clamp(py - 0.5f, 0.f, float(c.height - 1));
+              const float xx = std::clamp(px - 0.5f, 0.f, c.xmax), yy = std::min(std::max(py - 0.5f, 0.f), c.ymax);
               const int x0 = std::min(int(xx), c.width - 2), y0 = int(yy);
-              const float fx = xx - x0, fy = yy - y0;
-              const uint8_t* n = data + L.offset(t.cam, x0, y0);
-              const float w00 = (1 - fx) * (1 - fy), w01 = (1 - fx) * fy, w10 = fx * (1 - fy), w11 = fx * fy;
-              acc0 += t.weight * (w00 * n[0] + w01 * n[3] + w10 * n[6] + w11 * n[9]);
-              acc1 += t.weight * (w00 * n[1] + w01 * n[4] + w10 * n[7] + w11 * n[10]);
-              acc2 += t.weight * (w00 * n[2] + w01 * n[5] + w10 * n[8] + w11 * n[11]);
+              // Fixed point: the fractions in 1/128 (rounded), the four weights sum to 2^14; a
+              // channel's sum of weight x 8-bit value stays under 2^22 (int32).
+              const int ix = int((xx - x0) * 128 + 0.5f), iy = int((yy - y0) * 128 + 0.5f);
+              const uint8_t* n = data + c.base + size_t(y0) * stride + size_t(x0) * 6;
+              const int w00 = (128 - ix) * (128 - iy), w01 = (128 - ix) * iy, w10 = ix * (128 - iy), w11 = ix * iy;
+              const float tw = t.weight * (1.f / 16384);  // 2^14 -> 1
+              acc0 += tw * float(w00 * n[0] + w01 * n[3] + w10 * n[6] + w11 * n[9]);
+              acc1 += tw * float(w00 * n[1] + w01 * n[4] + w10 * n[7] + w11 * n[10]);
+              acc2 += tw * float(w00 * n[2] + w01 * n[5] + w10 * n[8] + w11 * n[11]);
               wsum += t.weight;
             }
           };

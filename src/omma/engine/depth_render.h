@@ -7,13 +7,14 @@
 // pixel the contributors and static weights of the method on the sphere of radius reference_mm
 // (pano::for_each_pixel_weights), plus, as fallbacks, the cameras that see the direction only at
 // infinity (used only where every one of the method's taps leaves its image or cone at the pixel's
-// depth). Taps lighter than min_weight are dropped as in MapOptions. Per tap the map holds the direction w in the
-// camera's frame, as x_inf = w.u / w.t, y_inf = w.v / w.t, 1 / w.t and w.b (b = q - c_i), so that
-// moving the tap to inverse depth s is (contributors.h):
-//     k = s / w.t,  x = (x_inf + k b.u) / (1 + k b.t),  y = (y_inf + k b.v) / (1 + k b.t)
-//     cone (eq. 2.3): (w.t (1 + k b.t))^2 >= cos^2(aov/2) (1 + 2 s w.b + s^2 |b|^2)
-// then the lens (eq. 5.23-5.26, only for cameras with distortion), the pixel (eq. 5.21-5.22) and a
-// bilinear sample from the frame store (compiled_map.h's row pairs: one 12-byte neighbourhood).
+// depth). Taps lighter than min_weight are dropped as in MapOptions. Per tap the map holds the
+// direction w in the camera's frame as the pixel's numerators at infinity p_u = cu w.t + fu w.u,
+// p_v = cv w.t + fv w.v, and w.t, w.b (b = q - c_i); per camera the same numerators P_u, P_v of b, so
+// that moving the tap to inverse depth s is (contributors.h, eq. 5.21-5.22 folded in):
+//     z = w.t + s b.t,  pixel = ((p_u + s P_u) / z, (p_v + s P_v) / z)
+//     cone (eq. 2.3): z^2 >= cos^2(aov/2) (1 + 2 s w.b + s^2 |b|^2)
+// with the lens (eq. 5.23-5.26) applied in between for cameras with distortion; then a bilinear
+// sample (fractions in 1/128) from the frame store (compiled_map.h's row pairs: one 12-byte neighbourhood).
 // A tap whose moved position leaves its camera's image or cone is dropped and the remaining
 // weights renormalised. Per pixel, s is the coarse inverse depth interpolated bilinearly.
 //
