@@ -74,7 +74,7 @@ DepthDemo run_depth_demo(const Rig& rig, const PanoGrid& grid, const std::vector
   for (size_t i = 0; i < frames.size(); ++i) store->set(int(i), frames[i]);
   auto out = std::make_shared<cv::Mat>();
   const engine::Workload w{"omma-mrf-depth", 0, [&] { dr->render(*store, frames, *out); }, {}};
-  const double fps = engine::measure_fps(w, 1.0, 5);
+  const double fps = engine::measure_fps(w, 2.0, 10);  // 2 s: single seconds vary by +-15 % on the 2-core machine
   write_image(dir / "pano_mrf_engine_depth.png", *out);
   const double engine_psnr = pano::psnr_db(*out, truth), engine_vs_ref = engine::psnr_u8(*out, with_depth);
 
