@@ -21,10 +21,12 @@
 // a coarse pixel in camera pixels) minus that blurred again with band_ratio times the sigma, into the
 // layer L_ik. The band-pass removes what ZNCC's per-patch gain and offset cannot: the vignetting's
 // ramp across a patch near the image edge, which two cameras share and which otherwise "matches" at
-// whatever candidate puts both patches at their image edges (measured, colon vr180 270x270, mrf,
-// seeds 1-5: seed 2's border band went to the far end, 20 % of the gap closed; with band_ratio 2 and
-// noise_sigma 0.005 the eight colon cases close 78-97 %, band_ratio 3: 71-96 %, none: 20-93 %;
-// noise_sigma 0.0025-0.005 alike, 0.01 worse, 0.02 fails, since the band-pass holds less variance). For every pair of cameras (i, j) that both see u at
+// whatever candidate puts both patches at their image edges. Measured (mrf, gap closed between the
+// best fixed sphere and the true depth; colon vr180 270x270 seeds 1-5 (seeds 4, 5 at dome-z 6, 18 mm)
+// and equirect 480x128 seeds 1-3): without the band-pass (noise_sigma 0.01) 20-92 %, seed 2's border
+// band put at the far end; band_ratio 2 with noise_sigma 0.005: 78-97 % (the default); band_ratio 3:
+// 71-92 %; noise_sigma 0.0025-0.005 alike, 0.01 worse, 0.02 fails (the band-pass holds less variance,
+// so the texture weight's sigma_n is smaller than for the plain gray levels). For every pair of cameras (i, j) that both see u at
 // D_k, over the (2 window + 1)^2 patch of coarse pixels P around u where both see the surface:
 //     ZNCC_ij = cov(L_i, L_j) / sqrt(var L_i var L_j)   (zero-mean normalised cross-correlation:
 //               invariant to a gain and an offset per camera and patch, i.e. to the colour gains
