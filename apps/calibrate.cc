@@ -27,6 +27,7 @@ struct CalibrateArgs {
   int radial_terms = 1, max_iterations = 50, min_matches = 30, upsample = 2, threads = 2,
       dense_rounds = calib::CalibrationOptions{}.dense_rounds;
   double loss_scale = 1.0, ransac_px = 5, prior_deg = 5, prior_mean_focal = 0.002, tube = 0;
+  bool tube_tilt = false;
   bool json = false, photometric = false, no_geometric = false;
 };
 
@@ -73,8 +74,11 @@ void add_calibrate_command(CLI::App& root) {
                   "nominal one, against the focal/depth ambiguity of small-baseline parallax (default 0.002; 0 = off)");
   cmd->add_option("--tube", a.tube,
                   "The frames show the calibration tube of this diameter (mm; the thesis's is 35) around the dome: "
-                  "near field, and scene points on its wall are constrained to it (its axis offset and tilt are "
-                  "estimated); default 0 = a scene of unknown shape");
+                  "near field, and scene points on its wall are constrained to it (its axis offset is estimated; "
+                  "its axis defines the rig's z axis, as the thesis's fixture does); default 0 = a scene of unknown shape");
+  cmd->add_flag("--tube-tilt", a.tube_tilt,
+                "Estimate the tube's tilt too (a mount that is not trusted): the rig's tilt is then held only by the "
+                "5 mm parallax of the camera positions; compare with rig-diff --align");
   cmd->add_option("--max-iterations", a.max_iterations, "Ceres iterations per solve (default 50)");
   cmd->add_option("--dense-rounds", a.dense_rounds,
                   "Near field: rounds of dense patch alignment and re-solve after the first solve")
@@ -128,6 +132,7 @@ void add_calibrate_command(CLI::App& root) {
     opt.dense_rounds = a.dense_rounds;
     if (a.tube < 0) throw std::invalid_argument("--tube must be a diameter in mm (> 0), or 0 for none");
     opt.tube_diameter_mm = a.tube;
+    opt.tube_tilt = a.tube_tilt;
     if (a.tube > 0) opt.scene = calib::SceneModel::kNear;
     opt.threads = a.threads;
     opt.min_observations = a.min_matches;

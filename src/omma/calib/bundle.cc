@@ -289,6 +289,7 @@ CalibrationResult solve_tracks(const Rig& nominal, const Rig& start, std::vector
     ceres::SphereManifold<3> sphere3;
     ceres::SphereManifold<4> sphere4;
     std::unique_ptr<ceres::Manifold> k_manifold, fcc_manifold;
+    ceres::SubsetManifold tube_offset_only(4, {2, 3});  // the tube's tilt held (CalibrationOptions::tube_tilt)
     if (!k_const.empty() && k_const.size() < 5) k_manifold = std::make_unique<ceres::SubsetManifold>(5, k_const);
     if (!fcc_const.empty() && fcc_const.size() < 4) fcc_manifold = std::make_unique<ceres::SubsetManifold>(4, fcc_const);
     const std::string loss = opt.loss != "auto" ? opt.loss : near ? "cauchy" : "huber";
@@ -322,6 +323,7 @@ CalibrationResult solve_tracks(const Rig& nominal, const Rig& start, std::vector
       if (problem.HasParameterBlock(points[ti].data()))
         problem.SetManifold(points[ti].data(), near ? static_cast<ceres::Manifold*>(&sphere4) : &sphere3);
     }
+    if (tube && !opt.tube_tilt && problem.HasParameterBlock(axis.data())) problem.SetManifold(axis.data(), &tube_offset_only);
     for (int i = 0; i < n; ++i) {
       if (!problem.HasParameterBlock(delta[i].data())) continue;
       if (!opt.estimate_rotation) {

@@ -182,6 +182,7 @@ TEST(Calibrate, CalibrationTubeFewShots) {
               "RMS %.3f px, %d tracks\n", d.orientation_error_deg.median, d.orientation_error_deg.max,
               d.focal_error_rel.median, d.focal_error_rel.max, d.center_error_px.median, r.rms_px, r.tracks);
   EXPECT_TRUE(r.uncalibrated_ids.empty());
+  // Measured 0.158 deg (max 0.260), 0.32 %, 0.55 px (0.19 / 0.30 deg with the tube's tilt estimated).
   EXPECT_LT(d.orientation_error_deg.median, 0.25);  // target 0.1 with 8 shots (met there, README)
   EXPECT_LT(d.orientation_error_deg.max, 0.45);     // target 0.3 with 8 shots
   EXPECT_LT(d.focal_error_rel.median, 0.005);
