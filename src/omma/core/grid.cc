@@ -8,18 +8,16 @@
 #include "omma/core/limits.h"
 
 namespace omma {
-namespace {
-// Polar span of the equirectangular grids (radians).
-double theta_span(Projection p) {
+
+AngularSpan angular_span(Projection p) {
   switch (p) {
-    case Projection::kEquirect: return kPi / 2;
-    case Projection::kEquirectFull: return kPi;
-    case Projection::kEquirect100: return deg2rad(100);
-    case Projection::kVr180: break;
+    case Projection::kEquirect: return {2 * kPi, kPi / 2};
+    case Projection::kVr180: return {kPi, kPi};
+    case Projection::kEquirectFull: return {2 * kPi, kPi};
+    case Projection::kEquirect100: return {2 * kPi, deg2rad(100)};
   }
-  return 0;
+  return {2 * kPi, kPi};
 }
-}  // namespace
 
 Projection parse_projection(const std::string& name) {
   if (name == "equirect") return Projection::kEquirect;
@@ -45,7 +43,7 @@ Vec3 PanoGrid::direction(double x, double y) const {
     case Projection::kEquirect:
     case Projection::kEquirectFull:
     case Projection::kEquirect100: {
-      const double span = theta_span(projection);
+      const double span = angular_span(projection).height;
       const double phi = x / width * 2 * kPi;
       const double theta = y / height * span;
       return direction_from_spherical(theta, phi);
@@ -66,7 +64,7 @@ std::optional<Vec2> PanoGrid::pixel(const Vec3& w_in) const {
     case Projection::kEquirect:
     case Projection::kEquirectFull:
     case Projection::kEquirect100: {
-      const double span = theta_span(projection);
+      const double span = angular_span(projection).height;
       const Spherical s = spherical_from_direction(w);
       if (s.theta > span) return std::nullopt;
       return Vec2(s.phi / (2 * kPi) * width, s.theta / span * height);
@@ -86,7 +84,7 @@ double PanoGrid::pixel_solid_angle(int col, int row) const {
     case Projection::kEquirect:
     case Projection::kEquirectFull:
     case Projection::kEquirect100: {
-      const double span = theta_span(projection);
+      const double span = angular_span(projection).height;
       const double t0 = row * span / height, t1 = (row + 1) * span / height;
       return (2 * kPi / width) * (std::cos(t0) - std::cos(t1));
     }

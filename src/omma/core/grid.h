@@ -17,6 +17,13 @@ enum class Projection {
 
 // "equirect", "vr180", "equirect-full", "equirect-100"
 Projection parse_projection(const std::string& name);
+
+// The angles (radians) the grid's width and height span: equirect 2 pi x pi/2, vr180 pi x pi,
+// equirect-full 2 pi x pi, equirect-100 2 pi x 100 deg.
+struct AngularSpan {
+  double width = 0, height = 0;
+};
+AngularSpan angular_span(Projection p);
 std::string to_string(Projection p);
 
 struct PanoGrid {

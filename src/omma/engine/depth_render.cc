@@ -54,7 +54,7 @@ struct DTap {
 
 // Per camera: b = q - c in the camera's frame, |b|^2, cos^2(aov/2), intrinsics.
 struct DCam {
-  float bu, bv, bt, bb, cos2;
+  float bt, bb, cos2;
   float fu, fv, cu, cv;
   float pu, pv;        // cu b.t + fu b.u, cv b.t + fv b.v (DTap::pu, pv for b)
   float xmax, ymax;    // width - 1, height - 1
@@ -68,6 +68,11 @@ double ms_since(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
 }
 
+// Tile `tile` of a width x height output cut into compiled_map.h's kTileW x kTileH tiles, tiles_x a row.
+cv::Rect tile_rect(int tile, int tiles_x, int width, int height) {
+  const int c0 = (tile % tiles_x) * kTileW, r0 = (tile / tiles_x) * kTileH;
+  return cv::Rect(c0, r0, std::min(width, c0 + kTileW) - c0, std::min(height, r0 + kTileH) - r0);
+}
 
 // What a tile render reads and writes (DepthRenderer::render).
 struct TileArgs {
@@ -101,12 +106,11 @@ struct ScalarAcc {
 // Renders tile `tile` (compiled_map.h's kTileW x kTileH; its pixels start at p in render order).
 template <class Acc>
 inline void render_depth_tile(const TileArgs& a, int tile, size_t p) {
-  const int c0 = (tile % a.tiles_x) * kTileW, r0 = (tile / a.tiles_x) * kTileH;
-  const int c1 = std::min(a.width, c0 + kTileW), r1 = std::min(a.height, r0 + kTileH);
-  for (int row = r0; row < r1; ++row) {
+  const cv::Rect box = tile_rect(tile, a.tiles_x, a.width, a.height);
+  for (int row = box.y; row < box.y + box.height; ++row) {
     const float* srow = a.inverse->ptr<float>(row);
     uint8_t* o = a.out->ptr<uint8_t>(row);
-    for (int col = c0; col < c1; ++col, ++p) {
+    for (int col = box.x; col < box.x + box.width; ++col, ++p) {
       const float s = srow[col];
       Acc acc;
       float wsum = 0;
@@ -223,8 +227,6 @@ DepthRenderer::DepthRenderer(const Rig& rig, const DepthRenderOptions& opt) : im
   for (const auto& c : rig.cameras) {
     const Vec3 b = q - c.position_mm;
     DCam d;
-    d.bu = float(b.dot(c.frame.u));
-    d.bv = float(b.dot(c.frame.v));
     d.bt = float(b.dot(c.frame.t));
     d.bb = float(b.squaredNorm());
     const double ca = std::cos(c.in.aov / 2);
@@ -300,13 +302,9 @@ DepthRenderer::DepthRenderer(const Rig& rig, const DepthRenderOptions& opt) : im
   m.ffirst.assign(npx + 1, 0);
   const int tiles_x = (g.width + kTileW - 1) / kTileW, tiles_y = (g.height + kTileH - 1) / kTileH;
   m.tile_first.assign(size_t(tiles_x) * tiles_y, 0);
-  auto tile_rect = [&](int tile) {
-    const int c0 = (tile % tiles_x) * kTileW, r0 = (tile / tiles_x) * kTileH;
-    return cv::Rect(c0, r0, std::min(g.width, c0 + kTileW) - c0, std::min(g.height, r0 + kTileH) - r0);
-  };
   size_t n = 0, nf = 0, qi = 0;
   for (int tile = 0; tile < tiles_x * tiles_y; ++tile) {
-    const cv::Rect t = tile_rect(tile);
+    const cv::Rect t = tile_rect(tile, tiles_x, g.width, g.height);
     m.tile_first[tile] = uint32_t(qi);
     for (int r = t.y; r < t.y + t.height; ++r)
       for (int c = t.x; c < t.x + t.width; ++c, ++qi) {
@@ -321,7 +319,7 @@ DepthRenderer::DepthRenderer(const Rig& rig, const DepthRenderOptions& opt) : im
   m.taps.resize(n);
   m.fallbacks.resize(nf);
   tbb::parallel_for(0, tiles_x * tiles_y, [&](int tile) {
-    const cv::Rect t = tile_rect(tile);
+    const cv::Rect t = tile_rect(tile, tiles_x, g.width, g.height);
     const size_t q0 = m.tile_first[tile];
     size_t k = m.first[q0], f = m.ffirst[q0];
     for (int r = t.y; r < t.y + t.height; ++r)

@@ -9,7 +9,6 @@
 #include <cstdio>
 #include <cstdlib>
 #include <limits>
-#include <utility>
 #include <stdexcept>
 
 #include <opencv2/imgproc.hpp>
@@ -50,17 +49,6 @@ struct Layer {
   cv::Mat valid;         // CV_8UC1
   bool empty() const { return rect.area() == 0; }
 };
-
-// The angles a projection's width and height span (grid.h), degrees.
-std::pair<double, double> span_deg(Projection p) {
-  switch (p) {
-    case Projection::kEquirect: return {360, 90};
-    case Projection::kVr180: return {180, 180};
-    case Projection::kEquirectFull: return {360, 180};
-    case Projection::kEquirect100: return {360, 100};
-  }
-  return {360, 180};
-}
 
 // Sums over the (2r+1)^2 window around every pixel (zero outside), separable running sums.
 void box_sum(const float* in, int w, int h, int r, float* tmp, float* out) {
@@ -207,8 +195,8 @@ DepthSweep::DepthSweep(const Rig& rig, const PanoGrid& grid, const SweepOptions&
   m.opt = opt;
   int factor = opt.factor;
   if (factor == 0) {
-    const auto [span_x, span_y] = span_deg(grid.projection);
-    const double out_pitch = std::max(span_x / grid.width, span_y / grid.height);  // degrees
+    const AngularSpan span = angular_span(grid.projection);
+    const double out_pitch = rad2deg(std::max(span.width / grid.width, span.height / grid.height));  // degrees
     factor = std::clamp(static_cast<int>(std::lround(opt.pitch_deg / out_pitch)), 1, 64);
   }
   m.coarse = PanoGrid{grid.projection, std::max(1, (grid.width + factor / 2) / factor),
@@ -221,8 +209,8 @@ DepthSweep::DepthSweep(const Rig& rig, const PanoGrid& grid, const SweepOptions&
     m.inv.push_back((1 - t) / opt.near_mm + t / opt.far_mm);
   }
   // Coarse pitch (rad): the larger of the two axes' spacing.
-  const auto [span_x, span_y] = span_deg(grid.projection);
-  const double pitch = std::max(span_x / m.coarse.width, span_y / m.coarse.height) * kPi / 180;
+  const AngularSpan span = angular_span(grid.projection);
+  const double pitch = std::max(span.width / m.coarse.width, span.height / m.coarse.height);
   for (const auto& c : rig.cameras) {
     m.sigma.push_back(0.5 * pitch * std::max(c.in.fu, c.in.fv));
     // The blur to the coarse pitch makes full resolution unnecessary: each halving (cv::pyrDown, a
