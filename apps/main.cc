@@ -42,7 +42,7 @@ int main(int argc, char** argv) {
   bool verbose = false, quiet = false;
   app.add_flag("-v,--verbose", verbose, "More log output (stderr)");
   app.add_flag("-q,--quiet", quiet, "Only warnings and errors on stderr");
-  app.set_version_flag("--version", "omma 0.1.0");
+  app.set_version_flag("--version", "omma 0.2.0");
   for (const auto& c : omma::app::kCommands) c.add(app);
   omma::init_logging(false, false);
   app.parse_complete_callback([&] {

@@ -107,6 +107,19 @@ def test_simulate_photo_scene_from_an_array(rig):
     assert (colours[:, 0] > 200).sum() > 100 and (colours[:, 2] > 200).sum() > 100
 
 
+def test_a_photo_scene_is_read_as_an_equirect_full_panorama(rig):
+    # An asymmetric photo (a bright block left of centre, a gradient along the rows): its truth on
+    # the equirect-full grid of the same size is the photo itself, not its mirror image.
+    photo = np.full((64, 128, 3), 40, np.uint8)
+    photo[:, :, 1] = np.linspace(0, 255, 128, dtype=np.uint8)[None, :]
+    photo[20:40, 30:50, 2] = 250
+    s = omma.simulate(rig, scene=photo, projection="equirect-full", size=(128, 64), ideal=True,
+                      supersample=1)
+    err = np.abs(s.truth.astype(int) - photo.astype(int)).mean()
+    err_mirrored = np.abs(s.truth.astype(int) - photo[:, ::-1].astype(int)).mean()
+    assert err < 2 and err_mirrored > 20
+
+
 def test_simulation_save_writes_a_frames_folder(frames_dir):
     assert sorted(p.name for p in frames_dir.glob("cam_*.png"))[:2] == ["cam_00.png", "cam_01.png"]
     assert json.loads((frames_dir / "sim.json").read_text())["scene"] == "photo:memory"

@@ -1,6 +1,9 @@
 // B1 angle generation (thesis eq. 5.11-5.14, Fig. 5.10; hw::angles_at): two M-bit accumulators.
 // theta starts at theta_min and grows by k_theta per row, phi restarts at phi_min at each row and
 // grows by k_phi per pixel; both wrap modulo 2^M (the natural overflow of the registers, eq. 5.13).
+// The host loads k_phi as the two's complement of the column step: the panorama's column angle
+// decreases to the right (omma's conventions.h (G1)/(G2), an unmirrored panorama), and the wrap
+// makes that a subtraction with no extra logic.
 // Rows top to bottom, columns left to right (§5.4: "starting from the top left corner").
 // One direction per II cycles at most (II = 3: the thesis's Cartesian unit with three table sets,
 // §5.4.4), and only while `issue_ok` (room downstream).

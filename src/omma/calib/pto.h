@@ -7,8 +7,10 @@
 // positive yaw turns right, positive pitch looks up. We map:
 //     PT forward F (y = p = 0) = dome -x,   PT up U = dome +z,   PT right R = F x U = dome +y.
 //   A PanoTools equirect panorama (360 x 180) then has longitude lambda = 180 deg - phi and latitude
-//   90 deg - theta: its pixel x is omma's equirect x mirrored (x_omma = W - x_pt), rows agree with
-//   omma's equirect-full grid (and the top half is omma's 360 x 90 equirect grid).
+//   90 deg - theta: its pixels ARE omma's equirect-full pixels, both the world seen the right way
+//   round (conventions.h (G1): x = W (180 deg - phi) / 360 deg + W / 2 = -W phi / 360 deg mod W),
+//   and the top half is omma's 360 x 90 equirect grid. nona's output and omma's stitch are compared
+//   as they are, with no flip (pto_test.cc).
 //
 // Camera orientation. PanoTools' camera at y = p = r = 0 has optical axis F, image right R, image
 // down -U, i.e. (t, u, v) = (-x, +y, -z) in the dome frame. A camera with (y, p, r) is

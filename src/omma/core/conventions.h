@@ -30,17 +30,39 @@
 //   A camera sees w when w.t >= cos(aov/2) (eq. 2.3); aov is the full (diagonal-free, circular)
 //   angle of view of the camera cone, in (0, 180) degrees.
 //
-// Panorama grids (see grid.h)
-//   * equirect: 360 x 90 degrees, dome axis (theta = 0) along the top row, theta grows downwards to
-//     90 deg at the bottom row, phi grows left to right from 0 to 360 deg.
-//   * vr180: 180 x 180 degrees half-equirectangular, dome axis at the image centre, image right = +x,
-//     image up = +y.
-//   * equirect360x180 (full sphere rigs): theta 0..180 deg top to bottom.
+// Panorama grids (grid.h derives every projection from the two equations below, in one place)
+//   A panorama shows the world as a person standing at the rig's centre sees it: never mirrored.
+//   Looking along a direction f with "up" h, the viewer's right is r = f x h (right-handed frame).
+//   * Longitude-latitude grids (equirect, equirect-full, equirect-100): up = the dome axis +z, so a
+//     viewer facing azimuth phi has phi - 90 deg on the right: TURNING RIGHT DECREASES PHI, and the
+//     image right is the viewer's right (as in Hugin/PanoTools, PTGui and every 360-degree viewer):
+//       phi(x) = -2 pi x / W  (mod 2 pi),   theta(y) = span_v * y / H                       (G1)
+//     with x, y continuous pixel coordinates. The left edge of column 0 looks at phi = 0 (+x), the
+//     image centre at phi = 180 deg (-x); the top row at theta = 0 (the dome axis).
+//       equirect       360 x 90 deg  (span_v =  90 deg, dome rigs: the dome axis is the zenith)
+//       equirect-full  360 x 180 deg (span_v = 180 deg, full-sphere rigs and far-field photos)
+//       equirect-100   360 x 100 deg (span_v = 100 deg, Giga-Eye, thesis Table 7.4)
+//     PanoTools' equirect longitude lambda (0 at its image centre, growing to the right) is
+//     lambda = 180 deg - phi, so its pixels are omma's equirect-full pixels (calib/pto.h).
+//   * vr180: 180 x 180 deg half-equirectangular, looking along the dome axis +z with image up = +y,
+//     so the image right is r = z x y = -x:
+//       lon(x) = 90 deg - 180 deg * x / W  (the angle about +y from +z towards +x),
+//       lat(y) = 90 deg - 180 deg * y / H  (towards +y),
+//       w = (cos(lat) sin(lon), sin(lat), cos(lat) cos(lon))                               (G2)
+//     The image centre looks along +z, image right along -x, image up along +y.
+//   A camera frame with u x v = t (above) is itself unmirrored, so a camera's picture and the panorama
+//   show the same scene the same way round (tested with SIFT, Hugin's nona and OCR in grid_test.cc,
+//   pto_test.cc and handedness_test.cc).
 #pragma once
 
 namespace omma {
 
 inline constexpr double kPi = 3.14159265358979323846;
+
+// Version of the panorama grid convention above, part of every cache key that depends on it (map
+// files, engine/compiled_map.h): 1 = the mirrored grids of omma 0.1 (phi grew to the right, vr180's
+// right was +x); 2 = (G1)/(G2), the world the right way round.
+inline constexpr int kGridConvention = 2;
 constexpr double deg2rad(double deg) { return deg * kPi / 180.0; }
 constexpr double rad2deg(double rad) { return rad * 180.0 / kPi; }
 

@@ -38,18 +38,30 @@ std::string to_string(Projection p) {
   return "?";
 }
 
+double equirect_phi(double x, int width) {
+  // (G1): phi = -2 pi x / W, wrapped into [0, 2 pi).
+  double phi = -x / width * 2 * kPi;
+  phi -= 2 * kPi * std::floor(phi / (2 * kPi));
+  return phi >= 2 * kPi ? 0.0 : phi;
+}
+
+double equirect_x(double phi, int width) {
+  // Inverse of (G1), wrapped into [0, W).
+  double x = -phi / (2 * kPi) * width;
+  x -= width * std::floor(x / width);
+  return x >= width ? 0.0 : x;
+}
+
 Vec3 PanoGrid::direction(double x, double y) const {
   switch (projection) {
     case Projection::kEquirect:
     case Projection::kEquirectFull:
     case Projection::kEquirect100: {
-      const double span = angular_span(projection).height;
-      const double phi = x / width * 2 * kPi;
-      const double theta = y / height * span;
-      return direction_from_spherical(theta, phi);
+      const double theta = y / height * angular_span(projection).height;  // (G1)
+      return direction_from_spherical(theta, equirect_phi(x, width));
     }
     case Projection::kVr180: {
-      const double lon = x / width * kPi - kPi / 2;   // -90..90 deg, towards +x
+      const double lon = kPi / 2 - x / width * kPi;   // (G2): +90 deg (+x) at the left .. -90 (-x)
       const double lat = kPi / 2 - y / height * kPi;  // +90 (top, +y) .. -90 deg
       const double c = std::cos(lat);
       return {c * std::sin(lon), std::sin(lat), c * std::cos(lon)};
@@ -67,13 +79,13 @@ std::optional<Vec2> PanoGrid::pixel(const Vec3& w_in) const {
       const double span = angular_span(projection).height;
       const Spherical s = spherical_from_direction(w);
       if (s.theta > span) return std::nullopt;
-      return Vec2(s.phi / (2 * kPi) * width, s.theta / span * height);
+      return Vec2(equirect_x(s.phi, width), s.theta / span * height);
     }
     case Projection::kVr180: {
       if (w.z() < 0) return std::nullopt;
       const double lat = std::asin(std::clamp(w.y(), -1.0, 1.0));
       const double lon = std::atan2(w.x(), w.z());
-      return Vec2((lon + kPi / 2) / kPi * width, (kPi / 2 - lat) / kPi * height);
+      return Vec2((kPi / 2 - lon) / kPi * width, (kPi / 2 - lat) / kPi * height);
     }
   }
   return std::nullopt;

@@ -1,4 +1,6 @@
-// Panorama output grids: which direction each output pixel looks at. Conventions: conventions.h.
+// Panorama output grids: which direction each output pixel looks at. Conventions: conventions.h,
+// equations (G1) (longitude-latitude grids) and (G2) (vr180). Every panorama, scene lookup and
+// hardware angle register derives its pixel <-> direction mapping from here.
 #pragma once
 
 #include <optional>
@@ -9,8 +11,8 @@
 namespace omma {
 
 enum class Projection {
-  kEquirect,     // 360 x 90 deg: phi 0..360 left to right, theta 0 (dome axis) top .. 90 deg bottom
-  kVr180,        // 180 x 180 deg half-equirectangular, dome axis (+z) at the centre, right=+x, up=+y
+  kEquirect,     // 360 x 90 deg: phi 360..0 left to right (G1), theta 0 (dome axis) top .. 90 deg bottom
+  kVr180,        // 180 x 180 deg half-equirectangular, dome axis (+z) at the centre, right=-x, up=+y (G2)
   kEquirectFull,  // 360 x 180 deg: theta 0 top .. 180 deg bottom (full-sphere rigs)
   kEquirect100    // 360 x 100 deg: theta 0 top .. 100 deg bottom (Giga-Eye, thesis Table 7.4)
 };
@@ -25,6 +27,12 @@ struct AngularSpan {
 };
 AngularSpan angular_span(Projection p);
 std::string to_string(Projection p);
+
+// (G1) for one row of a longitude-latitude grid W pixels wide: the azimuth phi in [0, 2 pi) that
+// continuous pixel coordinate x looks at (phi = -2 pi x / W mod 2 pi: turning right decreases phi),
+// and its inverse, x in [0, W).
+double equirect_phi(double x, int width);
+double equirect_x(double phi, int width);
 
 struct PanoGrid {
   Projection projection = Projection::kVr180;

@@ -2,13 +2,16 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 namespace omma {
 namespace {
 
 TEST(Grid, Vr180CentreIsDomeAxis) {
   PanoGrid g{Projection::kVr180, 1080, 1080};
   EXPECT_NEAR((g.direction(540, 540) - Vec3::UnitZ()).norm(), 0, 1e-12);
-  EXPECT_NEAR((g.direction(1080, 540) - Vec3::UnitX()).norm(), 0, 1e-12);  // right edge = +x
+  EXPECT_NEAR((g.direction(1080, 540) + Vec3::UnitX()).norm(), 0, 1e-12);  // right edge = -x (G2)
+  EXPECT_NEAR((g.direction(0, 540) - Vec3::UnitX()).norm(), 0, 1e-12);     // left edge = +x
   EXPECT_NEAR((g.direction(540, 0) - Vec3::UnitY()).norm(), 0, 1e-12);     // top edge = +y
 }
 
@@ -16,7 +19,45 @@ TEST(Grid, EquirectTopRowIsDomeAxis) {
   PanoGrid g{Projection::kEquirect, 1920, 512};
   EXPECT_NEAR(g.direction(100, 0).z(), 1.0, 1e-12);
   EXPECT_NEAR(g.direction(0, 512).z(), 0.0, 1e-12);
-  EXPECT_NEAR((g.direction(0, 512) - Vec3::UnitX()).norm(), 0, 1e-12);
+  EXPECT_NEAR((g.direction(0, 512) - Vec3::UnitX()).norm(), 0, 1e-12);     // left edge = +x (G1)
+  EXPECT_NEAR((g.direction(960, 512) + Vec3::UnitX()).norm(), 0, 1e-12);   // centre = -x
+  EXPECT_NEAR((g.direction(480, 512) + Vec3::UnitY()).norm(), 0, 1e-12);   // a quarter turn right = -y
+}
+
+// conventions.h: a panorama is the world as seen by a person at the rig's centre. Wherever that
+// person looks (f, with "up" h the image's up there), the image's right is their right, f x h, and
+// never their left: the grids are not mirrored.
+TEST(Grid, ImageRightIsTheViewersRightInEveryProjection) {
+  for (Projection p : {Projection::kVr180, Projection::kEquirect, Projection::kEquirectFull,
+                       Projection::kEquirect100}) {
+    const PanoGrid g{p, 720, 360};
+    int checked = 0;
+    for (int r = 10; r < 350; r += 20)
+      for (int c = 5; c < 715; c += 30) {
+        const double x = c + 0.5, y = r + 0.5, e = 1e-3;
+        const Vec3 f = g.direction(x, y);
+        const Vec3 up = (g.direction(x, y - e) - g.direction(x, y + e)).normalized();
+        const Vec3 right = (g.direction(x + e, y) - g.direction(x - e, y)).normalized();
+        EXPECT_GT(right.dot(f.cross(up)), 0.999) << to_string(p) << " at " << c << "," << r;
+        ++checked;
+      }
+    EXPECT_GT(checked, 300);
+  }
+}
+
+TEST(Grid, EquirectLongitudeFunctionsAreInverse) {
+  for (int w : {1, 360, 1920})
+    for (double x : {0.0, 0.25, 0.5, 17.3, w - 0.5, w - 1e-9}) {
+      if (x >= w) continue;
+      const double phi = equirect_phi(x, w);
+      EXPECT_GE(phi, 0);
+      EXPECT_LT(phi, 2 * kPi);
+      const double back = equirect_x(phi, w);
+      EXPECT_GE(back, 0);
+      EXPECT_LT(back, w);
+      EXPECT_NEAR(std::remainder(back - x, double(w)), 0, 1e-6) << w << " " << x;
+    }
+  EXPECT_NEAR(equirect_phi(0.25 * 360, 360), 1.5 * kPi, 1e-12);  // a quarter of the way: phi = 270 deg
 }
 
 TEST(Grid, RoundTripAllProjections) {

@@ -3,6 +3,7 @@
 #include <zlib.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <fstream>
 #include <optional>
@@ -192,6 +193,10 @@ SphericalLayout spherical_layout(const PanoGrid& g) {
     case Projection::kEquirectFull:
       l.full_width = g.width;
       l.full_height = g.height;
+      break;
+    case Projection::kEquirect100:  // 100 of 180 degrees, from the zenith down
+      l.full_width = g.width;
+      l.full_height = static_cast<int>(std::lround(g.height * 180.0 / 100.0));
       break;
   }
   return l;

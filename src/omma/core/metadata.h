@@ -6,10 +6,13 @@
 // the image's own resolution (SphericalLayout):
 //   equirect       360 x 90 deg, the dome axis (+z) along the top row: the TOP HALF of the sphere
 //                  (the dome axis is the zenith). Full W x 2H, the image at left 0, top 0.
-//   vr180          180 x 180 deg with the dome axis at the centre, right = +x, up = +y: the FRONT
+//   vr180          180 x 180 deg with the dome axis at the centre, right = -x, up = +y: the FRONT
 //                  HALF (the dome axis looks forward, the VR180 convention). Full 2W x H, the image
 //                  at left W/2, top 0.
 //   equirect-full  the whole sphere: full W x H.
+//   equirect-100   360 x 100 deg from the zenith down (Giga-Eye): full W x round(1.8 H), top 0.
+// Every grid is the world the right way round (conventions.h (G1), (G2)), as these formats assume,
+// so no pose or flip is written.
 //
 // Photos (JPEG, PNG): Google's Photo Sphere XMP (namespace GPano, http://ns.google.com/photos/1.0/
 // panorama/): ProjectionType equirectangular, UsePanoramaViewer, FullPanoWidth/HeightPixels,

@@ -50,6 +50,13 @@ TEST(SphericalLayout, EachGridIsItsPartOfTheSphere) {
   EXPECT_EQ(l.full_height, 1024);
   EXPECT_EQ(l.width, 2048);
   EXPECT_EQ(l.height, 1024);
+  // equirect-100 (Giga-Eye): 100 of the sphere's 180 degrees, from the zenith down.
+  l = spherical_layout({Projection::kEquirect100, 9000, 2500});
+  EXPECT_EQ(l.full_width, 9000);
+  EXPECT_EQ(l.full_height, 4500);
+  EXPECT_EQ(l.left, 0);
+  EXPECT_EQ(l.top, 0);
+  EXPECT_EQ(l.height, 2500);
 }
 
 TEST(SphericalLayout, AgreesWithTheGridsDirections) {
@@ -67,8 +74,17 @@ TEST(SphericalLayout, AgreesWithTheGridsDirections) {
   const SphericalLayout lv = spherical_layout(vr);
   for (int col : {0, 100, 199}) {
     const Vec3 w = vr.pixel_direction(col, 100);
-    const double lon = std::atan2(w.x(), w.z());  // 0 = forward (the full sphere's centre column)
-    EXPECT_NEAR((lon / (2 * kPi) + 0.5) * lv.full_width, lv.left + col + 0.5, 1e-9);
+    // The full sphere's yaw: 0 = forward (+z, its centre column), growing to the viewer's right,
+    // which is -x when looking along +z with +y up (conventions.h (G2)).
+    const double yaw = std::atan2(-w.x(), w.z());
+    EXPECT_NEAR((yaw / (2 * kPi) + 0.5) * lv.full_width, lv.left + col + 0.5, 1e-9);
+  }
+  // equirect-100: the rows are the full sphere's first rows.
+  const PanoGrid g100{Projection::kEquirect100, 360, 100};
+  const SphericalLayout l100 = spherical_layout(g100);
+  for (int row : {0, 50, 99}) {
+    const double theta = std::acos(g100.pixel_direction(7, row).z());
+    EXPECT_NEAR(theta / kPi * l100.full_height, l100.top + row + 0.5, 1e-9);
   }
 }
 

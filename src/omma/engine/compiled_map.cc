@@ -486,6 +486,7 @@ std::string map_key(const Rig& rig, const MapOptions& opt) {
   for (bool a : opt.active) active += a ? '1' : '0';
   j["active"] = active;
   j["format"] = kMapFormatVersion;
+  j["grid_convention"] = kGridConvention;  // no map of the mirrored grids is ever reused
   char buf[32];
   std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(fnv1a(j.dump())));
   return buf;

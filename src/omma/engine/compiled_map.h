@@ -194,7 +194,9 @@ std::string map_key(const Rig& rig, const MapOptions& opt);
 //   i32 stride_px, rows, cameras, cameras x (i32 row0, width, height), then the arrays tile_run,
 //   tile_tap, tile_base, tile_line, runs, base, delta, weight, prior, lines (each u64 count and the
 //   elements), u32 magic, u32 CRC-32 (core/checksum.h) of every byte before it.
-inline constexpr uint32_t kMapFormatVersion = 5;  // 3: tiles, runs, row pairs; 4: 1/128; 5: key, CRC-32
+// 3: tiles, runs, row pairs; 4: 1/128; 5: key, CRC-32; 6: the unmirrored grids (core/conventions.h
+// kGridConvention 2: a version-5 file maps the mirrored panorama and is refused).
+inline constexpr uint32_t kMapFormatVersion = 6;
 inline constexpr size_t kMapKeyBytes = 16;
 std::vector<uint8_t> map_file_bytes(const CompiledMap& map, const std::string& key);
 void save_map(const CompiledMap& map, const std::filesystem::path& path, const std::string& key);  // atomic

@@ -5,6 +5,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "omma/core/geometry.h"
+#include "omma/core/grid.h"
 
 namespace omma::engine {
 
@@ -47,9 +48,8 @@ std::vector<cv::Mat> panorama_to_camera_maps(const Rig& rig, cv::Size pano_size,
       for (int x = 0; x < cam.in.width; ++x) {
         const Vec3 w = m.unproject(Vec2(x + 0.5, y + 0.5));
         const Spherical s = spherical_from_direction(w);
-        double phi = s.phi + yaw_rad;
-        phi -= 2 * kPi * std::floor(phi / (2 * kPi));
-        map.at<cv::Vec2f>(y, x) = cv::Vec2f(float(phi / (2 * kPi) * pano_size.width - 0.5),
+        // The panorama is an equirect-full grid (conventions.h (G1)), turned by yaw about +z.
+        map.at<cv::Vec2f>(y, x) = cv::Vec2f(float(equirect_x(s.phi + yaw_rad, pano_size.width) - 0.5),
                                             float(s.theta / kPi * pano_size.height - 0.5));
       }
     maps.push_back(map);

@@ -20,32 +20,31 @@ int64_t round_half_up(double x) { return static_cast<int64_t>(std::floor(x + 0.5
 AngleRegs angle_regs(const HwConfig& cfg, const PanoGrid& grid) {
   const double turn = std::ldexp(1.0, cfg.angle_bits);  // 2^M codes = 2 pi
   const uint32_t mask = mask_bits(cfg.angle_bits);
-  // Spans as fractions of a full turn; first centre = start + span / (2N).
-  double row_span = 0, col_span = 0, col_start = 0;
+  // Spans as fractions of a full turn (core/grid.h). The column angle follows conventions.h: it
+  // DEcreases to the right, (G1) phi = -2 pi x / W and (G2) lon = 90 deg - 180 deg x / W, so the
+  // column step is negative, held as its two's complement modulo 2^M (the accumulator wraps modulo
+  // 2^M anyway, eq. 5.13: adding 2^M - k is subtracting k). First centre = start + step / 2.
+  const AngularSpan span = angular_span(grid.projection);
+  const double row_span = span.height / (2 * kPi), col_span = span.width / (2 * kPi);
+  double col_start = 0;  // angle of the left edge of column 0, in turns
   AngleRegs r;
   r.rows = grid.height;
   r.cols = grid.width;
-  switch (grid.projection) {
-    case Projection::kEquirect:
-      row_span = 0.25, col_span = 1.0, col_start = 0;
-      r.axes = AxisMap::kDome;
-      r.wrap_cols = true;
-      break;
-    case Projection::kEquirectFull:
-      row_span = 0.5, col_span = 1.0, col_start = 0;
-      r.axes = AxisMap::kDome;
-      r.wrap_cols = true;
-      break;
-    case Projection::kVr180:
-      row_span = 0.5, col_span = 0.5, col_start = -0.25;  // longitude from -90 deg
-      r.axes = AxisMap::kVr180;
-      r.wrap_cols = false;
-      break;
+  if (grid.projection == Projection::kVr180) {
+    col_start = 0.25;  // longitude +90 deg (+x) at the left edge
+    r.axes = AxisMap::kVr180;
+    r.wrap_cols = false;
+  } else {
+    col_start = 0;  // phi = 0 (+x) at the left edge
+    r.axes = AxisMap::kDome;
+    r.wrap_cols = true;
   }
+  const int64_t col_step = round_half_up(turn * col_span / grid.width);  // |k_phi|, codes per column
   r.k_theta = static_cast<uint32_t>(round_half_up(turn * row_span / grid.height)) & mask;
-  r.k_phi = static_cast<uint32_t>(round_half_up(turn * col_span / grid.width)) & mask;
+  r.k_phi = static_cast<uint32_t>(-col_step) & mask;  // -|k_phi| mod 2^M
   r.theta_min = static_cast<uint32_t>(round_half_up(turn * (row_span / grid.height / 2))) & mask;
-  r.phi_min = static_cast<uint32_t>(round_half_up(turn * (col_start + col_span / grid.width / 2))) & mask;
+  // start - step / 2, rounded as the mirror image of the old start + step / 2 (exact in turns).
+  r.phi_min = static_cast<uint32_t>(-round_half_up(turn * (col_span / grid.width / 2 - col_start))) & mask;
   return r;
 }
 

@@ -30,11 +30,14 @@ namespace omma::hw {
 // Angle generator registers (Table 6.7 pano_*; M-bit values, uQ0.M of a full turn). Pixel (col,
 // row) looks at theta = theta_min + row * k_theta, phi = phi_min + col * k_phi (mod 2^M), which is
 // what the accumulators hold after `row` and `col` increments (eq. 5.11-5.12); theta_min and
-// phi_min are the angles of the first pixel CENTRE. axes selects how (a, b, c) = (sin t cos p,
-// sin t sin p, cos t) map onto the dome frame (a wire permutation, free in hardware):
+// phi_min are the angles of the first pixel CENTRE. k_phi is the two's complement (mod 2^M) of the
+// column step: the column angle DEcreases to the right (conventions.h (G1), (G2): the panorama is
+// not mirrored), which the modulo-2^M accumulator does with no extra logic.
+// axes selects how (a, b, c) = (sin t cos p, sin t sin p, cos t) map onto the dome frame (a wire
+// permutation, free in hardware):
 //   kDome  (equirect grids): omega = (a, b, c)  -- theta from the dome axis +z, phi from +x (eq. 5.15)
 //   kVr180 (vr180 grid):     omega = (b, c, a)  -- theta from +y (top row) down, phi = longitude
-//                            about +y from +z towards +x (conventions.h vr180)
+//                            about +y from +z towards +x (conventions.h (G2))
 enum class AxisMap : int { kDome = 0, kVr180 = 1 };
 
 struct AngleRegs {

@@ -113,14 +113,18 @@ TEST(Cartesian, Vr180AxisMapMatchesTheGrid) {
       const Vec3 w = grid.pixel_direction(col, row);
       for (int k = 0; k < 3; ++k) EXPECT_NEAR(o.w[k] / unit, w[k], 1e-3) << col << "," << row;
     }
-  const PanoGrid eq{Projection::kEquirect, 96, 24};
-  const AngleRegs r2 = angle_regs(cfg, eq);
-  for (int row = 0; row < eq.height; row += 5)
-    for (int col = 0; col < eq.width; col += 7) {
-      const Omega o = cartesian(cfg, rom, angles_at(cfg, r2, col, row), r2.axes);
-      const Vec3 w = eq.pixel_direction(col, row);
-      for (int k = 0; k < 3; ++k) EXPECT_NEAR(o.w[k] / unit, w[k], 1e-3);
-    }
+  // Every longitude-latitude grid (conventions.h (G1): phi decreases to the right, the column step
+  // held as its two's complement).
+  for (const PanoGrid& eq : {PanoGrid{Projection::kEquirect, 96, 24}, PanoGrid{Projection::kEquirectFull, 96, 48},
+                             PanoGrid{Projection::kEquirect100, 90, 25}}) {
+    const AngleRegs r2 = angle_regs(cfg, eq);
+    for (int row = 0; row < eq.height; row += 5)
+      for (int col = 0; col < eq.width; col += 7) {
+        const Omega o = cartesian(cfg, rom, angles_at(cfg, r2, col, row), r2.axes);
+        const Vec3 w = eq.pixel_direction(col, row);
+        for (int k = 0; k < 3; ++k) EXPECT_NEAR(o.w[k] / unit, w[k], 1e-3) << to_string(eq.projection);
+      }
+  }
 }
 
 // Camera search, distance and projection against the float camera model on the 24-camera rig.

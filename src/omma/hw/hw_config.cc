@@ -138,8 +138,8 @@ void check_grid(const HwConfig& cfg, const PanoGrid& grid) {
     throw std::invalid_argument("panorama width and height must be below 65536 (16-bit counters)");
   // One angle code per pixel step at least: span / N >= 2 pi / 2^M.
   const double turn = std::ldexp(1.0, cfg.angle_bits);
-  const double col_span = grid.projection == Projection::kVr180 ? 0.5 : 1.0;
-  const double row_span = grid.projection == Projection::kEquirect ? 0.25 : 0.5;
+  const AngularSpan span = angular_span(grid.projection);
+  const double col_span = span.width / (2 * kPi), row_span = span.height / (2 * kPi);
   if (turn * col_span / grid.width < 1 || turn * row_span / grid.height < 1)
     throw std::invalid_argument(fmt::format(
         "angle_bits = {} gives less than one angle code per pixel step of a {}x{} {} panorama", cfg.angle_bits,

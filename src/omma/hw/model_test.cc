@@ -172,7 +172,7 @@ TEST(RegisterMap, ThesisAngleRegistersFromTheGrid) {
   // covers 190 deg, not 180 (hw-spec: "M = 11 is sufficient" does not hold for 1080 over 180 deg).
   HwConfig cfg = thesis_config();
   const AngleRegs r = angle_regs(cfg, {Projection::kVr180, 1080, 1080});
-  EXPECT_EQ(r.k_phi, 4u);
+  EXPECT_EQ(r.k_phi, 8192u - 4u);  // -4 mod 2^13: the longitude decreases to the right (conventions.h (G2))
   EXPECT_EQ(r.k_theta, 4u);
 }
 

@@ -29,7 +29,7 @@ const std::vector<GlobalRegister>& global_registers() {
       {"panorama_row_cnt", 0x1800, 11, 0x1D5, false, "panorama rows"},
       {"panorama_col_cnt", 0x2000, 11, 0x1AC, false, "panorama columns"},
       {"pano_max_phi", 0x2800, 13, 0x17F8, false, "phi after the last column (min + cols * k)"},
-      {"pano_k_phi", 0x3000, 13, 0x00A, false, "horizontal angle step"},
+      {"pano_k_phi", 0x3000, 13, 0x00A, false, "horizontal angle step (two's complement: phi decreases to the right)"},
       {"pano_max_theta", 0x3800, 13, 0xDF8, false, "theta after the last row (min + rows * k)"},
       {"pano_min_theta", 0x4000, 13, 0x300, false, "theta of the first row (pixel centre)"},
       {"pano_k_theta", 0x4800, 13, 0x006, false, "vertical angle step"},

@@ -9,6 +9,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "omma/core/grid.h"
 #include "omma/sim/usaf.h"
 
 namespace omma::sim {
@@ -49,8 +50,9 @@ class PhotoScene final : public Scene {
     double phi = std::atan2(d.y(), d.x());
     if (phi < 0) phi += 2 * kPi;
     const double theta = std::acos(std::clamp(d.z(), -1.0, 1.0));
-    // Continuous photo coordinates (pixel centres at +0.5) -> sample grid (centres at integers).
-    const double x = phi / (2 * kPi) * W - 0.5;
+    // The photo is an equirect-full panorama (conventions.h (G1)): continuous photo coordinates
+    // (pixel centres at +0.5) -> sample grid (centres at integers).
+    const double x = equirect_x(phi, W) - 0.5;
     const double y = std::clamp(theta / kPi * H - 0.5, 0.0, H - 1.0);
     const double fx = std::floor(x), fy = std::floor(y);
     const double ax = x - fx, ay = y - fy;

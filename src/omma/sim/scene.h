@@ -48,10 +48,12 @@ class Scene {
 };
 
 // Far-field equirectangular 360 x 180 deg photograph (any size, 8- or 16-bit, 1 or 3 channels):
-// only the ray's direction matters. Mapping: photo column x <-> azimuth phi = 2 pi x / W (phi from
-// +x towards +y, eq. 5.15), photo row y <-> polar angle theta = pi y / H, so the photo's top row is
-// the dome axis +z (zenith) and its centre row the horizon. Bilinear sampling in linear light,
-// wrapping in x. Throws SceneError if the file is missing or unreadable.
+// only the ray's direction matters. The photo is read as an omma equirect-full panorama, the way
+// every 360-degree viewer shows it (conventions.h (G1)): photo column x <-> azimuth
+// phi = -2 pi x / W (mod 2 pi), photo row y <-> polar angle theta = pi y / H, so the photo's top
+// row is the dome axis +z (zenith), its centre row the horizon, and a camera of the rig sees the
+// photo the right way round (text reads correctly in the simulated frames). Bilinear sampling in
+// linear light, wrapping in x. Throws SceneError if the file is missing or unreadable.
 std::unique_ptr<Scene> make_photo_scene(const std::string& path);
 // The same from an image in memory (BGR or gray, 8U/16U/32F; 32F taken as sRGB-encoded in [0, 1]).
 std::unique_ptr<Scene> make_photo_scene(const cv::Mat& equirect, const std::string& spec = "photo:memory");

@@ -58,7 +58,7 @@ cv::Mat remap_photo(const cv::Mat& img, int w, int h, F dir) {
   for (int r = 0; r < h; ++r)
     for (int c = 0; c < w; ++c) {
       const Spherical s = spherical_from_direction(dir(c, r));
-      mx.at<float>(r, c) = static_cast<float>(s.phi / (2 * kPi) * img.cols - 0.5);
+      mx.at<float>(r, c) = static_cast<float>(equirect_x(s.phi, img.cols) - 0.5);  // (G1)
       my.at<float>(r, c) = static_cast<float>(s.theta / kPi * img.rows - 0.5);
     }
   cv::Mat out;
@@ -99,12 +99,17 @@ TEST(SimPhoto, TruthEqualsPhotoResampledOnTheGrid) {
 }
 
 TEST(SimPhoto, EquirectTruthIsTheTopHalfOfThePhoto) {
-  // Photo top row = dome axis, centre row = horizon, phi = 2 pi x / W: the 360x90 grid at the photo's
-  // own resolution reproduces the top half pixel for pixel (up to the sRGB round trip).
+  // Photo top row = dome axis, centre row = horizon, read as an equirect-full panorama (conventions.h
+  // (G1), as every 360-degree viewer shows it): the 360x90 grid at the photo's own resolution
+  // reproduces the top half pixel for pixel (up to the sRGB round trip), and not its mirror image.
   const auto scene = make_photo_scene(photo());
   const PanoGrid grid{Projection::kEquirect, photo().cols, photo().rows / 2};
   const cv::Mat truth = render_truth(*scene, grid, {}, 1);
-  EXPECT_GT(cv::PSNR(truth, photo().rowRange(0, photo().rows / 2)), 45.0);
+  const cv::Mat top = photo().rowRange(0, photo().rows / 2);
+  cv::Mat mirrored;
+  cv::flip(top, mirrored, 1);
+  EXPECT_GT(cv::PSNR(truth, top), 45.0);
+  EXPECT_LT(cv::PSNR(truth, mirrored), 25.0);
 }
 
 TEST(SimColon, BrightnessFallsWithDistance) {

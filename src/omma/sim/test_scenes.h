@@ -62,7 +62,7 @@ inline cv::Mat smooth_texture(int width = 720, int height = 360) {
   cv::Mat tex(height, width, CV_32FC3);
   for (int r = 0; r < height; ++r)
     for (int c = 0; c < width; ++c) {
-      const double phi = 2 * kPi * (c + 0.5) / width, theta = kPi * (r + 0.5) / height;
+      const double phi = equirect_phi(c + 0.5, width), theta = kPi * (r + 0.5) / height;  // (G1)
       tex.at<cv::Vec3f>(r, c) = cv::Vec3f(static_cast<float>(0.5 + 0.3 * std::sin(3 * phi) * std::sin(theta)),
                                           static_cast<float>(0.5 + 0.3 * std::cos(2 * theta)),
                                           static_cast<float>(0.5 + 0.25 * std::cos(phi + 4 * theta)));
@@ -195,7 +195,7 @@ inline Rig perturb(const Rig& nominal, const Perturbation& p, unsigned seed = 7)
   return rig;
 }
 
-// The equirect photo (360 x 180 deg, theta 0 at the top, phi 0..360 left to right), downsampled.
+// The equirect photo (an equirect-full panorama, conventions.h (G1)), downsampled.
 inline cv::Mat load_photo(const std::string& path, int width = 2048) {
   cv::Mat img = cv::imread(path, cv::IMREAD_COLOR);
   if (img.empty()) return img;
@@ -206,7 +206,7 @@ inline cv::Mat load_photo(const std::string& path, int width = 2048) {
 // Scene lookup for a direction (far field) through an equirect photo: continuous source pixel.
 inline cv::Point2f equirect_source(const cv::Mat& scene, const Vec3& w) {
   const Spherical s = spherical_from_direction(w);
-  return {static_cast<float>(s.phi / (2 * kPi) * scene.cols - 0.5),
+  return {static_cast<float>(equirect_x(s.phi, scene.cols) - 0.5),
           static_cast<float>(s.theta / kPi * scene.rows - 0.5)};
 }
 
