@@ -252,8 +252,9 @@ void add_stitch_command(CLI::App& root) {
                   "mrf-spherical (eq. 4.10-4.11), sad (eq. 4.17-4.18)")
       ->capture_default_str();
   cmd->add_option("--projection", a.projection,
-                  "equirect (360x90 deg, dome axis on the top row) or vr180 (180x180 deg, dome axis at the "
-                  "centre)")
+                  "equirect (360x90 deg, dome axis on the top row), vr180 (180x180 deg, dome axis at the "
+                  "centre), equirect-full (360x180) or equirect-100 (360x100); never mirrored: turning right "
+                  "moves right in the image (README, Conventions)")
       ->capture_default_str();
   cmd->add_option("--size", a.size,
                   "Panorama size WxH in pixels [default: 1080x1080 vr180, 1920x512 equirect]");
