@@ -62,6 +62,22 @@ TEST(MapFile, RoundTripIsExact) {
   EXPECT_FALSE(parse_map_for(f.file.data(), f.file.size(), f.rig, other).has_value());
 }
 
+// A map written before the grids were the world the right way round (format 5, core/conventions.h
+// kGridConvention 1) maps the mirrored panorama: it is refused with a message that names the
+// version, even when its checksum is intact, and never rendered from.
+TEST(MapFile, AMapOfTheMirroredGridsIsRefused) {
+  const Fixture f;
+  std::vector<uint8_t> old = f.file;
+  const uint32_t v5 = 5;
+  std::memcpy(old.data() + 4, &v5, 4);  // u32 magic, u32 version (compiled_map.h)
+  Fixture::fix_checksum(old);
+  std::string why;
+  EXPECT_FALSE(parse_map_for(old.data(), old.size(), f.rig, f.opt, &why).has_value());
+  EXPECT_NE(why.find("version 5"), std::string::npos) << why;
+  EXPECT_EQ(kMapFormatVersion, 6u);
+  EXPECT_EQ(kGridConvention, 2);
+}
+
 // Every bit of the header and 2000 random bits elsewhere, and 40 random 4 KiB blocks: the CRC-32
 // refuses each. The same header flips with the checksum made to match again (as if the damage had
 // been written by a program): the header checks against the rig refuse each of them too.
