@@ -6,10 +6,17 @@
 #include "apps/command.h"
 #include "omma/core/log.h"
 #include "omma/core/progress.h"
+#include "omma/core/version.h"
 
 namespace omma::app {
 
 void print_json(const nlohmann::json& j) {
+  if (j.is_object() && !j.contains("omma_version")) {  // every JSON summary says which omma wrote it
+    nlohmann::json with = j;
+    with["omma_version"] = omma::version();
+    std::cout << with.dump(2) << std::endl;
+    return;
+  }
   std::cout << j.dump(2) << std::endl;
 }
 
@@ -42,7 +49,7 @@ int main(int argc, char** argv) {
   bool verbose = false, quiet = false;
   app.add_flag("-v,--verbose", verbose, "More log output (stderr)");
   app.add_flag("-q,--quiet", quiet, "Only warnings and errors on stderr");
-  app.set_version_flag("--version", "omma 0.2.0");
+  app.set_version_flag("--version", "omma " + omma::version());
   for (const auto& c : omma::app::kCommands) c.add(app);
   omma::init_logging(false, false);
   app.parse_complete_callback([&] {

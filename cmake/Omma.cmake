@@ -2,6 +2,7 @@
 # Builds library omma_NAME from every *.cc in the current folder except *_test.cc, and, when tests
 # are on, one GoogleTest executable omma_NAME_test from the *_test.cc files beside the sources
 # (COLMAP's foo.h / foo.cc / foo_test.cc layout). Helpers add files without touching CMake.
+include(GNUInstallDirs)
 function(omma_stage name)
   cmake_parse_arguments(ARG "" "" "DEPS;TEST_DEPS" ${ARGN})
   file(GLOB all_cc CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/*.cc)
@@ -12,13 +13,21 @@ function(omma_stage name)
   endif()
   if(lib_cc)
     add_library(omma_${name} STATIC ${lib_cc})
-    target_include_directories(omma_${name} PUBLIC ${PROJECT_SOURCE_DIR}/src)
+    target_include_directories(omma_${name} PUBLIC $<BUILD_INTERFACE:${PROJECT_SOURCE_DIR}/src>
+                                                   $<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}>)
     target_link_libraries(omma_${name} PUBLIC ${ARG_DEPS})
   else()
     add_library(omma_${name} INTERFACE)
-    target_include_directories(omma_${name} INTERFACE ${PROJECT_SOURCE_DIR}/src)
+    target_include_directories(omma_${name} INTERFACE $<BUILD_INTERFACE:${PROJECT_SOURCE_DIR}/src>
+                                                      $<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}>)
     target_link_libraries(omma_${name} INTERFACE ${ARG_DEPS})
   endif()
+  # Installed and exported as omma::NAME (cmake/install.cmake: find_package(omma) in other projects).
+  set_target_properties(omma_${name} PROPERTIES EXPORT_NAME ${name})
+  add_library(omma::${name} ALIAS omma_${name})
+  install(TARGETS omma_${name} EXPORT ommaTargets
+          ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR} LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR})
+  set_property(GLOBAL APPEND PROPERTY OMMA_STAGES omma_${name})
   if(OMMA_BUILD_TESTS AND test_cc)
     add_executable(omma_${name}_test ${test_cc})
     target_link_libraries(omma_${name}_test PRIVATE omma_${name} ${ARG_TEST_DEPS} GTest::gtest GTest::gtest_main)

@@ -7,7 +7,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/install-deps.sh --test  # Verilator, Yosys, Icarus
 # a build folder configured before Verilator was installed has the RTL off: switch it on
-if [ -f build/CMakeCache.txt ] && ! grep -q "^OMMA_RTL:BOOL=ON" build/CMakeCache.txt; then
+if [ -f build/CMakeCache.txt ] && ! grep -q "^OMMA_RTL:[A-Z]*=ON" build/CMakeCache.txt; then
   cmake -S . -B build -DOMMA_RTL=ON -Dverilator_DIR=/usr/share/verilator >&2
 fi
 scripts/build.sh --target omma_rtl_pano_bench omma_rtl_gen_files >/dev/null

@@ -17,4 +17,4 @@ from ._omma import *  # noqa: F401,F403
 from ._omma import (CalibrationOptions, CameraEffects, Design, Engine, Error, IoError, METHODS,  # noqa: F401
                     PROJECTIONS, Rig, RigError, SceneError, Simulation, SinkError)
 
-__version__ = "0.2.0"
+from ._omma import __version__  # noqa: F401  (the file VERSION, through the C++ library)

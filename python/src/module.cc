@@ -5,6 +5,7 @@
 
 #include "bindings.h"
 #include "omma/core/io.h"
+#include "omma/core/version.h"
 #include "omma/core/log.h"
 #include "omma/core/progress.h"
 #include "omma/core/rig.h"
@@ -80,6 +81,7 @@ void add_errors(py::module_& m) {
 
 PYBIND11_MODULE(_omma, m) {
   m.doc() = "omma: compound-eye camera toolkit (rigs, design, simulator, stitcher, real-time engine, calibration)";
+  m.attr("__version__") = omma::version();
   omma::init_logging(false, false);  // "[info] ..." on stderr, as the command line
   omma::py::add_errors(m);
   omma::py::add_rig(m);

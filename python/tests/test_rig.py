@@ -1,6 +1,7 @@
 """Rigs from Python: load, validate, save, JSON round trips, design; errors as the command line's."""
 import json
 import subprocess
+from pathlib import Path
 
 import pytest
 
@@ -90,3 +91,8 @@ def test_set_verbosity(rig, capfd):
         omma.set_verbosity("info")
     with pytest.raises(ValueError, match="verbosity must be quiet, info or debug"):
         omma.set_verbosity("loud")
+
+
+def test_version_is_the_version_file():
+    version_file = Path(__file__).resolve().parents[2] / "VERSION"
+    assert omma.__version__ == version_file.read_text().strip()

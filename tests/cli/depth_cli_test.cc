@@ -37,7 +37,7 @@ TEST(DepthCli, DepthModesAndDepthOut) {
   EXPECT_EQ(picture.cols, 360);  // colour map widened for the legend
   EXPECT_GT(picture.rows, 128);  // legend strip
   // truth:FILE reads the data back; sphere:R; inf.
-  for (const std::string mode : {"truth:" + (d / "depth.tiff").string(), std::string("sphere:1000"), std::string("inf")}) {
+  for (const std::string& mode : {"truth:" + (d / "depth.tiff").string(), std::string("sphere:1000"), std::string("inf")}) {
     const RunResult s = run_omma(stitch(d, mode, d / "p.png") + " --json");
     ASSERT_EQ(s.exit_code, 0) << mode << ": " << s.err;
   }

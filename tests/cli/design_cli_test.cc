@@ -5,6 +5,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "omma/core/rig.h"
+#include "omma/core/version.h"
 #include "tests/cli/cli_util.h"
 
 namespace omma::test {
@@ -17,7 +18,8 @@ TEST(DesignCli, MaxVolumeReproducesThePrototype) {
                                (dir / "rig.json").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto j = r.json();
-  EXPECT_EQ(j.size(), 4u);  // exactly {method, cameras, layers, r_virtual_mm}
+  EXPECT_EQ(j.size(), 5u);  // exactly {method, cameras, layers, r_virtual_mm, omma_version}
+  EXPECT_EQ(j["omma_version"], omma::version());
   EXPECT_EQ(j["method"], "max-volume");
   EXPECT_EQ(j["cameras"], 24);
   EXPECT_EQ(j["layers"], nlohmann::json({3, 9, 12}));
@@ -109,7 +111,7 @@ TEST(CoverageCli, BadRigFilesAndOptionsFail) {
     EXPECT_FALSE(fs::exists(dir / "map.png"));
   }
   ASSERT_EQ(run_omma("design --out " + (dir / "rig.json").string()).exit_code, 0);
-  for (const std::string& opt : {"--step 0", "--distance -3", "--map-width 2"}) {
+  for (const char* opt : {"--step 0", "--distance -3", "--map-width 2"}) {
     const RunResult r = run_omma("coverage " + (dir / "rig.json").string() + " " + opt + map);
     EXPECT_NE(r.exit_code, 0) << opt;
     EXPECT_FALSE(fs::exists(dir / "map.png")) << opt;

@@ -40,7 +40,8 @@ struct Case {
 };
 const Case kCases[] = {{"equirect", "256x64", 256, 128, 0, 0},  // the top half of the sphere
                        {"vr180", "128x128", 256, 128, 64, 0},   // the front half
-                       {"equirect-full", "256x128", 256, 128, 0, 0}};
+                       {"equirect-full", "256x128", 256, 128, 0, 0},
+                       {"equirect-100", "360x100", 360, 180, 0, 0}};  // 100 of 180 deg from the zenith
 
 TEST(MetadataCli, StitchedJpegAndPngCarryGPanoForExiftool) {
   if (!have("exiftool")) GTEST_SKIP() << "exiftool not installed (scripts/install-deps.sh --test)";

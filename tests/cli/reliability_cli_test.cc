@@ -43,7 +43,12 @@ TEST(Reliability, CommandLineErrorsExitOneWithOneClearLine) {
   expect_error(run_omma("optics --no-such-option"), "no-such-option", "unknown option");
   expect_error(run_omma("rig check"), "RIG", "missing positional");
   expect_error(run_omma("stitch --rig"), "--rig", "option without its value");
-  EXPECT_EQ(run_omma("--version").exit_code, 0);
+  const RunResult v = run_omma("--version");
+  EXPECT_EQ(v.exit_code, 0);
+  std::ifstream version_file(std::string(OMMA_SOURCE_DIR) + "/VERSION");
+  std::string version;
+  std::getline(version_file, version);
+  EXPECT_EQ(v.out, "omma " + version + "\n");
 }
 
 // Findings 2, 6, 9 and 11: numbers that wrap or underflow, wrong types, unknown versions and huge

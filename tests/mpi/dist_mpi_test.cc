@@ -133,7 +133,9 @@ TEST_F(DistMpi, AKilledRankFailsTheRunAndTheRerunRedoesOnlyTheRest) {
   EXPECT_EQ(m["rank0"], "serves");
   int reused = 0;
   for (const auto& o : m["outputs"]) {
-    if (!o["reused"].get<bool>()) EXPECT_NE(o["rank"], 0) << "rank 0 only serves";
+    if (!o["reused"].get<bool>()) {
+      EXPECT_NE(o["rank"], 0) << "rank 0 only serves";
+    }
     const std::string name = fs::path(o["output"].get<std::string>()).filename().string();
     if (o["reused"].get<bool>()) {
       ++reused;

@@ -32,7 +32,9 @@ TEST(Coverage, ClosedFormMatchesThePointTest) {
     ASSERT_TRUE(std::isfinite(r));
     EXPECT_GE(cameras_seeing(rig, w, r * (1 + 1e-6) + 1e-9), 1);
     EXPECT_GE(cameras_seeing(rig, w, r * 3), 1);
-    if (r > 5.01) EXPECT_EQ(cameras_seeing(rig, w, r * (1 - 1e-6)), 0) << r;
+    if (r > 5.01) {
+      EXPECT_EQ(cameras_seeing(rig, w, r * (1 - 1e-6)), 0) << r;
+    }
   }
 }
 

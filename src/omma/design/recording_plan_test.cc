@@ -48,7 +48,9 @@ TEST(RecordingPlan, ConstraintsOfTheThesisSystem) {
     bool clock_ok = p.checks[0].ok, rate_ok = p.checks[2].ok;
     EXPECT_TRUE(p.checks[1].ok) << row.option;  // every clock can read its pixels
     if (clock_ok && rate_ok) hold.push_back(row.option);
-    if (row.option == 1) EXPECT_FALSE(rate_ok);  // 2 x 101 MiB/s = 211.6 MB/s > 150
+    if (row.option == 1) {
+      EXPECT_FALSE(rate_ok);  // 2 x 101 MiB/s = 211.6 MB/s > 150
+    }
   }
   EXPECT_EQ(hold, (std::vector<int>{2, 4, 5, 6, 7, 8}));
   // Recording time per SSD: 14.86 min at full resolution (thesis 14), 18.8 at half (thesis 17).

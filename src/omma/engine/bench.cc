@@ -434,7 +434,9 @@ std::vector<BenchRatio> bench_ratios(const std::vector<BenchEntry>& entries) {
   for (const auto& e : entries) {
     if (e.name.rfind("omma-", 0) != 0 || e.name.find("-1thread") != std::string::npos || !(e.fps > 0)) continue;
     const std::string size = e.name.substr(e.name.rfind('-') + 1);  // "1080x1080"
-    BenchRatio r{e.name, e.fps};
+    BenchRatio r;
+    r.name = e.name;
+    r.fps = e.fps;
     if (const double a = fps_of("opencv-remap-" + size); a > 0) r.vs_remap = e.fps / a;
     if (const double b = fps_of("opencv-multiband-" + size); b > 0) r.vs_multiband = e.fps / b;
     if (const double m = fps_of("memcpy-bound-" + size); m > 0) r.bound_over = m / e.fps;
