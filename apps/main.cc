@@ -11,13 +11,9 @@
 namespace omma::app {
 
 void print_json(const nlohmann::json& j) {
-  if (j.is_object() && !j.contains("omma_version")) {  // every JSON summary says which omma wrote it
-    nlohmann::json with = j;
-    with["omma_version"] = omma::version();
-    std::cout << with.dump(2) << std::endl;
-    return;
-  }
-  std::cout << j.dump(2) << std::endl;
+  nlohmann::json out = j;
+  if (out.is_object() && !out.contains("omma_version")) out["omma_version"] = omma::version();  // who wrote it
+  std::cout << out.dump(2) << std::endl;
 }
 
 void set_json_mode(bool on) { omma::set_progress_enabled(!on); }

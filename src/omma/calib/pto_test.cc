@@ -185,8 +185,9 @@ TEST(Pto, MalformedAndTruncatedProjectsAreRefused) {
 // The real peer: nona renders our exported project; its panorama, as it is (no flip: both are the
 // world the right way round, conventions.h (G1), pto.h), agrees with the reference stitcher's
 // nearest-neighbour panorama (omma stitch --method nn) on the covered region, and its mirror image
-// does not (so the test tells the two handednesses apart). Frames: the small far-field renderer of sim/test_scenes.h with a perturbed rig
-// (shifted centres, k1, focal, rotations) so that every converted parameter matters.
+// does not (so the test tells the two handednesses apart). Frames: the small far-field renderer of
+// sim/test_scenes.h with a perturbed rig (shifted centres, k1, focal, rotations) so that every
+// converted parameter matters.
 TEST(Pto, NonaRendersOurExportLikeOurNearestNeighbourStitch) {
   if (std::system("which nona >/dev/null 2>&1") != 0) GTEST_SKIP() << "nona (hugin-tools) not installed";
   const cv::Mat scene = testing::load_photo(std::string(OMMA_DATA_DIR) + "/lake.jpg");

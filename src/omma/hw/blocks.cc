@@ -26,19 +26,15 @@ AngleRegs angle_regs(const HwConfig& cfg, const PanoGrid& grid) {
   // 2^M anyway, eq. 5.13: adding 2^M - k is subtracting k). First centre = start + step / 2.
   const AngularSpan span = angular_span(grid.projection);
   const double row_span = span.height / (2 * kPi), col_span = span.width / (2 * kPi);
-  double col_start = 0;  // angle of the left edge of column 0, in turns
+  const bool vr180 = grid.projection == Projection::kVr180;
+  // The angle of the left edge of column 0, in turns: +x there, i.e. longitude +90 deg for vr180
+  // (G2), phi = 0 for the longitude-latitude grids (G1).
+  const double col_start = vr180 ? 0.25 : 0.0;
   AngleRegs r;
   r.rows = grid.height;
   r.cols = grid.width;
-  if (grid.projection == Projection::kVr180) {
-    col_start = 0.25;  // longitude +90 deg (+x) at the left edge
-    r.axes = AxisMap::kVr180;
-    r.wrap_cols = false;
-  } else {
-    col_start = 0;  // phi = 0 (+x) at the left edge
-    r.axes = AxisMap::kDome;
-    r.wrap_cols = true;
-  }
+  r.axes = vr180 ? AxisMap::kVr180 : AxisMap::kDome;
+  r.wrap_cols = !vr180;  // 360-degree grids wrap
   const int64_t col_step = round_half_up(turn * col_span / grid.width);  // |k_phi|, codes per column
   r.k_theta = static_cast<uint32_t>(round_half_up(turn * row_span / grid.height)) & mask;
   r.k_phi = static_cast<uint32_t>(-col_step) & mask;  // -|k_phi| mod 2^M

@@ -15,6 +15,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -240,15 +241,17 @@ cv::Mat text_world(const std::string& word, const Vec3& at, double height_deg) {
   return world;
 }
 
-// Where `w` lands in the panorama, and which way the world's "up" (towards +z) points there.
-bool locate(const PanoGrid& g, const Vec3& w, Vec2* px, Vec2* up) {
-  const auto p = g.pixel(w);
-  const Vec3 towards_zenith = (Vec3::UnitZ() - w.z() * w).normalized();
-  const auto q = g.pixel((w + 0.01 * towards_zenith).normalized());
-  if (!p || !q) return false;
-  *px = *p;
-  *up = (*q - *p).normalized();
-  return true;
+// Where an image (a camera's frame or a panorama, through `project`: direction -> optional pixel)
+// shows direction `at`, and the step in pixels to `above`, a direction a little higher (towards +z):
+// the step points the world's "up" there, and its length gives the image's scale.
+struct Spot {
+  Vec2 px, step;
+};
+template <typename Project>
+std::optional<Spot> spot(Project project, const Vec3& at, const Vec3& above) {
+  const std::optional<Vec2> p = project(at), q = project(above);
+  if (!p || !q) return std::nullopt;
+  return Spot{*p, *q - *p};
 }
 
 TEST(Handedness, TesseractReadsAWordInTheFramesAndEveryPanorama) {
@@ -277,20 +280,20 @@ TEST(Handedness, TesseractReadsAWordInTheFramesAndEveryPanorama) {
     for (size_t i = 1; i < rig.cameras.size(); ++i)
       if (rig.cameras[i].frame.t.dot(at) > rig.cameras[best].frame.t.dot(at)) best = i;
     const CameraModel m = rig.cameras[best].model();
-    const Vec3 up_dir = (at + 0.01 * (Vec3::UnitZ() - at.z() * at).normalized()).normalized();
-    ASSERT_TRUE(m.project(at) && m.project(up_dir));
-    const Vec2 fc = *m.project(at), fu = (*m.project(up_dir) - fc).normalized();
+    const Vec3 above = (at + 0.01 * (Vec3::UnitZ() - at.z() * at).normalized()).normalized();
+    const auto in_frame = spot([&](const Vec3& w) { return m.project(w); }, at, above);
+    ASSERT_TRUE(in_frame);
     std::vector<std::pair<std::string, cv::Mat>> views;
     views.emplace_back("frame cam " + std::to_string(rig.cameras[best].id),
-                       upright_patch(frames[best], fc, fu, cv::Size(240, 80), 1.0));
+                       upright_patch(frames[best], in_frame->px, in_frame->step.normalized(), cv::Size(240, 80), 1.0));
     for (Projection p : kAllProjections) {
       const PanoGrid g = grid_for(p);
-      Vec2 pc, pu;
-      ASSERT_TRUE(locate(g, at, &pc, &pu)) << to_string(p);
+      const auto in_pano = spot([&](const Vec3& w) { return g.pixel(w); }, at, above);
+      ASSERT_TRUE(in_pano) << to_string(p);
       const cv::Mat pano = stitch_u8(rig, frames, g);
       // Scaled to the frame's pixels per degree there, so that every patch holds the same view.
-      const double pano_step = (*g.pixel(up_dir) - pc).norm(), frame_step = (*m.project(up_dir) - fc).norm();
-      views.emplace_back(to_string(p), upright_patch(pano, pc, pu, cv::Size(240, 80), frame_step / pano_step));
+      views.emplace_back(to_string(p), upright_patch(pano, in_pano->px, in_pano->step.normalized(), cv::Size(240, 80),
+                                                     in_frame->step.norm() / in_pano->step.norm()));
     }
     for (const auto& [name, patch] : views) {
       cv::Mat mirror;
