@@ -1,5 +1,5 @@
 // omma bench: the engine's renderer against OpenCV peers and the memory bandwidth bound
-// (issue 5 point 4, thesis §5.4).
+// (thesis §5.4).
 #include <algorithm>
 #include <iostream>
 #include <thread>
@@ -87,10 +87,10 @@ void add_bench_command(CLI::App& root) {
         std::cout << fmt::format("{:<36} {:>12} {:>14} {:>14}   per round: A {}, B {}\n", r.name, num(r.vs_remap),
                                  num(r.vs_multiband), num(r.bound_over), range(r.vs_remap_rounds),
                                  range(r.vs_multiband_rounds));
-      std::cout << "targets (issue 5, mrf 1080x1080): >= 400 fps, >= 10x A, >= 100x B, bound / ours <= 2\n";
+      std::cout << "targets (mrf 1080x1080): >= 400 fps, >= 10x A, >= 100x B, bound / ours <= 2\n";
       for (const auto& r : ratios)
         if (r.vs_static > 0)
-          std::cout << fmt::format("{}: {:.1f} fps = {:.3f} x the static map (issue 14 target: >= 25 fps at "
+          std::cout << fmt::format("{}: {:.1f} fps = {:.3f} x the static map (target: >= 25 fps at "
                                    "1080x1080, depth every frame)\n", r.name, r.fps, r.vs_static);
     }
   });

@@ -101,7 +101,7 @@ struct MethodRow {
   double ms = 0;
 };
 
-// ---- Photometric calibration (issue 13): its own section, before / after --------------------------
+// ---- Photometric calibration: its own section, before / after ------------------------------------
 // The vignetting and colour gains estimated from the demo's own frames (the overlaps between
 // cameras, calib/photometric.h), compared with the simulator's truth, and every method stitched
 // again from the corrected frames (isp/photometric.h), against the same ground truth.

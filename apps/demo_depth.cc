@@ -99,7 +99,7 @@ DepthDemo run_depth_demo(const Rig& rig, const PanoGrid& grid, const std::vector
       pano::SweepOptions{}.steps, est_s, closed, 100 * derr.median_rel, 100 * derr.within_10, b_inf.precision,
       b_inf.recall, b_inf.f1, b_with.precision, b_with.recall, b_with.f1, b_jump.precision, b_jump.recall,
       b_jump.f1, fps, engine_psnr, engine_vs_ref);
-  d.markdown = "## Depth from the overlaps (issue 14)\n\n"
+  d.markdown = "## Depth from the overlaps\n\n"
                "![estimated depth](depth_estimate.png) ![true depth](depth_truth.png)\n\n"
                "Without depth (infinity) and with the estimated depth:\n\n"
                "![without](pano_mrf.png) ![with](pano_mrf_depth.png)\n\n"

@@ -1,4 +1,4 @@
-// omma demo, the depth section (issue 14 point 6): the depth estimated from the overlaps, the
+// omma demo, the depth section: the depth estimated from the overlaps, the
 // panorama without and with it, the boundaries from depth, the numbers, and the engine's
 // depth-adaptive rendering of the same frames. Kept apart from demo.cc's other sections.
 #pragma once

@@ -52,7 +52,7 @@ void run_eval(const EvalArgs& a) {
     seam = pano::seam_mask(pano::coverage_map(rig, grid), false);
   }
   const pano::EvalResult r = pano::evaluate(pano_img, truth, seam);
-  // Depth (issue 14): the depth used against the true depth, and a boundary map (eq. 4.15, gray)
+  // Depth (pano/depth_eval.h): the depth used against the true depth, and a boundary map (eq. 4.15, gray)
   // thresholded (eq. 4.16) against the true occlusion boundaries.
   nlohmann::json depth_json = nullptr, boundary_json = nullptr;
   if ((!a.depth.empty() || !a.boundary.empty()) && a.truth_depth.empty())

@@ -1,4 +1,4 @@
-// omma run: the live panoramic video engine (issue 5 point 3, thesis §5.3-5.4).
+// omma run: the live panoramic video engine (thesis §5.3-5.4).
 #include <csignal>
 #include <cstdio>
 #include <iostream>
@@ -84,7 +84,7 @@ void add_run_command(CLI::App& root) {
                   "A camera without a first frame after this many seconds is dropped (default 10)")
       ->check(CLI::Range(1e-3, 1e6));
   cmd->add_flag("--depth", o.depth,
-                "Depth-adaptive rendering (issue 14): the scene's depth estimated from the overlaps every\n"
+                "Depth-adaptive rendering: the scene's depth estimated from the overlaps every\n"
                 "panorama on a coarse grid (sphere sweep, ZNCC, semi-global, temporal), each pixel's taps moved\n"
                 "to where the cameras see its surface point (not with sad)");
   cmd->add_option("--sim-fps", o.sim_fps,

@@ -47,7 +47,7 @@ std::filesystem::path overlay_path_for(const std::filesystem::path& boundary) {
   return boundary.parent_path() / (boundary.stem().string() + "_overlay" + boundary.extension().string());
 }
 
-// --depth: the projection surface (issue 14). Returns the depth map (empty for inf) and facts for
+// --depth: the projection surface (pano/surface.h). Returns the depth map (empty for inf) and facts for
 // the JSON summary.
 struct DepthChoice {
   cv::Mat depth;

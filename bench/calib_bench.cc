@@ -1,4 +1,4 @@
-// Speed of calibration (issue 13 point 8): geometric plus photometric calibration of the 24-camera
+// Speed of calibration: geometric plus photometric calibration of the 24-camera
 // prototype dome from 8 shots of the calibration tube (thesis §3.6), with the parts measured alone
 // and a peer in the same run: the same geometric calibration from ONE shot (what the 7 more shots
 // cost: the averaging, and a refinement that aligns more patches on cleaner images).

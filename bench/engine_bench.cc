@@ -1,4 +1,4 @@
-// Engine benchmarks (issue 5 points 1, 2, 4): map compile time, our renderer against OpenCV
+// Engine benchmarks: map compile time, our renderer against OpenCV
 // cv::remap (peer A), cv::detail::MultiBandBlender (peer B) and the memcpy bandwidth bound, on the
 // thesis prototype rig with random-texture frames, at 1080x1080 vr180 and 1920x512 equirect.
 // `omma bench --json` runs the same workloads (omma/engine/bench.h) and prints fps.

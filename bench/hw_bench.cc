@@ -1,5 +1,5 @@
 // Speed of the bit-accurate hardware model (src/omma/hw): the 24-camera prototype rendered to a
-// 1080 x 1080 vr180 panorama (issue 15 target: < 2 s on the 2-core machine), against a peer in the
+// 1080 x 1080 vr180 panorama (target: < 2 s on the 2-core machine), against a peer in the
 // same run: the float reference stitcher (pano::stitch) on the same frames and grid.
 #include <benchmark/benchmark.h>
 

@@ -1,10 +1,10 @@
 #!/usr/bin/env python3
-"""The live simulator benchmark (issue 20 point 2).
+"""The live simulator benchmark.
 
 Runs `omma run --source sim:colon` on the thesis's 24-camera prototype (250x250 cameras, free-running
 at 44-56 fps) rendering 1080x1080 mrf panoramas and serving the live page, which headless Chromium
 shows in its 360-degree viewer for the whole run (the realistic load: the browser decodes and draws
-every frame on the same machine). It polls /stats.json every second and checks the issue's targets:
+every frame on the same machine). It polls /stats.json every second and checks the targets:
 
   every camera delivers >= 44 frames/s, the panorama keeps >= 25 fps, the mean age of the frames in
   a panorama (the engine's `latency_ms`, README "Real-time engine") stays below 50 ms, and does not

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The sanitizer stage of scripts/test.sh (issue 21): builds ./build-asan (RelWithDebInfo,
+# The sanitizer stage of scripts/test.sh: builds ./build-asan (RelWithDebInfo,
 # -fsanitize=address,undefined, no recovery: the first report fails the test) with only the
 # targets the selected tests need, and runs the tests that scripts/asan-tests.txt selects (one
 # CTest regular expression per line; chosen so that the stage fits CI's time). Leak detection is on.

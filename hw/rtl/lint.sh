@@ -2,7 +2,7 @@
 # Lint of the RTL with the three Debian tools (run by CTest: rtl_lint_*):
 #   Verilator --lint-only -Wall must print nothing (every warning class on; the few unused bits are
 #   waived in place with a comment saying why),
-#   Icarus Verilog must elaborate it, and Yosys must read and elaborate it (scripts/rtl_synth.sh
+#   Icarus Verilog must elaborate it, and Yosys must read and elaborate it (docs/results/rtl_synth.sh
 #   synthesizes it)
 #   (the SystemVerilog subset all three read: no int'() casts, string parameters or '{} patterns;
 #   for Yosys, packages are imported by a rewrite, synth/yosys_compat.py).

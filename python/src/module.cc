@@ -1,4 +1,4 @@
-// The omma Python extension module (issue 19): PYBIND11_MODULE and the error types.
+// The omma Python extension module: PYBIND11_MODULE and the error types.
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>

@@ -1,5 +1,5 @@
-"""Bad input from Python raises a clear exception and never crashes the interpreter (issue 19
-point 5). The same calls also run in a child interpreter, which must exit normally."""
+"""Bad input from Python raises a clear exception and never crashes the interpreter. The same
+calls also run in a child interpreter, which must exit normally."""
 import subprocess
 import sys
 import textwrap

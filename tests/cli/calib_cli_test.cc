@@ -1,4 +1,4 @@
-// CLI tests for `omma calibrate`, `omma rig-diff` and `omma pto` (issue: calibration, §3.6).
+// CLI tests for `omma calibrate`, `omma rig-diff` and `omma pto` (calibration, thesis §3.6).
 // Frames come from the small far-field renderer of src/omma/sim/test_scenes.h.
 #include <fstream>
 
@@ -12,7 +12,7 @@ namespace omma::test {
 namespace {
 namespace fs = std::filesystem;
 
-// The thesis prototype rendered by the simulator with the issue's manufacturing errors:
+// The thesis prototype rendered by the simulator with assumed manufacturing errors:
 // DIR/sim/{cam_XX.png, rig.json (nominal), rig_true.json (perturbed)}.
 fs::path make_far_field_case(const std::string& photo) {
   const fs::path dir = temp_dir("calib");
@@ -57,7 +57,7 @@ TEST(CalibCli, CalibrateThenRigDiffMeetsTargets) {
                                (dir / "sim/rig_true.json").string() + " --align --json");
   ASSERT_EQ(n.exit_code, 0) << n.err;
   EXPECT_GT(n.json()["orientation_error_deg"]["median"].get<double>(), 0.5);  // the nominal rig is off
-  // The calibrated rig feeds the stitcher unchanged (issue point 5): nn panorama vs the truth.
+  // The calibrated rig feeds the stitcher unchanged: nn panorama vs the truth.
   auto pano_psnr = [&](const std::string& rig) {
     const RunResult st = run_omma("stitch --rig " + rig + " --frames " + (dir / "sim").string() +
                                   " --method nn --projection equirect --size 360x90 --out " + (dir / "p.png").string());

@@ -1,5 +1,5 @@
-// CLI tests for the projection surface (issue 14): `omma stitch --depth ... --depth-out`, the
-// simulator's true depth, `omma eval --depth`, and bad input (points 2 and 7).
+// CLI tests for the projection surface (pano/surface.h): `omma stitch --depth ... --depth-out`, the
+// simulator's true depth, `omma eval --depth`, and bad input.
 #include <gtest/gtest.h>
 
 #include <filesystem>

@@ -1,4 +1,5 @@
-// CLI tests of `omma run` and `omma bench` (issue 5 points 3, 4 and 6).
+// CLI tests of `omma run` and `omma bench`: outputs, failing cameras, sources, bad input,
+// back-pressure, interruption, the live viewer and the benchmark's JSON.
 #include <arpa/inet.h>
 #include <netinet/in.h>
 #include <spawn.h>
@@ -272,8 +273,8 @@ std::pair<long, bool> video_frames(const fs::path& file) {
   return {n, n > 0};
 }
 
-// Issue 21 finding 12: with `--source-fps 0` ("as fast as possible") the cameras starved the
-// renderer (1 panorama in 8 s; here a 4 s run took 351 s to stop). Cameras now only overwrite their
+// With `--source-fps 0` ("as fast as possible") the cameras used to starve the
+// renderer (1 panorama in 8 s; a 4 s run took 351 s to stop). Cameras now only overwrite their
 // latest-frame buffer (a lock-free triple buffer), so the renderer runs at its own speed.
 TEST(EngineCli, SourcesFasterThanTheRendererOnlyOverwriteTheirFrames) {
   const auto dir = temp_dir("engine-fast-sources");
@@ -292,7 +293,7 @@ TEST(EngineCli, SourcesFasterThanTheRendererOnlyOverwriteTheirFrames) {
   fs::remove_all(dir);
 }
 
-// Issue 21 finding 3: a camera thread that the system refuses (here: 64 MiB stacks in a 1.2 GiB
+// A camera thread that the system refuses (here: 64 MiB stacks in a 1.2 GiB
 // address space) ended the run with std::terminate. Now the cameras share the threads that did
 // start, with a warning; --camera-threads bounds them.
 TEST(EngineCli, CameraThreadsTheSystemRefusesAreSharedNotFatal) {
@@ -327,7 +328,7 @@ TEST(EngineCli, CameraThreadsTheSystemRefusesAreSharedNotFatal) {
   fs::remove_all(dir);
 }
 
-// Issue 21 deliverable 7: SIGINT or SIGTERM stops `omma run` cleanly and leaves a playable video
+// SIGINT or SIGTERM stops `omma run` cleanly and leaves a playable video
 // holding every panorama; a run killed outright leaves only its temporary file, which the next run
 // removes with a warning; a full disk (here a file-size limit) leaves nothing under the name.
 TEST(EngineCli, InterruptedRecordingLeavesAPlayableVideoOrNothing) {
@@ -400,7 +401,7 @@ bool port_open(int port) {
   return ok;
 }
 
-// Issue 19 point 2: the live page is a 360-degree viewer (Pannellum, served by omma itself). Headless
+// The live page is a 360-degree viewer (Pannellum, served by omma itself). Headless
 // Chromium, driven by playwright-core (tests/cli/live_viewer.cjs), loads it: the viewer's canvas
 // shows the panorama (not blank), new frames change the image, and with the image paused a drag
 // changes the view (and nothing else does). Skipped where Chromium, node or web/node_modules are

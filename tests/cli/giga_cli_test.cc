@@ -1,4 +1,4 @@
-// CLI tests of the Giga-Eye (thesis ch. 7): plan, coverage, simulate, render, record (issue 17).
+// CLI tests of the Giga-Eye (thesis ch. 7): plan, coverage, simulate, render, record.
 #include <chrono>
 #include <filesystem>
 #include <fstream>

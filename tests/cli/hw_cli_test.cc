@@ -1,4 +1,5 @@
-// CLI tests for `omma hw simulate|sweep|throughput|memory|export|import` (issue 15).
+// CLI tests for `omma hw simulate|sweep|throughput|memory|export|import` (the bit-accurate
+// hardware model, src/omma/hw).
 #include <gtest/gtest.h>
 
 #include <filesystem>

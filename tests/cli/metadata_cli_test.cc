@@ -1,4 +1,4 @@
-// 360-degree metadata of omma's outputs as outside tools read it (issue 19 point 3): exiftool
+// 360-degree metadata of omma's outputs as outside tools read it: exiftool
 // (Debian libimage-exiftool-perl) on `omma stitch` JPEG/PNG panoramas, ffprobe (Debian ffmpeg) on
 // `omma run` MP4 videos. Layout facts: omma/core/metadata.h.
 #include <cstdio>

@@ -1,4 +1,4 @@
-// Photometric calibration and correction from the command line (issue 13 points 4, 5 and 7):
+// Photometric calibration and correction from the command line:
 // `omma calibrate --photometric` on a far-field scene, then `omma stitch` (8-bit and --raw frames)
 // with the model applied by default and `--no-photometric`, against ideal-photometry frames; and
 // the bad input of shots, flat fields and photometric rig values.
@@ -49,7 +49,7 @@ TEST(PhotometricCli, CalibratedPhotometryBringsTheStitchToIdealFrames) {
   std::printf("linear, vr180 256x256: uncorrected %.2f dB, estimated photometry %.2f dB (raw + ISP %.2f dB), ideal "
               "photometry %.2f dB\n", u, e, raw, i);
   EXPECT_GT(e, u + 1.0);    // the correction matters ...
-  EXPECT_GT(e, i - 1.0);    // ... and brings the panorama within 1 dB of ideal photometry (issue 13 point 4)
+  EXPECT_GT(e, i - 1.0);    // ... and brings the panorama within 1 dB of ideal photometry
   EXPECT_GT(raw, e - 2.0);  // the raw path with the model as flat gain: close (demosaicing costs a little)
   fs::remove_all(d);
 }

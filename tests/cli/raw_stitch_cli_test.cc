@@ -1,4 +1,4 @@
-// `omma stitch --raw`: the simulator's raw Bayer frames developed by the ISP (issue 4 point 6)
+// `omma stitch --raw`: the simulator's raw Bayer frames developed by the ISP (isp/isp.h)
 // give a panorama close to the one stitched from the simulator's own 8-bit frames.
 #include <gtest/gtest.h>
 

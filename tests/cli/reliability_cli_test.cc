@@ -1,5 +1,5 @@
-// Bad input from the command line (issue 21): each test reproduces one finding of the adversarial
-// run that used to crash, hang, exit with CLI11's codes or give a wrong result with exit 0.
+// Bad input from the command line: each test reproduces a case of bad input that used to crash,
+// hang, exit with CLI11's codes or give a wrong result with exit 0.
 #include <filesystem>
 #include <fstream>
 #include <regex>
@@ -34,7 +34,7 @@ fs::path write_json(const fs::path& dir, const std::string& name, const nlohmann
   return dir / name;
 }
 
-// Finding 8: CLI11's parse errors exit 105/106/109/114 without "omma: error:"; `--threads -1`
+// CLI11's parse errors used to exit 105/106/109/114 without "omma: error:"; `--threads -1`
 // printed the range 0 .. DBL_MAX in 309 digits.
 TEST(Reliability, CommandLineErrorsExitOneWithOneClearLine) {
   const RunResult threads = run_omma("run --rig x.json --source sim:colon --threads -1");
@@ -51,7 +51,7 @@ TEST(Reliability, CommandLineErrorsExitOneWithOneClearLine) {
   EXPECT_EQ(v.out, "omma " + version + "\n");
 }
 
-// Findings 2, 6, 9 and 11: numbers that wrap or underflow, wrong types, unknown versions and huge
+// Numbers that wrap or underflow, wrong types, unknown versions and huge
 // camera counts in rig files are refused by `omma rig check` and by every command that loads a rig.
 TEST(Reliability, RigFilesWithOutOfRangeNumbersAreRefused) {
   const fs::path dir = temp_dir("rel-rig");
@@ -89,7 +89,7 @@ TEST(Reliability, RigFilesWithOutOfRangeNumbersAreRefused) {
   fs::remove_all(dir);
 }
 
-// Finding 10: endless or special files were read into memory without limit (4.1 GB in 25 s).
+// Endless or special files used to be read into memory without limit (4.1 GB in 25 s).
 TEST(Reliability, DevicesAndFoldersAreRefusedBeforeReading) {
   const fs::path dir = temp_dir("rel-dev");
   expect_error(run_omma("rig check /dev/zero", 20), "not a regular file", "rig /dev/zero");
@@ -99,7 +99,7 @@ TEST(Reliability, DevicesAndFoldersAreRefusedBeforeReading) {
   fs::remove_all(dir);
 }
 
-// Finding 5: `omma run --size 65536x65536` ran for minutes; every size option has the same bounds
+// `omma run --size 65536x65536` used to run for minutes; every size option has the same bounds
 // (core/limits.h), as `omma stitch` had.
 TEST(Reliability, HugePanoramaSizesAreRefused) {
   const fs::path dir = temp_dir("rel-size");
@@ -114,7 +114,7 @@ TEST(Reliability, HugePanoramaSizesAreRefused) {
   fs::remove_all(dir);
 }
 
-// Finding 7 through the command: a PTO value that is not a number.
+// A PTO value that is not a number, through the command (pto_test.cc checks the parser).
 TEST(Reliability, MalformedPtoIsRefused) {
   const fs::path dir = temp_dir("rel-pto");
   std::ofstream(dir / "p.pto") << "i w250 h250 f0 v60 y1e999 p0 r0 n\"cam_00.png\"\n";
@@ -124,7 +124,7 @@ TEST(Reliability, MalformedPtoIsRefused) {
   fs::remove_all(dir);
 }
 
-// Finding 1: ff ff ff ff at byte 36 of a cached map crashed `omma run` (exit 139 or 134); other
+// ff ff ff ff at byte 36 of a cached map used to crash `omma run` (exit 139 or 134); other
 // damage rendered a different panorama with exit 0. Now: a warning, the map compiled again and
 // the same panorama as before.
 TEST(Reliability, DamagedMapCacheIsRecompiledWithAWarning) {

@@ -1,4 +1,4 @@
-// `omma render` of a recording under `mpirun -np 3` (issue 18): the frame sets spread over the
+// `omma render` of a recording under `mpirun -np 3`: the frame sets spread over the
 // ranks give the same bytes as one process, a rerun makes only what is missing, one panorama split
 // by bands (--split tiles) gives the same bytes too, and bad input (a recording one rank cannot
 // read, more ranks than frame sets) gives one clear error. Few tests, several checks each: every

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Yosys synth_xilinx (7-series) of every RTL block on its own and of the two tops: LUTs,
 flip-flops, DSP48E1 and block RAM (RAMB36E1 = 1, RAMB18E1 = 1/2), as a markdown table (stdout)
-and JSON (--json FILE). Run by scripts/rtl_synth.sh; needs the generated package (build/hw/rtl/gen).
+and JSON (--json FILE). Run by docs/results/rtl_synth.sh; needs the generated package (build/hw/rtl/gen).
 
 usage: synth.py GEN_DIR [--json FILE] [--only NAME...] [--jobs N]
 """

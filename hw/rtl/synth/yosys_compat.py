@@ -2,7 +2,7 @@
 """Rewrites the RTL for Yosys 0.23, whose SystemVerilog reader takes package members only as
 `pkg::name` (no `import pkg::*;`). Every module's `import` lines are dropped and the members of the
 imported packages are qualified. Verilator and Icarus read the sources as written; only the Yosys
-steps (lint.sh, scripts/rtl_synth.sh) go through this.
+steps (lint.sh, docs/results/rtl_synth.sh) go through this.
 
 usage: yosys_compat.py OUT_DIR FILE.sv...   (writes OUT_DIR/<name>.sv for every file)
 """

@@ -1,4 +1,4 @@
-// The whole 1080 x 1080 panorama through the Verilated pipeline (scripts/rtl_bench.sh): frames of
+// The whole 1080 x 1080 panorama through the Verilated pipeline (docs/results/rtl_bench.sh): frames of
 // the simulated colon or a far-field photograph into the frame memories, the configuration over
 // the Table 6.6 channels, one panorama run, every pixel compared with the bit-accurate model.
 // Prints one JSON object: simulated cycles (and per pixel, against the model's throughput count),

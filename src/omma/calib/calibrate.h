@@ -1,7 +1,8 @@
 // Rig calibration from one set of camera frames (thesis §3.6): SIFT features in every camera,
 // matching between cameras whose nominal cones of view intersect, RANSAC outlier rejection, then
 // a Ceres bundle adjustment of per-camera rotation, focal lengths, principal point and radial
-// distortion, with a robust loss.
+// distortion, with a robust loss. Measured accuracies and the tuning behind the defaults:
+// docs/results/tuning-calibration.md.
 //
 // Model (conventions.h, eq. 3.13, eq. 5.21-5.26). Camera i maps a dome-frame direction w to
 //   p = Exp(delta_i) * R_nom_i * w          (R_nom_i = rows t, u, v of the NOMINAL camera i;
@@ -24,49 +25,30 @@
 //
 // Near-field focal ambiguity: the baseline (cameras on a 5 mm dome) is small against the scene
 // depth (the colon wall at ~20 mm), so scaling every focal length by s and pushing the scene away
-// (points radially out from the dome centre) changes the images only in second order (measured on
-// the simulated colon: the free solution drifts to 5-40 % focal error at a reprojection RMS no worse
-// than the truth's). A prior (sigma = prior_mean_focal) holds the MEAN of fu/fu_nominal over the
-// cameras at 1 in the near field: it fixes that one direction (the lens batch's mean focal length is
-// taken as designed), the cameras' focal lengths relative to each other stay free. The near field
-// also uses a Cauchy loss (loss = "auto"): with the nominal rig's errors (~20 px on the colon) and
-// wrong matches that lie along epipolar lines, Huber lets outliers drag the rotations away.
-// Principal point and a small rotation about u or v are nearly the same thing for a 64 deg lens
-// (a shift of c px ~ c / f rad), which the near-field overlaps (narrow bands) hardly separate: on
-// the colon the orientation error is essentially the centre error / f. The panorama does not care.
+// (points radially out from the dome centre) changes the images only in second order. A prior
+// (sigma = prior_mean_focal) holds the MEAN of fu/fu_nominal over the cameras at 1 in the near
+// field: it fixes that one direction (the lens batch's mean focal length is taken as designed), the
+// cameras' focal lengths relative to each other stay free. The near field also uses a Cauchy loss
+// (loss = "auto"): wrong matches that lie along epipolar lines would drag the rotations away under
+// Huber. Principal point and a small rotation about u or v are nearly the same thing for a 64 deg
+// lens (a shift of c px ~ c / f rad), which the near-field overlaps (narrow bands) hardly separate.
 //
 // Residuals are in pixels; the robust loss (Huber or Cauchy, scale loss_scale_px) tames remaining
 // outliers, then observations above outlier_px are dropped and the problem is solved again. Three
 // passes: rotations and points with nominal intrinsics (a warm start), everything free, then
 // rejection and the final solve. Nothing is rejected after the warm start: with nominal
-// intrinsics the edge observations that determine them look like outliers. Measured on the
-// near-field model check (3000 tube points, 0.1 px noise, 5 noise seeds, mean): orientation
-// 0.43 -> 0.25 deg and focal 1.05 -> 0.60 % without priors, 0.34 -> 0.31 deg and 0.35 -> 0.32 %
-// with the default priors; on one colon simulation (CLI) focal 0.92 -> 0.50 %, on the test's
-// colon 1.0 -> 1.3 % (the near field varies a lot between scene instances).
+// intrinsics the edge observations that determine them look like outliers.
 //
 // Subpixel refinement (refine_rounds, subpixel.h). SIFT keypoints of one scene point in two cameras
-// disagree by ~0.2-0.3 px (SIFT is not affine invariant; measured with the true rig on the
-// simulated lake: 0.18 px median, 0.30 px RMS). After the first solve (the model is then good to a
-// few tenths of a pixel) every track is re-measured: its observation nearest a principal point is
-// the reference, and every other observation becomes the ECC alignment of the reference's 21 px
-// patch, by a homography started from the current model's map of the local scene plane (near
-// field: plane through the track's point, normal from its neighbouring points; far field: the
-// plane at infinity); then all is solved again from the first solution with outlier_px =
-// refine_outlier_px. Measured (simulator, --perturb orient=2,focal=0.03,center=5,k1=0.05, one set
-// of frames; before -> after the refinement):
-//   lake (far):   alignment error vs the true rig 0.18 -> 0.030 px median; orientation median
-//                 0.048 -> 0.016 deg, focal 0.13 -> 0.04 %, centre 0.25 -> 0.08 px, RMS 0.17 -> 0.036 px
-//   louvre (far): orientation median 0.16 -> 0.08 deg, focal 0.34 -> 0.14 %, nn PSNR 30.8 -> 31.1 dB
-//   colon (near): orientation median 0.80 -> 0.6 deg (max 2.1 -> 1.3), focal 0.83 -> ~1.0 %
-//                 (1.2-1.4 % with no rejection after the warm start), centre 2.6 -> 2.3 px, RMS
-//                 0.32 -> 0.13 px; ray error (rig_diff.h) 1.85 -> 0.41-0.46 deg; nn PSNR at the
-//                 true rig's.
-// Near field: dense, flat-fielded, weighted refinement (dense_refine, refine.h dense_tracks). The
-// study of the near-field limits behind these choices (true correspondences of the simulated
-// colon, vignetting, noise, folds, model checks, what was tried) is in
-// docs/near_field_calibration.md; in short, one dark shot of the colon does not hold the
-// information for 0.1 deg, several shots of the well-lit calibration tube (§3.6) do (README).
+// disagree by a few tenths of a pixel (SIFT is not affine invariant). After the first solve every
+// track is re-measured: its observation nearest a principal point is the reference, and every other
+// observation becomes the ECC alignment of the reference's patch (SubpixelOptions::patch_px), by a
+// homography started from the current model's map of the local scene plane (near field: plane
+// through the track's point, normal from its neighbouring points; far field: the plane at
+// infinity); then all is solved again from the first solution with outlier_px = refine_outlier_px.
+// Near field: dense, flat-fielded, weighted refinement instead (dense_refine, refine.h
+// dense_tracks); the study of the near-field limits behind these choices is in
+// docs/near_field_calibration.md.
 //
 // Stages and files: features and matching (features.h, with the feature tracks), bundle
 // adjustment (bundle.h), subpixel refinement (refine.h, subpixel.h), photometric calibration
@@ -84,10 +66,11 @@
 
 namespace omma::calib {
 
-// The near field's alignment options (measured on the simulated colon, see calibrate.h above):
-// 31 px patches (the wall's folds limit them: 41 px is worse), no coarse Gaussian stage (the start
-// is within a few tenths of a pixel), correlation >= 0.5 (the flat-fielded patches correlate less;
-// the covariance weights the weak ones down).
+// The near field's alignment options (chosen on the simulated colon,
+// docs/results/tuning-calibration.md): 31 px patches (larger ones cross the wall's folds), no coarse
+// Gaussian stage (the start is within a few tenths of a pixel), correlation >= 0.5 (the
+// flat-fielded patches correlate less; the covariance weights the weak ones down), flat field of
+// sigma 5 px (to_alignment_image).
 inline SubpixelOptions dense_subpixel_defaults() {
   SubpixelOptions so;
   so.patch_px = 31;
@@ -115,7 +98,7 @@ struct CalibrationOptions {
   bool share_distortion = false;  // one k1..k5 for all cameras
 
   std::string loss = "auto";      // "huber", "cauchy", "none" or "auto": Huber in the far field,
-                                  // Cauchy in the near field (see "Near field" above)
+                                  // Cauchy in the near field (see "Near-field focal ambiguity" above)
   double loss_scale_px = 1.0;
   double outlier_px = 3.0;        // after the first solve, drop observations with a larger error
   double prior_rotation_deg = 5;  // gauge prior (see above)
@@ -126,7 +109,7 @@ struct CalibrationOptions {
                                   // ECC patch alignment of every observation, then solve again
   SubpixelOptions subpixel;
   double refine_min_fraction = 0.5;  // fewer observations aligned: keep the unrefined solution
-                                  // (warning); measured: lake 99 %, louvre 99 %, colon 68 %
+                                  // (warning)
   double refine_outlier_px = 1.0; // outlier_px of the solves on refined observations
   bool dense_refine = true;       // near field: dense guided correspondences from every keypoint
                                   // (see dense_tracks in refine.h) instead of the matched tracks
@@ -148,16 +131,14 @@ struct CalibrationOptions {
   // The tube's axis defines the rig's z axis, as the thesis's fixture does (false: only its offset is
   // estimated) or is estimated, tilt too (true: for a mount that is not trusted; the rig's tilt and the
   // tube's then trade against each other, told apart only by the 5 mm parallax of the camera positions,
-  // and the rig compares with the truth up to a global rotation, rig-diff --align). Measured (README,
-  // 8 shots, seeds 1-3): median orientation error 0.073 / 0.083 / 0.065 deg with the axis held,
-  // 0.090 / 0.102 / 0.072 deg with the tilt estimated (0.091 / 0.079 / 0.078 with --align).
+  // and the rig compares with the truth up to a global rotation, rig-diff --align).
   bool tube_tilt = false;
   double tube_tolerance = 0.15;          // first solve (from the nominal rig)
   double tube_tolerance_refined = 0.03;  // solves after the first
   int max_iterations = 50;        // Ceres iterations per solve
   int min_observations = 30;      // a camera with fewer keeps its nominal values (warning)
   int threads = 2;                // Ceres threads; near-field results vary with the summation order
-                                  // of a multi-threaded solve (colon: +-0.2 deg), 1 = reproducible
+                                  // of a multi-threaded solve, 1 = reproducible
 };
 
 struct CameraReport {
@@ -188,7 +169,7 @@ struct CalibrationResult {
 CalibrationResult calibrate_rig(const Rig& nominal, const std::vector<cv::Mat>& frames,
                                 const CalibrationOptions& opt = {});
 
-// Several shots of a static scene (issue 13): the frame sets averaged in linear light (sRGB decoded,
+// Several shots of a static scene: the frame sets averaged in linear light (sRGB decoded,
 // averaged, encoded again as 16-bit sRGB, CV_16UC3), which divides the sensor noise by sqrt(shots)
 // and keeps one observation per feature. Throws std::invalid_argument if the sets differ in count
 // or in a frame's size or are not 8/16-bit colour images (names the set and camera index).

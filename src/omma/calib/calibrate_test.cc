@@ -24,7 +24,7 @@ namespace {
 namespace testing = ::omma::sim::testing;  // the small exact renderers (sim/test_scenes.h)
 
 const PanoGrid kGrid{Projection::kEquirect, 720, 180};
-const char* kPerturb = "orient=2,focal=0.03,center=5,k1=0.05";  // the issue's manufacturing errors
+const char* kPerturb = "orient=2,focal=0.03,center=5,k1=0.05";  // the assumed manufacturing errors
 
 struct Outcome {
   CalibrationResult result;
@@ -40,7 +40,7 @@ double stitch_psnr(const Rig& rig, const std::vector<cv::Mat>& frames, const cv:
   return pano::psnr_db(pano::stitch(rig, frames, so), truth, mask);
 }
 
-// The simulator (omma_sim) renders the thesis prototype (design) with the issue's perturbation;
+// The simulator (omma_sim) renders the thesis prototype (design) with that perturbation;
 // calibrate from the nominal rig; compare with the true rig; nn panoramas against the truth.
 Outcome run_simulated(const std::string& scene_spec) {
   const Rig nominal = design::thesis_prototype_rig();
@@ -95,7 +95,7 @@ TEST(Calibrate, FarFieldPhotoMeetsAccuracyTargets) {
   const Outcome o = run_simulated(photo("lake.jpg"));
   EXPECT_EQ(o.result.scene, SceneModel::kFar);
   EXPECT_TRUE(o.result.uncalibrated_ids.empty());
-  // The issue's targets: median orientation < 0.1 deg, focal < 0.5 %, RMS < 0.5 px, PSNR within
+  // The accuracy targets: median orientation < 0.1 deg, focal < 0.5 %, RMS < 0.5 px, PSNR within
   // 0.5 dB of the true rig's. With the subpixel refinement (subpixel.h) measured: 0.016 deg (max
   // 0.13), 0.04 %, centre 0.08 px, RMS 0.036 px; the thresholds keep a margin of ~3x.
   EXPECT_LT(o.after.orientation_error_deg.median, 0.05);
@@ -121,7 +121,8 @@ TEST(Calibrate, FeaturelessSkyCamerasKeepNominalValuesWithWarning) {
 }
 
 // The colon (near field, parallax). The panorama target is met (PSNR after calibration within 0.5 dB
-// of the true rig's) and the reprojection RMS too, but not the parameter targets of issue 6 point 3:
+// of the true rig's) and the reprojection RMS too, but not the parameter targets (orientation 0.1 deg,
+// focal 0.5 %):
 // with a 5 mm baseline against a ~20 mm deep scene, focal length trades against depth (the mean
 // focal is held by a prior, calibrate.h) and the principal point against rotation, and the
 // observations of the dark, folded wall are not precise enough even after the dense, flat-fielded
@@ -136,7 +137,7 @@ TEST(Calibrate, ColonNearFieldCalibration) {
   EXPECT_TRUE(o.result.uncalibrated_ids.empty());
   EXPECT_GT(o.result.tracks, 4000);                              // the dense refinement's tracks
   EXPECT_LT(o.result.rms_px, 0.2);                               // target 0.5 px
-  EXPECT_GT(o.psnr_calibrated, o.psnr_true - 0.5);               // the issue's target
+  EXPECT_GT(o.psnr_calibrated, o.psnr_true - 0.5);               // the panorama target
   EXPECT_GT(o.psnr_calibrated, o.psnr_nominal + 0.5);
   EXPECT_LT(o.after.orientation_error_deg.median, 0.75);         // target 0.1 deg: not met
   EXPECT_LT(o.after.orientation_error_deg.max, 1.3);
@@ -149,8 +150,8 @@ TEST(Calibrate, ColonNearFieldCalibration) {
 
 // The thesis's calibration (§3.6): several shots of the static, well-lit 35 mm calibration tube,
 // averaged, flat-fielded with shots of a white target, wall points constrained to the tube
-// (CalibrationOptions::tube_diameter_mm). The full figures (8 shots, three seeds: all of issue
-// 13's targets met) come from scripts/tube_calibration.sh (README); this test keeps CI shorter
+// (CalibrationOptions::tube_diameter_mm). The full figures (8 shots, three seeds: every accuracy
+// target met) come from docs/results/tube_calibration.sh (README); this test keeps CI shorter
 // (~30 s of CPU) with 2 shots, one dense round and SIFT without upsampling. Measured (seed 1):
 // orientation median 0.19 deg (max 0.30), focal 0.33 % (max 0.61), centre 0.59 px, RMS 0.058 px
 // (with SIFT upsampled: 0.16 / 0.33 deg at 42 s; 8 shots, full settings: 0.089 / 0.165 deg).

@@ -1,17 +1,17 @@
-// Photometric calibration (issue 13 point 4): each camera's vignetting and colour gains (the model
+// Photometric calibration: each camera's vignetting and colour gains (the model
 // of core/photometric.h) estimated from the images themselves.
 //
 // Lens model of the estimation. The cameras of a dome carry the same lens, and a lens's falloff is
 // a function of the angle a between the ray and the optical axis (cos^4 law, mechanical
 // vignetting, both symmetric about the axis), not of the pixel radius: two cameras whose focal
-// lengths differ by 3 % have, at the same pixel radius, falloffs ~0.8 % apart. So the estimation
+// lengths differ have different falloffs at the same pixel radius. So the estimation
 // fits ONE falloff of the ray angle for all cameras,
 //   V(a) = 1 + beta1 q + ... + beta5 q^5,   q = tan^2 a   (from each camera's calibrated model),
 // and per camera and channel a gain; then each camera's falloff is written in Hugin's pixel-radius
 // model (b, c, d about the principal point: x = cu - W/2, y = cv - H/2) by the minimax fit over
-// its pixels (core/photometric.h fit_vignetting; the largest relative error is reported, 0.2 % for
-// the simulator's cos^4 falloff on the prototype). Five terms: a cubic in q fitted by least
-// squares misses cos^4 = (1 + q)^-2 by ~1 % in the corners (measured on flat fields).
+// its pixels (core/photometric.h fit_vignetting; the largest relative error is reported as
+// PhotometricSummary::max_fit_error). Five terms, because a cubic in q fitted by least squares
+// misses cos^4 = (1 + q)^-2 in the corners (measured figures: docs/results/tuning-photometric.md).
 //
 // From overlaps (calibrate_photometric): cameras whose images overlap see the same scene radiance
 // L along the same direction (far field; the stitcher's own assumption, pano/), so for a sample
@@ -49,13 +49,11 @@ struct PhotometricOptions {
   double smooth_sigma_px = 1.5;  // Gaussian smoothing of the linear images before sampling
   double min_signal = 0.003;     // linear, every channel of both samples above ...
   double max_signal = 0.9;       // ... and below (saturation: the smoothing spreads it)
-  double registration_px = 0.3;  // assumed misregistration, pixels (a calibrated far-field rig:
-                                 // ~0.05 px; the margin covers parallax of distant objects)
+  double registration_px = 0.3;  // assumed misregistration, pixels (more than a calibrated
+                                 // far-field rig's: the margin covers parallax of distant objects)
   double max_log_change = 0.05;  // keep samples whose log value changes less than this over
-                                 // registration_px (every channel, both cameras). Measured on
-                                 // the lake (true rig): 1 px / 0.02 leaves the horizon cameras,
-                                 // whose views are all foliage, without samples (gains off by
-                                 // 11 %); 0.3 px / 0.05 with min_signal 0.003: 0.3 % / 0.3 %
+                                 // registration_px (every channel, both cameras); tuning:
+                                 // docs/results/tuning-photometric.md
   double loss_scale = 0.03;      // Cauchy scale, log units (3 %)
   double noise_signal = 0.01;    // linear signal at which a sample's weight is 1/sqrt(2): weight =
                                  // s / sqrt(s^2 + noise_signal^2), s = its darkest channel (dark
@@ -97,7 +95,8 @@ PhotometricSummary calibrate_flat_field(const Rig& rig, const std::vector<std::v
                                         const PhotometricOptions& opt = {});
 
 // The falloff polynomial of the ray angle, beta = (beta1, ..., beta5), written in the pixel
-// radius model of `camera` (centred on its principal point), by least squares over its pixels.
+// radius model of `camera` (centred on its principal point), by the minimax fit over its pixels
+// (core/photometric.h fit_vignetting).
 // *max_error gets the largest relative difference over the image.
 Photometric photometric_from_lens(const RigCamera& camera, const std::array<double, PhotometricSummary::kLensTerms>& beta,
                                   const std::array<double, 3>& gains, double* max_error = nullptr);

@@ -1,7 +1,7 @@
 // Photometric calibration (photometric.h) on simulated frames of the 24-camera prototype with the
 // default sensor effects (50 % cos^4 vignetting, colour gains uniform in [0.9, 1.1], noise): the
 // estimated gains and falloffs against the simulator's truth (sim/render.h true_falloff, gains).
-// Targets (issue 13 point 4): gains within 1 %, falloff within 1 % over the whole field, up to one
+// Targets: gains within 1 %, falloff within 1 % over the whole field, up to one
 // global scale (flat field) / one scale per channel (overlaps: the scene's white balance).
 #include "omma/calib/photometric.h"
 

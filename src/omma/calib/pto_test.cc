@@ -134,8 +134,8 @@ TEST(Pto, UnsupportedLensAndMissingImagesFail) {
   EXPECT_FALSE(warn.warnings.empty());
 }
 
-// Issue 21, finding 7: malformed numbers, bare image lines and truncated projects used to import
-// (y=nan as yaw 0, a bare 'i' line skipped, a cut project as 6 or 12 of 24 cameras).
+// Malformed numbers, bare image lines and truncated projects are refused, not imported as
+// something else (y=nan as yaw 0, a bare 'i' line skipped, a cut project as 6 or 12 of 24 cameras).
 TEST(Pto, MalformedAndTruncatedProjectsAreRefused) {
   const std::string line = "i w250 h250 f0 v60 y10 p20 r0 n\"cam_00.png\"\n";
   EXPECT_EQ(import_pto(line).rig.cameras.size(), 1u);

@@ -32,7 +32,7 @@ std::vector<std::vector<TrackObservation>> refine_tracks(const Rig& rig, const s
 // point, so that one region of the wall is one reference patch; every other camera that sees it
 // is a target of the ECC alignment (subpixel.h), started from the plane homography. Each aligned
 // observation gets the whitening of its covariance (AlignInfo), scaled so that the median
-// observation weighs 1, floored at weight_floor times the median sigma.
+// observation weighs 1, floored at dense_weight_floor (CalibrationOptions) times the median sigma.
 std::vector<std::vector<TrackObservation>> dense_tracks(const Rig& rig, const std::vector<cv::Mat>& gray,
                                                         const std::vector<CameraFeatures>& feats, const SolveState& st,
                                                         const CalibrationOptions& opt, int* attempted, int* refined);

@@ -9,9 +9,8 @@
 // the local scene plane predicted by the current rig model), maximising the enhanced correlation
 // coefficient, which is invariant to gain and offset (vignetting, colour gains). The refined
 // position is the warp of p_a. A homography, not an affine map: between two cameras 30-60 deg apart
-// the perspective (quadratic) terms across a 21 px patch reach ~0.5 px at its edges, and an affine
-// fit absorbs their mean into its translation, a bias of ~0.1 px (measured on the simulated lake
-// with the true rig: 0.115 px median error affine, see calibrate.h for the homography's).
+// the perspective (quadratic) terms across a patch are not affine, and an affine fit absorbs their
+// mean into its translation, a bias (measured: docs/results/tuning-calibration.md).
 //
 // Pixel coordinates: continuous, centres at integer + 0.5 (conventions.h).
 #pragma once
@@ -31,7 +30,7 @@ struct SubpixelOptions {
   int search_margin_px = 10;    // image B is cropped to the warped template's box plus this
   int gauss_px = 5;             // ECC's Gaussian pre-filter size of the coarse stage (odd; 0 or 1:
                                 // no coarse stage); the fine stage runs unfiltered
-  int max_iterations = 12;      // ECC iterations per stage (more change nothing measurable)
+  int max_iterations = 12;      // ECC iterations per stage
   double epsilon = 1e-5;        // ECC convergence threshold (parameter increment)
   double min_correlation = 0.8; // reject alignments with a lower ECC correlation coefficient
   double max_shift_px = 2.5;    // reject if the refined position moved more than this from the start
@@ -47,13 +46,10 @@ struct SubpixelOptions {
 // Gaussian of that sigma): I_flat = I / (G_sigma * I). Vignetting (a brightness falloff of ~10 %
 // across a 21 px patch near the image edges, in opposite directions in the two cameras of an
 // overlap) and slow shading are multiplicative, so the division removes them; ECC itself is only
-// invariant to a constant gain and offset per patch. Measured on the simulated colon with the
-// true correspondences and the true local homography as the start (17221 SIFT keypoints seen by a
-// second camera, 21 px patches where the wall is flat to 0.1 px): median alignment error 0.19 ->
-// 0.13 px, the per-camera-pair mean error (a bias the bundle adjustment cannot average away)
-// 0.10 -> 0.05 px; without sensor noise 0.12 -> 0.06 px (no vignetting and no noise: 0.05 px).
-// Used in the near field (CalibrationOptions::dense_subpixel); the far field keeps the plain grey
-// image (the night-time louvre's dark sky: 0.08 -> 0.12 deg with the flat field).
+// invariant to a constant gain and offset per patch. Used in the near field
+// (CalibrationOptions::dense_subpixel); the far field keeps the plain grey image (the division
+// amplifies the noise of dark regions such as a night sky). Measured effect:
+// docs/results/tuning-calibration.md.
 cv::Mat to_alignment_image(const cv::Mat& image, double flatfield_sigma_px = 0);
 
 // What an alignment measured besides the position.

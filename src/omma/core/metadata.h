@@ -1,4 +1,4 @@
-// 360-degree metadata of panorama outputs (issue 19 point 3), so that photo viewers, video players
+// 360-degree metadata of panorama outputs, so that photo viewers, video players
 // and sharing platforms recognise omma's panoramas as spherical, and know which part of the
 // sphere they cover. One place for every writer (apps, engine sinks, Python bindings).
 //

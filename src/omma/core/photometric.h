@@ -1,4 +1,4 @@
-// The per-camera photometric model (issue 13): how a camera's linear signal relates to the
+// The per-camera photometric model: how a camera's linear signal relates to the
 // scene's radiance, the one source of truth for every stage that corrects it (stitcher, ISP,
 // engine, calibration, PTO export, the hardware model's vignetting tables).
 //

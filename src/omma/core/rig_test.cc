@@ -112,8 +112,8 @@ TEST(Rig, RejectsBadInputWithClearMessages) {
             std::string::npos);
 }
 
-// Issue 21, findings 2, 6, 9, 11: integers that wrap, tiny focal lengths, wrong types and versions,
-// camera counts. Each of these loaded before.
+// Rig files with integers that wrap, tiny focal lengths, wrong types and versions, or bad camera
+// counts are refused with a message naming the problem.
 TEST(Rig, RejectsOutOfRangeNumbersWrongTypesAndVersions) {
   auto has = [](const std::string& msg, const char* part) { return msg.find(part) != std::string::npos; };
   // 4294967546 = 2^32 + 250 used to become 250, 4294967297 -> 1, 4294967296 -> 0.

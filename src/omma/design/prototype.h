@@ -21,7 +21,7 @@ namespace omma::design {
 Rig thesis_prototype_rig();
 
 // ---------------------------------------------------------------------------------------------
-// Giga-Eye (thesis ch. 7, notes/gigaeye-spec.md §1-2): 44 cameras in layers of 1, 6, 15 and 22 at
+// Giga-Eye (thesis ch. 7, ../shared/notes/gigaeye-spec.md §1-2): 44 cameras in layers of 1, 6, 15 and 22 at
 // polar angles 0, 39.6, 59.3 and 80.8 deg, evenly spaced in azimuth (60, 24, 16.36 deg), pinholes
 // on a 200 mm sphere along their radial optical axes. Every camera: 2592 x 1944 px (5 MP), angle of
 // view 53 x 43 deg through the image centre (fu = 1296 / tan 26.5 deg = 2599.6 px, fv = 972 /

@@ -1,4 +1,4 @@
-// The Giga-Eye recording planner (thesis ch. 7, Table 7.1, §7.1; notes/gigaeye-spec.md §3).
+// The Giga-Eye recording planner (thesis ch. 7, Table 7.1, §7.1; ../shared/notes/gigaeye-spec.md §3).
 //
 // Per camera: bytes/s = W * H * fps * bits / 8 (raw Bayer, packed). Table 7.1 prints bandwidth in
 // binary units ("MB/s" = MiB/s = 2^20 B/s) and memory in GiB (2^30 B) for `minutes` of recording,

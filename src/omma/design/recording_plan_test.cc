@@ -1,4 +1,4 @@
-// The recording planner against Table 7.1 and the text of §7.1 (notes/gigaeye-spec.md §3).
+// The recording planner against Table 7.1 and the text of §7.1 (../shared/notes/gigaeye-spec.md §3).
 #include "omma/design/recording_plan.h"
 
 #include <gtest/gtest.h>

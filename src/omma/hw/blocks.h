@@ -5,7 +5,7 @@
 //
 //   B1 angle generation        angle_regs / angles_at            eq. 5.11-5.14
 //   B2 Cartesian unit          sincos_lookup / cartesian          eq. 5.15-5.18 (5.17 corrected)
-//   B3 camera search           cone_test / priority_encode        eq. 2.3
+//   B3 camera search           cone_test / camera_search          eq. 2.3
 //      distance                distance_unit                      eq. 5.19-5.20
 //   B4 projection + address    project / tap_address              eq. 5.21-5.27
 //   B5 frame memory            FrameMemory (RGB565, §5.2)

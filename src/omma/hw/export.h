@@ -1,4 +1,4 @@
-// `omma hw export` / `omma hw import`: the files a chip (and the RTL testbench of issue 16) loads,
+// `omma hw export` / `omma hw import`: the files a chip (and the RTL testbench, hw/rtl/) loads,
 // written from a (calibrated) rig, and the way back. Formats: docs/hw-model.md §6. Every file is
 // written atomically (temporary name, then rename).
 //

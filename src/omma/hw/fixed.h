@@ -11,7 +11,8 @@
 //                         RTL: a sign-magnitude restoring divider (restoring_divide below).
 //   * isqrt_floor(v)      floor(sqrt(v)) for v >= 0. RTL: the restoring (digit-by-digit) square root.
 // Each has a plain bit-serial reference (what the RTL iterates) and the fast form the model uses;
-// hw_test.cc checks that they agree on random and edge inputs.
+// blocks_test.cc (Fixed.BitSerialReferencesAgreeWithFastForms) checks that they agree on random and
+// edge inputs.
 #pragma once
 
 #include <cstdint>
@@ -42,7 +43,8 @@ constexpr int64_t div_round(int64_t n, int64_t d) {
 // Bit-serial restoring divider: quotient of n / d (n >= 0, d > 0) with `quotient_bits` bits, one
 // bit per step from the MSB: partial remainder r <- 2r + next bit of n; if r >= d then r -= d and
 // the quotient bit is 1. Returns floor(n / d) provided it fits in quotient_bits (the caller states
-// the width; hw_test checks the model never exceeds it). Reference for udiv_floor.
+// the width and guarantees the quotient fits; higher bits are dropped). Reference for udiv_floor
+// (blocks_test.cc checks that the two agree).
 uint64_t restoring_divide(uint64_t n, uint64_t d, int quotient_bits, int dividend_bits);
 
 // floor(sqrt(v)), v >= 0 (fast form: double sqrt then exact integer correction).

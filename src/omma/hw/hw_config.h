@@ -1,7 +1,7 @@
 // Every width and fixed-point format of the hardware model, in one place (thesis §5.4, ch. 6; the
 // thesis states none of them except "16-bit precision" for eq. 5.21-5.27, 2048 x 16-bit sin/cos
 // ROMs and 13-bit angle registers). docs/hw-model.md describes each block's arithmetic with these
-// names; the RTL (issue 16) takes the same values as Verilog parameters.
+// names; the RTL (hw/rtl/) takes the same values as Verilog parameters.
 //
 // Formats (Qm.n: value = integer / 2^n; "s" signed two's complement, "u" unsigned):
 //   angle          uQ0.M of a full turn (eq. 5.14: B = 2 pi sum b_j 2^-(j+1)), M = angle_bits, wraps mod 2^M

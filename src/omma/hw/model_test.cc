@@ -169,7 +169,7 @@ TEST(RegisterMap, Table67Defaults) {
 
 TEST(RegisterMap, ThesisAngleRegistersFromTheGrid) {
   // With 13-bit angles a 1080-column vr180 grid needs k = 8192 / 2160 = 3.79 -> 4: the chip then
-  // covers 190 deg, not 180 (hw-spec: "M = 11 is sufficient" does not hold for 1080 over 180 deg).
+  // covers 190 deg, not 180 (../shared/notes/hw-spec.md: "M = 11 is sufficient" does not hold for 1080 over 180 deg).
   HwConfig cfg = thesis_config();
   const AngleRegs r = angle_regs(cfg, {Projection::kVr180, 1080, 1080});
   EXPECT_EQ(r.k_phi, 8192u - 4u);  // -4 mod 2^13: the longitude decreases to the right (conventions.h (G2))

@@ -1,6 +1,6 @@
 // The whole bit-accurate panorama pipeline (thesis Fig. 5.9-5.15): the blocks of blocks.h chained
 // over every output pixel, in the thesis's scan order (rows top to bottom, columns left to right).
-// This is the golden model the RTL (issue 16) is compared with pixel by pixel.
+// This is the golden model the RTL (hw/rtl/) is compared with pixel by pixel.
 //
 // Frames: CV_8UC3 BGR as OpenCV reads them (8-bit; 16-bit frames are reduced to their 8 most
 // significant bits, as §5.2); each is stored as RGB565 (blocks.h rgb888_to_rgb565). The panorama

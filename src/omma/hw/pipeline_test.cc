@@ -1,6 +1,7 @@
 // The whole pipeline against the floating-point reference stitcher (pano::stitch) on the same
 // RGB565 frames: the 24-camera prototype, the simulated colon and a far-field photograph, both
-// projections, nn / linear / mrf. Issue 15: >= 45 dB at the default widths.
+// projections, nn / linear / mrf. Target: >= 45 dB PSNR against the float stitch at the default
+// widths (HwConfig).
 #include "omma/hw/pipeline.h"
 
 #include <gtest/gtest.h>
@@ -80,7 +81,7 @@ void expect_45db_everywhere(const std::vector<cv::Mat>& frames, const char* scen
 TEST(HwVsFloat, ColonBothProjectionsEveryMethod) { expect_45db_everywhere(colon_frames(), "colon"); }
 TEST(HwVsFloat, LouvreBothProjectionsEveryMethod) { expect_45db_everywhere(louvre_frames(), "louvre"); }
 
-// Issue 13 point 5: the rig's photometric model in the vignetting memory. The Louvre's frames are
+// The rig's photometric model in the vignetting memory. The Louvre's frames are
 // vignetted and tinted by the simulator's default sensor model (50 % cos^4 falloff, gains in
 // [0.9, 1.1]) in linear light; the chip with the model's tables (the sRGB power-law approximation)
 // is compared with the float stitch of the exactly corrected frames, and with the clean frames'

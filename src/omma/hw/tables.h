@@ -43,7 +43,7 @@ double vignetting_rmax(const Intrinsics& in);
 // rho = sqrt((i + 0.5) * 2^vig_shift) / r_max (uQ2.14, saturated at 4 - 2^-14).
 VignettingTables make_vignetting_tables(const HwConfig& cfg, const Rig& rig, const VignettingModel& model = {});
 
-// The rig's photometric model (core/photometric.h, issue 13) as a VignettingModel:
+// The rig's photometric model (core/photometric.h) as a VignettingModel:
 //   radial(cam, rho)  = (1 / V(r))^e   at the pixel radius r = rho * r_max(cam) from the model's
 //                       vignetting centre (the table is indexed by the distance from the principal
 //                       point: a centre offset between the two is not represented, see docs/hw-model.md),

@@ -1,4 +1,4 @@
-// Photometric correction of camera frames (issue 13): divides a frame's LINEAR signal by the
+// Photometric correction of camera frames: divides a frame's LINEAR signal by the
 // camera's gain_c * V(px) (the model of core/photometric.h), i.e. for an sRGB-encoded frame
 //   out = encode( decode(in) / (gain_c * V(px)) ),   clipped to [0, 1].
 // The readable reference works in double precision; the fast path is the engine's: per camera a

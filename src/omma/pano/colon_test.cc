@@ -1,6 +1,6 @@
 // The six methods on the simulated colon (near field, parallax) seen by the 24-camera prototype,
 // with the simulator's default sensor effects (vignetting, +-10 % colour gains, shot and read noise,
-// 10-bit quantisation) at one ray per pixel to keep the test short. Issue 3, point 7.
+// 10-bit quantisation) at one ray per pixel to keep the test short.
 #include <gtest/gtest.h>
 
 #include <cstdio>

@@ -1,5 +1,5 @@
 // Camera search and projection for one panorama direction (thesis eq. 2.3, 2.5, 5.19-5.26), on a
-// projection surface at distance D (issue 14).
+// projection surface at distance D (surface.h).
 // Frames: dome frame, mm (conventions.h). Pixel coordinates: continuous, centres at integer + 0.5.
 //
 // Projection surface. The thesis samples every camera along the panorama direction w itself

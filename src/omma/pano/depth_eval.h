@@ -1,4 +1,4 @@
-// Figures for depth maps (issue 14 point 4): depth error against a true depth, occlusion boundaries
+// Figures for depth maps: depth error against a true depth, occlusion boundaries
 // (depth discontinuities) and the precision / recall / F1 of a boundary map against them.
 // Depth maps: CV_32FC1 mm (surface.h).
 #pragma once

@@ -1,4 +1,4 @@
-// The projection surface and depth from the overlaps (issue 14): D = infinity reproduces the
+// The projection surface and depth from the overlaps (surface.h, sweep.h): D = infinity reproduces the
 // thesis's stitcher exactly; on the simulated colon the true depth removes most of the parallax
 // error and the estimated depth closes most of the gap to it.
 #include <gtest/gtest.h>
@@ -117,7 +117,7 @@ struct ColonFigures {
 };
 
 // mrf on the colon of `seed` (sim::colon_case), the fixed sphere at 22 mm (the best of 15, 18, 22,
-// 27 and 35 mm on every case of scripts/depth_table.sh), the true and the estimated depth.
+// 27 and 35 mm on every case of docs/results/depth_table.sh), the true and the estimated depth.
 ColonFigures colon_figures(const PanoGrid& grid, uint64_t seed) {
   const Colon c = simulate_colon(grid, seed);
   const cv::Mat seam = seam_mask(coverage_map(c.rig, c.grid), false);
@@ -165,7 +165,7 @@ ColonFigures colon_figures(const PanoGrid& grid, uint64_t seed) {
   return f;
 }
 
-// One seed and projection in CI (OMMA_DEPTH_SEEDS=1,2,3 runs more; scripts/depth_table.sh has the
+// One seed and projection in CI (OMMA_DEPTH_SEEDS=1,2,3 runs more; docs/results/depth_table.sh has the
 // full-size table). Thresholds: see the measured values in the comments.
 TEST(PanoDepth, ColonTruthAndEstimate) {
   std::vector<int> seeds{1};
@@ -194,7 +194,7 @@ TEST(PanoDepth, ColonTruthAndEstimate) {
       const double closed_seam =
           (f.estimate.seam_psnr_db - f.sphere.seam_psnr_db) / (f.truth.seam_psnr_db - f.sphere.seam_psnr_db);
       EXPECT_GT(f.estimate.psnr_db, f.sphere.psnr_db + 0.8);
-      EXPECT_GT(closed, 0.7);  // the issue's target
+      EXPECT_GT(closed, 0.7);  // target: the estimate closes 70 % of the gap to the true depth
       EXPECT_GT(closed_seam, 0.7);
       EXPECT_LT(f.depth.median_rel, 0.04);
       EXPECT_GT(f.from_depth.f1, f.thesis.f1);

@@ -1,6 +1,6 @@
 // Every method on the thesis's 24-camera prototype dome (design::thesis_prototype_rig) with far-field
 // photographs (noise-free minimal renderer of sim/test_scenes.h): PSNR / SSIM / seam PSNR against the
-// ideal panorama. The printed table is part of the point 7 (the simulator adds the colon).
+// ideal panorama. The test prints the table (colon_test.cc adds the simulated colon).
 #include "omma/design/prototype.h"
 
 #include <gtest/gtest.h>

@@ -1,4 +1,4 @@
-// Projection surfaces D(w) for the stitcher (issue 14): the distance, from the observer q, at which
+// Projection surfaces D(w) for the stitcher: the distance, from the observer q, at which
 // each panorama direction w meets the scene. The geometry of sampling a camera on the surface is in
 // contributors.h (X = q + D w, camera i's ray X - c_i); this file holds the depth maps themselves.
 //

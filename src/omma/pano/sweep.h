@@ -1,16 +1,16 @@
-// Depth of every panorama direction from the cameras' overlaps (issue 14 point 3): a sweep of
+// Depth of every panorama direction from the cameras' overlaps: a sweep of
 // spheres around the observer q (the "plane sweep" of multi-view stereo with spheres as planes,
 // since the panorama is a set of directions from q), a patch cost robust to noise, colour gain
 // and vignetting, semi-global aggregation over the panorama grid with edge-aware penalties, a
-// confidence, and a smooth fallback to a prior distance where nothing can be measured.
+// confidence, and a smooth fallback to a prior distance where nothing can be measured. The
+// measurements behind the defaults: docs/results/tuning-depth-sweep.md.
 //
 // Grid. The sweep runs on a coarse grid of the output's projection, `factor` times smaller in each
 // axis: by default the factor that gives a pitch of about pitch_deg, so that the estimate does not
-// depend on the output size (measured on the colon, vr180 270x270: a 1.33 deg pitch beats 0.67 and
-// 2.7 deg by 0.4-0.6 dB). It is the same projection at a lower resolution, so its pixel (c, r) looks
-// at the centre of the output's f x f block there. The depth is upsampled to the output grid at the
-// end (bilinear in inverse depth). Then a 5x5 median filter of the winners removes isolated wrong
-// minima (+0.3 dB on the colon).
+// depend on the output size. It is the same projection at a lower resolution, so its pixel (c, r)
+// looks at the centre of the output's f x f block there. A (2 median + 1)^2 median filter of the
+// winners removes isolated wrong minima. The depth is upsampled to the output grid at the end
+// (bilinear in inverse depth).
 //
 // Candidates. D_k, k = 0 .. steps-1, uniform in inverse depth s = 1/D between 1/near and 1/far
 // (the parallax of a camera at baseline b is b * s, so equal steps in s are equal steps in pixels).
@@ -21,13 +21,10 @@
 // a coarse pixel in camera pixels) minus that blurred again with band_ratio times the sigma, into the
 // layer L_ik. The band-pass removes what ZNCC's per-patch gain and offset cannot: the vignetting's
 // ramp across a patch near the image edge, which two cameras share and which otherwise "matches" at
-// whatever candidate puts both patches at their image edges. Measured (mrf, gap closed between the
-// best fixed sphere and the true depth; colon vr180 270x270 seeds 1-5 (seeds 4, 5 at dome-z 6, 18 mm)
-// and equirect 480x128 seeds 1-3): without the band-pass (noise_sigma 0.01) 20-92 %, seed 2's border
-// band put at the far end; band_ratio 2 with noise_sigma 0.005: 78-97 % (the default); band_ratio 3:
-// 71-92 %; noise_sigma 0.0025-0.005 alike, 0.01 worse, 0.02 fails (the band-pass holds less variance,
-// so the texture weight's sigma_n is smaller than for the plain gray levels). For every pair of cameras (i, j) that both see u at
-// D_k, over the (2 window + 1)^2 patch of coarse pixels P around u where both see the surface:
+// whatever candidate puts both patches at their image edges. The band-pass holds less variance than
+// the plain gray levels, so the texture weight's sigma_n (noise_sigma) is smaller than theirs would
+// be. For every pair of cameras (i, j) that both see u at D_k, over the (2 window + 1)^2 patch of
+// coarse pixels P around u where both see the surface:
 //     ZNCC_ij = cov(L_i, L_j) / sqrt(var L_i var L_j)   (zero-mean normalised cross-correlation:
 //               invariant to a gain and an offset per camera and patch, i.e. to the colour gains
 //               and the slowly varying vignetting)
@@ -40,11 +37,8 @@
 // of the panorama is seen by one camera only), and at infinity a far-field scene's footprints part at
 // the edge of the coverage. It takes the cost of the nearest candidate (in k) with evidence, at most
 // the pixel's best cost + unknown_cost (and at most neutral): the cost curve is continued flat, so
-// that the smoothness term, not where the overlap happens to begin or end, decides. Measured: with
-// a constant neutral cost the colon's estimate is pulled to where overlaps begin (too far; 8-26 %
-// of the gap closed on seed 2 instead of 28 %); with "best + 0.25" for every unknown candidate the
-// lake photo's smooth sky is put at 0.6-2 m where only near candidates overlap (-0.58 dB against
-// infinity; now 0.00 dB); unknown_cost 0.1-0.15 lets the estimate collapse to the near end.
+// that the smoothness term, not where the overlap happens to begin or end, decides (a constant
+// cost for unknown candidates pulls the estimate to where overlaps begin or end).
 // The SAD of eq. 4.17 is the special case of one candidate (D = infinity), a 1-pixel patch and
 // absolute differences instead of ZNCC.
 //
@@ -97,7 +91,7 @@ struct SweepOptions {
   double noise_sigma = 0.005;  // sigma_n: gray-level noise of the band-pass for the texture weight
   double w0 = 0.2;             // evidence of the neutral cost
   double unknown_cost = 0.25;  // cap of an unknown candidate's cost above the pixel's best (see above)
-  double neutral_cost = 0.5;   // cost where no pair of cameras gives evidence (see below)
+  double neutral_cost = 0.5;   // cost where no pair of cameras gives evidence (see "Cost" above)
   double p1 = 0.2, p2 = 2.0;   // SGM penalties, cost units
   double edge_gray = 0.03;     // edge-aware P2 scale, gray levels
   int paths = 8;               // 4 or 8

@@ -96,7 +96,7 @@ cv::Mat render_truth(const Scene& scene, const PanoGrid& grid, const DomePose& p
 cv::Mat render_truth_linear(const Scene& scene, const PanoGrid& grid, const DomePose& pose = {},
                             int supersample = 2, double exposure = 1.0, Progress* progress = nullptr);
 
-// The ground-truth depth of the truth panorama (issue 14): for every truth pixel, the distance (mm)
+// The ground-truth depth of the truth panorama (pano/surface.h): for every truth pixel, the distance (mm)
 // from the dome centre along its centre direction to the surface the truth shows (Scene::distance);
 // +infinity where the ray meets nothing within the scene's range (and for far-field scenes).
 // CV_32FC1, grid-sized. Written by the simulator as DIR/truth_depth.tiff (32-bit float, mm).

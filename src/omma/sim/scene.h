@@ -36,8 +36,8 @@ class Scene {
   virtual cv::Vec3f radiance(const Vec3& origin, const Vec3& dir, const Vec3& light) const = 0;
   // Distance (mm) along the ray origin + s * dir (dir a unit vector) to the surface point whose
   // radiance radiance() returns; +infinity for far-field scenes and for rays that meet nothing
-  // within the scene's range (the colon's dark lumen beyond 400 mm). The ground-truth depth of
-  // issue 14 (render_truth_depth).
+  // within the scene's range (the colon's dark lumen beyond 400 mm). The ground-truth depth
+  // (render_truth_depth).
   virtual double distance(const Vec3& origin, const Vec3& dir) const {
     (void)origin;
     (void)dir;

@@ -10,7 +10,7 @@
 //   DIR/rig_true.json     the rig the frames were rendered with (= rig.json without perturbation)
 //   DIR/sim.json          what was simulated: scene, seed, effects, per-camera gains and the
 //                         vignetting polynomial closest to the truth (true_photometric), perturbation
-// Several shots of a static scene (shots > 1, e.g. the calibration tube, issue 13): the same rig,
+// Several shots of a static scene (shots > 1, e.g. the calibration tube, thesis §3.6): the same rig,
 // radiance and colour gains, independent sensor noise per shot; written as one frames folder per
 // shot, DIR/shot_00, DIR/shot_01, ... (each complete: frames, truth, rigs, sim.json with "shot").
 #pragma once
@@ -56,7 +56,7 @@ SimulateResult simulate(const Rig& nominal, const Scene& scene, const SimulateOp
 void write_frames_folder(const std::filesystem::path& dir, const SimulateResult& result,
                          const SimulateOptions& options, const Scene& scene);
 
-// The colon cases of the depth tables (issue 14 point 4; tests, `omma demo`, scripts/depth_table.sh):
+// The colon cases of the depth tables (tests, `omma demo`, docs/results/depth_table.sh):
 // seed s (1, 2, 3, ...) simulates the default colon with effects.seed = s (noise, colour gains) and
 // the dome (s - 1) * 12 mm along the tube, so that each seed sees other folds and polyps at other
 // distances (`omma simulate --scene colon --seed s --dome-z 12(s-1)`; seed 1 is the demo's scene).
