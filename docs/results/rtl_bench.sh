@@ -2,9 +2,9 @@
 # The full 1080 x 1080 panorama through the Verilated RTL, compared pixel by pixel with the
 # bit-accurate model; prints one JSON object per run (simulated cycles, cycles per pixel against the
 # model's throughput count, simulation wall time). Arguments go to every run (e.g. --scene louvre).
-#   scripts/rtl_bench.sh                     # colon, vr180 1080x1080, nn and linear
+#   docs/results/rtl_bench.sh                     # colon, vr180 1080x1080, nn and linear
 set -euo pipefail
-cd "$(dirname "$0")/.."
+cd "$(dirname "$0")/../.."
 scripts/install-deps.sh --test  # Verilator, Yosys, Icarus
 # a build folder configured before Verilator was installed has the RTL off: switch it on
 if [ -f build/CMakeCache.txt ] && ! grep -q "^OMMA_RTL:[A-Z]*=ON" build/CMakeCache.txt; then

@@ -1,17 +1,17 @@
 #!/usr/bin/env bash
-# Giga-Eye benchmarks (issue 17, thesis ch. 7), all in one run on this machine:
+# Giga-Eye benchmarks (thesis ch. 7), all in one run on this machine:
 #   1. omma render at 9000x2400 (21.6 MP) from 44 x 1296x972 frames (Table 7.2's sensor mode) and at
 #      17700x4650 (82.3 MP) from 44 x 2592x1944 frames (Table 7.3's), per method, cached maps, against
 #      the simulator's truth; Hugin's nona on the same frames and about the same output size, timed
 #      in the same run.
 #   2. omma record: 44 simulated cameras -> HDF5, MB/s against the disk's sequential write rate (dd,
 #      same folder, same run); the FFV1 probe (bench/ffv1_probe.cc) for the container choice.
-# Usage: scripts/giga_bench.sh [OUT_DIR] [--quick]   (--quick: 21.6 MP only, fewer repeats)
+# Usage: docs/results/giga_bench.sh [OUT_DIR] [--quick]   (--quick: 21.6 MP only, fewer repeats)
 set -euo pipefail
-cd "$(dirname "$0")/.."
+cd "$(dirname "$0")/../.."
 OUT=${1:-/tmp/omma-giga-bench}
 QUICK=${2:-}
-B=$PWD/build/omma
+B=${OMMA:-$PWD/build/omma}
 DATA=$PWD/../shared/data
 mkdir -p "$OUT"
 log() { echo "== $*" >&2; }

@@ -1,14 +1,14 @@
 #!/usr/bin/env bash
-# Issue 3, point 7: PSNR / SSIM / seam PSNR of the six blending methods against the simulator's
+# PSNR / SSIM / seam PSNR of the six blending methods against the simulator's
 # ground truth, on louvre.jpg, lake.jpg and the colon scene, both projections.
-#   scripts/pano_table.sh RIG [OUT_DIR]        (RIG: e.g. the 24-camera prototype rig file)
+#   docs/results/pano_table.sh RIG [OUT_DIR]        (RIG: e.g. the 24-camera prototype rig file)
 # Writes OUT_DIR/table.md (Markdown) and prints it. Uses build/omma (override with OMMA=...).
 # Sizes: equirect 1920x512 and vr180 1080x1080 (the thesis's panoramas); override with
 # EQ_SIZE=WxH VR_SIZE=WxH for a quicker run. SIM_FLAGS adds simulator flags (e.g. --ideal: no
 # vignetting, gains, noise or quantisation); SCENES limits the scenes (e.g. SCENES=colon).
 set -euo pipefail
-cd "$(dirname "$0")/.."
-RIG=${1:?usage: scripts/pano_table.sh RIG [OUT_DIR]}
+cd "$(dirname "$0")/../.."
+RIG=${1:?usage: docs/results/pano_table.sh RIG [OUT_DIR]}
 OUT=${2:-/tmp/omma-pano-table}
 OMMA=${OMMA:-build/omma}
 EQ_SIZE=${EQ_SIZE:-1920x512}

@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
-# Issue 13, point 4: far-field panoramas with estimated photometry against the same method on
+# Far-field panoramas with estimated photometry against the same method on
 # ideal-photometry frames (--vignetting 0 --color-gain 0, same seed) and on the uncorrected frames,
 # all six methods, both projections, every photo in ../shared/data.
-#   scripts/photometric_table.sh [OUT_DIR]
+#   docs/results/photometric_table.sh [OUT_DIR]
 # Per photo and projection: simulate the 24-camera prototype (default sensor effects: 50 % cos^4
 # vignetting, gains in [0.9, 1.1], noise) and the same with ideal photometry; `omma calibrate
 # --no-geometric --photometric` estimates vignetting and gains from the overlaps of the first
@@ -10,7 +10,7 @@
 # Writes OUT_DIR/table.md and prints it. Uses build/omma (override with OMMA=...); EQ_SIZE, VR_SIZE
 # as in pano_table.sh; PHOTOS limits the photos (e.g. PHOTOS=lake).
 set -euo pipefail
-cd "$(dirname "$0")/.."
+cd "$(dirname "$0")/../.."
 OUT=${1:-/tmp/omma-photometric-table}
 OMMA=${OMMA:-build/omma}
 EQ_SIZE=${EQ_SIZE:-1920x512}

@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
-# Distributed rendering benchmark (issue 18): `omma render` of a simulated Giga-Eye recording under
+# Distributed rendering benchmark: `omma render` of a simulated Giga-Eye recording under
 # mpirun with 1, 2 and 4 local ranks. Prints, and writes to OUT/summary.md and OUT/runs.csv:
 # frame sets per second, efficiency against one rank, the time split into read / develop / render /
-# write, and the model of the speed on N nodes (README "Rendering on a cluster").
+# write, and the model of the speed on N nodes (docs/results/mpi_bench.md).
 #
-#   scripts/mpi_bench.sh [OUT]      (default /tmp/omma-mpi-bench; needs build/omma built with MPI)
+#   docs/results/mpi_bench.sh [OUT]      (default /tmp/omma-mpi-bench; needs build/omma built with MPI)
 #
 # Environment: SETS (16) frame sets; SIZE (1500x400) panorama; THREADS (1) threads per rank;
 # RANKS ("1 2 4"); ROUNDS (3): the runs are repeated, interleaved, and the median round is reported
@@ -13,8 +13,8 @@
 # 44 x 5.04 MP: 0.097; here 0.60 MP from 44 x 0.14 MP: 0.097), so develop and render weigh as they
 # would at full size.
 set -euo pipefail
-cd "$(dirname "$0")/.."
-OMMA=$PWD/build/omma
+cd "$(dirname "$0")/../.."
+OMMA=${OMMA:-$PWD/build/omma}
 OUT=${1:-/tmp/omma-mpi-bench}
 SETS=${SETS:-16}
 SIZE=${SIZE:-1500x400}
@@ -109,7 +109,7 @@ print("|---|---|---|---|---|")
 for t in tiles:
     print(f"| {t['ranks']} | {float(t['seconds']):.2f} | {t1 / float(t['seconds']):.2f} | {float(t['load_s']):.2f} | "
           f"{float(t['split_s']):.2f} |")
-# The model (README "Rendering on a cluster").
+# The model (docs/results/mpi_bench.md).
 rec = json.load(open(f"{out}/record.json"))
 b_in = rec["bytes"] / rec["frames"][0]
 b_out = os.path.getsize(f"{out}/k1-works/p_00000.tif")

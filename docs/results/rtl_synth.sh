@@ -3,7 +3,7 @@
 # block RAM per block (markdown table on stdout, JSON in build/hw/rtl/synth.json). Takes a few
 # minutes per large block; arguments go to hw/rtl/synth/synth.py (e.g. --only cam_search).
 set -euo pipefail
-cd "$(dirname "$0")/.."
+cd "$(dirname "$0")/../.."
 scripts/install-deps.sh --test  # Verilator, Yosys, Icarus
 # a build folder configured before Verilator was installed has the RTL off: switch it on
 if [ -f build/CMakeCache.txt ] && ! grep -q "^OMMA_RTL:[A-Z]*=ON" build/CMakeCache.txt; then

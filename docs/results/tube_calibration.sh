@@ -1,16 +1,16 @@
 #!/usr/bin/env bash
-# Issue 13, point 2: calibration of the 24-camera prototype from 8 shots of the thesis's 35 mm
+# Calibration of the 24-camera prototype from 8 shots of the thesis's 35 mm
 # calibration tube (§3.6), three simulation seeds, with --perturb orient=2,focal=0.03,center=5,k1=0.05
 # and the default sensor effects; then the colon check: the tube calibration applied to colon
 # frames of the same rig, mrf panorama against the true rig's (geometry only: --no-photometric on
 # both sides).
-#   scripts/tube_calibration.sh [OUT_DIR]      (SEEDS="1 2 3" SHOTS=8 DENSE_ROUNDS=3 to change)
+#   docs/results/tube_calibration.sh [OUT_DIR]      (SEEDS="1 2 3" SHOTS=8 DENSE_ROUNDS=3 to change)
 # The errors are given as they are and with the global rotation removed (rig-diff --align). The
 # tube's axis defines the rig's z axis (its offset is estimated); TUBE_TILT=1 estimates its tilt too
 # (omma calibrate --tube-tilt), and then only the 5 mm parallax holds the rig's tilt.
 # Writes OUT_DIR/table.md and prints it. Uses build/omma (override with OMMA=...).
 set -euo pipefail
-cd "$(dirname "$0")/.."
+cd "$(dirname "$0")/../.."
 OUT=${1:-/tmp/omma-tube-calibration}
 OMMA=${OMMA:-build/omma}
 SEEDS=${SEEDS:-"1 2 3"}

@@ -1,15 +1,15 @@
 #!/usr/bin/env bash
-# Issue 14, point 4: the six blending methods on the colon with the projection surface at infinity
+# The six blending methods on the colon with the projection surface at infinity
 # (the thesis), the best fixed sphere, the simulator's true depth and the estimated depth; the depth
 # error and the boundary maps against the true occlusion boundaries; far-field photos with and
 # without the estimate.
-#   scripts/depth_table.sh [OUT_DIR]
+#   docs/results/depth_table.sh [OUT_DIR]
 # Writes OUT_DIR/table.md and prints it. Uses build/omma (OMMA=...). SEEDS (default "1 2 3"),
 # PROJECTIONS (default "vr180 equirect"), VR_SIZE / EQ_SIZE (1080x1080 / 1920x512), RADII (the
 # fixed spheres tried, mm), PHOTOS (far-field scenes; default louvre and lake).
 # Colon seed s: `omma simulate --scene colon --seed s --dome-z 12(s-1)` (sim::colon_case).
 set -euo pipefail
-cd "$(dirname "$0")/.."
+cd "$(dirname "$0")/../.."
 OUT=${1:-/tmp/omma-depth-table}
 OMMA=${OMMA:-build/omma}
 SEEDS=${SEEDS:-"1 2 3"}
