@@ -8,7 +8,7 @@
 
 #include "apps/command.h"
 #include "omma/core/rig.h"
-#include "omma/engine/bench.h"
+#include "omma/bench/bench.h"
 #include "omma/design/prototype.h"
 
 namespace omma::app {
@@ -22,7 +22,7 @@ void add_bench_command(CLI::App& root) {
   struct Opts {
     std::string rig, save_rig;
     bool json = false, quick = false, depth = false;
-    double seconds = engine::BenchOptions{}.min_seconds;
+    double seconds = bench::BenchOptions{}.min_seconds;
     int rounds = 5;
     std::vector<std::string> only;
   };
@@ -48,14 +48,14 @@ void add_bench_command(CLI::App& root) {
     set_json_mode(o.json);
     const Rig rig = o.rig.empty() ? design::thesis_prototype_rig() : design::load_rig_or_builtin(o.rig);
     if (!o.save_rig.empty()) save_rig(rig, o.save_rig);
-    engine::BenchOptions bo;
+    bench::BenchOptions bo;
     bo.min_seconds = o.seconds;
     bo.rounds = o.rounds;
     bo.quick = o.quick;
     bo.depth = o.depth;
     bo.only = o.only;
     std::vector<std::string> skipped;
-    const auto entries = engine::run_bench_suite(rig, bo, &skipped);
+    const auto entries = bench::run_bench_suite(rig, bo, &skipped);
     nlohmann::json results = nlohmann::json::array();
     for (const auto& e : entries) {
       nlohmann::json r = {{"name", e.name}, {"fps", e.fps}};
@@ -63,7 +63,7 @@ void add_bench_command(CLI::App& root) {
       r["round_fps"] = e.round_fps;
       results.push_back(r);
     }
-    const auto ratios = engine::bench_ratios(entries);
+    const auto ratios = bench::bench_ratios(entries);
     nlohmann::json ratios_json = nlohmann::json::array();
     for (const auto& r : ratios) ratios_json.push_back(r.to_json());
     if (o.json) {

@@ -15,14 +15,14 @@
 #include "apps/giga_demo.h"
 #include "omma/core/frames.h"
 #include "omma/core/io.h"
-#include "omma/core/metadata.h"
+#include "omma/io/metadata.h"
 #include "omma/core/log.h"
 #include "omma/core/progress.h"
 #include "omma/design/coverage.h"
 #include "omma/design/prototype.h"
-#include "omma/engine/bench.h"
-#include "omma/engine/compiled_map.h"
-#include "omma/engine/render.h"
+#include "omma/bench/bench.h"
+#include "omma/render/compiled_map.h"
+#include "omma/render/render.h"
 #include "omma/isp/photometric.h"
 #include "omma/pano/maps.h"
 #include "omma/pano/quality.h"
@@ -71,7 +71,7 @@ cv::Mat frame_mosaic(const Rig& rig, const std::vector<cv::Mat>& frames) {
 // agreement with the reference stitch and its speed.
 struct EngineRow {
   double compile_s = 0;
-  double fps = 0;            // all threads (engine::measure_fps)
+  double fps = 0;            // all threads (bench::measure_fps)
   double psnr_vs_reference = 0;
   double bytes_per_pixel = 0;
 };
@@ -79,19 +79,19 @@ struct EngineRow {
 EngineRow run_engine(const Rig& rig, const PanoGrid& grid, const std::vector<cv::Mat>& frames,
                      const cv::Mat& reference_mrf) {
   EngineRow e;
-  engine::MapOptions mo;
+  render::MapOptions mo;
   mo.grid = grid;
   mo.method = pano::Method::kMrf;
   const auto t0 = std::chrono::steady_clock::now();
-  const engine::CompiledMap map = engine::compile_map(rig, mo);
+  const render::CompiledMap map = render::compile_map(rig, mo);
   e.compile_s = ms_since(t0) / 1000;
   e.bytes_per_pixel = map.bytes_per_pixel();
-  engine::FrameStore store(map.layout);
+  render::FrameStore store(map.layout);
   for (size_t c = 0; c < frames.size(); ++c) store.set(int(c), frames[c]);
   cv::Mat out;
-  const engine::Workload w{"omma-mrf", 0, [&] { engine::render(map, store, out); }, {}};
-  e.fps = engine::measure_fps(w, 0.2, 20);
-  e.psnr_vs_reference = engine::psnr_u8(out, reference_mrf);
+  const bench::Workload w{"omma-mrf", 0, [&] { render::render(map, store, out); }, {}};
+  e.fps = bench::measure_fps(w, 0.2, 20);
+  e.psnr_vs_reference = render::psnr_u8(out, reference_mrf);
   return e;
 }
 
@@ -292,7 +292,7 @@ void run_demo(const DemoOptions& o) {
   std::vector<cv::Mat> frames;
   for (const auto& f : simr.frames) frames.push_back(f.image);
   write_image(dir / "frames_mosaic.png", frame_mosaic(rig, frames));
-  write_panorama(dir / "truth.png", simr.truth, grid);
+  io::write_panorama(dir / "truth.png", simr.truth, grid);
 
   // Maps that use the overlap (§4.3).
   const cv::Mat coverage = pano::coverage_map(rig, grid);
@@ -316,7 +316,7 @@ void run_demo(const DemoOptions& o) {
     MethodRow row{pano::to_string(m), {}, ms_since(t0)};
     row.eval = pano::evaluate(p, simr.truth, seam);
     const cv::Mat p8 = to_u8(p);
-    write_panorama(dir / ("pano_" + row.method + ".png"), p8, grid);
+    io::write_panorama(dir / ("pano_" + row.method + ".png"), p8, grid);
     if (m == pano::Method::kMrf) mrf = p8;
     rows.push_back(row);
   }

@@ -10,9 +10,9 @@
 #include "omma/core/frames.h"
 #include "omma/core/io.h"
 #include "omma/core/log.h"
-#include "omma/engine/bench.h"
-#include "omma/engine/depth_render.h"
-#include "omma/engine/render.h"
+#include "omma/bench/bench.h"
+#include "omma/render/depth_render.h"
+#include "omma/render/render.h"
 #include "omma/pano/depth_eval.h"
 #include "omma/pano/maps.h"
 #include "omma/pano/quality.h"
@@ -66,17 +66,17 @@ DepthDemo run_depth_demo(const Rig& rig, const PanoGrid& grid, const std::vector
 
   // The engine's depth-adaptive renderer on the same frames (depth every panorama).
   spdlog::info("demo: the engine's depth-adaptive renderer");
-  engine::DepthRenderOptions dro;
+  render::DepthRenderOptions dro;
   dro.map.grid = grid;
   dro.map.method = pano::Method::kMrf;
-  auto dr = std::make_shared<engine::DepthRenderer>(rig, dro);
-  auto store = std::make_shared<engine::FrameStore>(dr->layout());
+  auto dr = std::make_shared<render::DepthRenderer>(rig, dro);
+  auto store = std::make_shared<render::FrameStore>(dr->layout());
   for (size_t i = 0; i < frames.size(); ++i) store->set(int(i), frames[i]);
   auto out = std::make_shared<cv::Mat>();
-  const engine::Workload w{"omma-mrf-depth", 0, [&] { dr->render(*store, frames, *out); }, {}};
-  const double fps = engine::measure_fps(w, 2.0, 10);  // 2 s: single seconds vary by +-15 % on the 2-core machine
+  const bench::Workload w{"omma-mrf-depth", 0, [&] { dr->render(*store, frames, *out); }, {}};
+  const double fps = bench::measure_fps(w, 2.0, 10);  // 2 s: single seconds vary by +-15 % on the 2-core machine
   write_image(dir / "pano_mrf_engine_depth.png", *out);
-  const double engine_psnr = pano::psnr_db(*out, truth), engine_vs_ref = engine::psnr_u8(*out, with_depth);
+  const double engine_psnr = pano::psnr_db(*out, truth), engine_vs_ref = render::psnr_u8(*out, with_depth);
 
   DepthDemo d;
   const double closed = 100 * (estimate.psnr_db - sphere.psnr_db) / (with_truth.psnr_db - sphere.psnr_db);

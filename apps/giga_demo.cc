@@ -22,9 +22,10 @@
 #include "omma/design/dome.h"
 #include "omma/design/prototype.h"
 #include "omma/design/recording_plan.h"
-#include "omma/engine/pano_render.h"
-#include "omma/engine/recorder.h"
-#include "omma/engine/tiff_writer.h"
+#include "omma/render/pano_render.h"
+#include "omma/live/recorder.h"
+#include "omma/io/pano_file.h"
+#include "omma/io/tiff_writer.h"
 #include "omma/pano/quality.h"
 #include "omma/sim/perturb.h"
 #include "omma/sim/render.h"
@@ -93,19 +94,19 @@ void run_giga_demo(const GigaDemoOptions& opts) {
   sopt.effects.seed = o.seed;
   sopt.progress = !o.json;
   const sim::SimulateResult sr = sim::simulate(truth_rig, *scene, sopt);
-  std::vector<std::unique_ptr<engine::CameraSource>> sources;
-  for (const auto& f : sr.frames) sources.push_back(engine::still_source(f.raw, 2, o.frame_sets));
-  engine::RecordOptions ro;
+  std::vector<std::unique_ptr<live::CameraSource>> sources;
+  for (const auto& f : sr.frames) sources.push_back(live::still_source(f.raw, 2, o.frame_sets));
+  live::RecordOptions ro;
   ro.frames = o.frame_sets;
   ro.fps = 2;
   ro.sensor_mode = o.mode;
   ro.clock_mhz = 66;
   ro.progress = !o.json;
-  engine::RecordingManifest m;
+  io::RecordingManifest m;
   m.rig = nominal;
-  const auto rs = engine::record(std::move(sources), rec_dir, m, ro);
+  const auto rs = live::record(std::move(sources), rec_dir, m, ro);
   if (!rs.error.empty()) throw std::runtime_error("recording: " + rs.error);
-  engine::RecordingReader rec(rec_dir);
+  io::RecordingReader rec(rec_dir);
   md += fmt::format("## Recording\n\n{} frame sets of 44 x {}x{} raw 12-bit frames in {:.1f} s ({:.1f} MB, HDF5, "
                     "`omma recording check {}`): {} complete sets, {} frames dropped.\n\n",
                     rec.frame_sets(), nominal.cameras[0].in.width, nominal.cameras[0].in.height, secs(t), rs.bytes / 1e6,
@@ -154,11 +155,11 @@ void run_giga_demo(const GigaDemoOptions& opts) {
 
   // 5. The 21.6 MP panoramas from the recording with the calibrated rig (BigTIFF), against the truth.
   t = clock::now();
-  engine::PanoRenderOptions po;
+  render::PanoRenderOptions po;
   po.grid = PanoGrid{Projection::kEquirect100, size.width, size.height};
   po.method = pano::Method::kMrf;
   po.progress = !o.json;
-  engine::PanoRenderer renderer(cal.rig, po);
+  render::PanoRenderer renderer(cal.rig, po);
   // The complete frame sets (a camera missing from a set would leave its part black).
   std::vector<int64_t> sets;
   for (int64_t s = 0; s < rec.frame_sets(); ++s) {
@@ -169,8 +170,8 @@ void run_giga_demo(const GigaDemoOptions& opts) {
   if (sets.empty()) sets.push_back(0);
   double render_s = 0;
   for (int64_t s : sets)
-    render_s += engine::render_frame_set(rec, s, renderer, iso, dir / fmt::format("pano_{:05d}.tif", s)).render;
-  const cv::Mat pano = engine::read_tiff_rows(dir / fmt::format("pano_{:05d}.tif", sets[0]));
+    render_s += io::render_frame_set(rec, s, renderer, iso, dir / fmt::format("pano_{:05d}.tif", s)).render;
+  const cv::Mat pano = io::read_tiff_rows(dir / fmt::format("pano_{:05d}.tif", sets[0]));
   const PanoGrid small{Projection::kEquirect100, 1800, 480};
   cv::Mat preview;
   cv::resize(pano, preview, cv::Size(small.width, small.height), 0, 0, cv::INTER_AREA);

@@ -12,7 +12,7 @@
 #include "omma/core/log.h"
 #include "omma/core/progress.h"
 #include "omma/design/prototype.h"
-#include "omma/engine/recorder.h"
+#include "omma/live/recorder.h"
 
 namespace omma::app {
 namespace {
@@ -35,7 +35,7 @@ void run_record(const RecordArgs& a) {
   if (a.sources.empty()) throw std::invalid_argument("give at least one --source");
   if (a.duration <= 0 && a.frames <= 0) throw std::invalid_argument("give --duration or --frames (or both)");
   const Rig rig = design::load_rig_or_builtin(a.rig);
-  engine::RecordOptions o;
+  live::RecordOptions o;
   o.duration_s = a.duration;
   o.frames = a.frames;
   o.queue_frames = a.queue;
@@ -46,18 +46,18 @@ void run_record(const RecordArgs& a) {
   o.progress = !a.json;
   o.stop = &g_stop;
   if (std::string why; !o.IsValid(&why)) throw std::invalid_argument(why);
-  engine::SourceOptions so;
+  live::SourceOptions so;
   so.fps = a.source_fps.value_or(a.fps);
   if (so.fps < 0) throw std::invalid_argument("--source-fps must be >= 0");
-  auto sources = engine::open_sources(rig, a.sources, so);
-  engine::RecordingManifest m;
+  auto sources = live::open_sources(rig, a.sources, so);
+  io::RecordingManifest m;
   m.rig = rig;
   std::signal(SIGINT, on_stop_signal);
   std::signal(SIGTERM, on_stop_signal);
 #ifdef SIGXFSZ
   std::signal(SIGXFSZ, SIG_IGN);  // a file-size limit shows as a write error (like a full disk)
 #endif
-  const engine::RecordSummary s = engine::record(std::move(sources), a.out, m, o);
+  const live::RecordSummary s = live::record(std::move(sources), a.out, m, o);
   int64_t frames = 0, dropped = 0;
   for (size_t c = 0; c < s.frames.size(); ++c) frames += s.frames[c], dropped += s.dropped[c];
   if (a.json) {
@@ -80,7 +80,7 @@ void run_record(const RecordArgs& a) {
 
 void run_check(const std::string& dir, bool json) {
   set_json_mode(json);
-  engine::RecordingReader r(dir);
+  io::RecordingReader r(dir);
   // Read every frame of every stream: a damaged chunk shows here.
   size_t total = 0;
   for (int c = 0; c < r.cameras(); ++c) total += r.frames(c);
@@ -138,7 +138,7 @@ void add_record_command(CLI::App& root) {
   auto* cmd = root.add_subcommand(
       "record",
       "Record free-running cameras as raw 12-bit RGGB Bayer with per-frame capture timestamps and sequence\n"
-      "numbers: one HDF5 stream per camera (cam_XX.h5) and manifest.json in OUT (engine/recording.h). Crash\n"
+      "numbers: one HDF5 stream per camera (cam_XX.h5) and manifest.json in OUT (io/recording.h). Crash\n"
       "safe: flushed every --flush seconds; `omma recording check OUT` reads a killed recording.");
   cmd->add_option("--rig", a.rig, "Rig file or built-in rig")->required();
   cmd->add_option("--source", a.sources,

@@ -19,9 +19,11 @@
 #include "omma/design/prototype.h"
 #include "omma/dist/comm.h"
 #include "omma/dist/job.h"
-#include "omma/dist/split_render.h"
-#include "omma/engine/pano_render.h"
-#include "omma/engine/tiff_writer.h"
+#include "apps/split_render.h"
+#include "omma/render/pano_render.h"
+#include "omma/io/pano_file.h"
+#include "omma/io/recording.h"
+#include "omma/io/tiff_writer.h"
 #include "omma/isp/photometric.h"
 #include "omma/pano/quality.h"
 
@@ -53,7 +55,7 @@ fs::path set_path(const std::string& pattern, int64_t set, bool many) {
 // dist::run_job (one item per frame set), of --split tiles (every rank on one set) and of --repeat.
 class RenderJob : public dist::Job {
  public:
-  RenderJob(const RenderArgs& a, const engine::PanoRenderOptions& o, const isp::IspOptions& iso)
+  RenderJob(const RenderArgs& a, const render::PanoRenderOptions& o, const isp::IspOptions& iso)
       : a_(a), o_(o), iso_(iso) {}
 
   void open() override {
@@ -61,7 +63,7 @@ class RenderJob : public dist::Job {
     if (!recording_ && !fs::is_directory(a_.input))
       throw IoError("input '" + a_.input + "' is neither a recording nor a frames folder");
     if (recording_) {
-      rec_ = std::make_unique<engine::RecordingReader>(a_.input);
+      rec_ = std::make_unique<io::RecordingReader>(a_.input);
       const Rig& rr = rec_->manifest().rig;
       rig_ = a_.rig.empty() ? rr : design::load_rig_or_builtin(a_.rig);
       if (rig_.cameras.size() != rr.cameras.size())
@@ -109,13 +111,13 @@ class RenderJob : public dist::Job {
             {"method", a_.method},     {"band_rows", a_.band_rows}, {"demosaic", a_.demosaic}, {"awb", a_.awb},
             {"bits", a_.bits},         {"raw", a_.raw}, {"photometric", !a_.no_photometric},           {"min_weight", o_.min_weight}};
   }
-  void setup() override { renderer_ = std::make_unique<engine::PanoRenderer>(rig_, o_); }
+  void setup() override { renderer_ = std::make_unique<render::PanoRenderer>(rig_, o_); }
   // Reads and develops frame set i into the renderer (read and develop times).
   dist::ItemTimes load(int64_t i) {
     dist::ItemTimes t;
     if (recording_) {
-      engine::FrameSetTimes ft;
-      renderer_->set_frames(engine::develop_frame_set(*rec_, first_ + i, iso_, &ft, gains_));
+      render::FrameSetTimes ft;
+      renderer_->set_frames(render::develop_frame_set(*rec_, first_ + i, iso_, &ft, gains_));
       t.read = ft.read;
       t.develop = ft.develop;
     } else {
@@ -133,25 +135,25 @@ class RenderJob : public dist::Job {
   dist::ItemTimes run(int64_t i) override {
     dist::ItemTimes t = load(i);
     const auto t0 = clock::now();
-    t.render = engine::render_to_file(*renderer_, output(i));
+    t.render = io::render_to_file(*renderer_, output(i));
     t.write = seconds(t0, clock::now()) - t.render;
     return t;
   }
   bool recording() const { return recording_; }
-  engine::PanoRenderer& renderer() { return *renderer_; }
+  render::PanoRenderer& renderer() { return *renderer_; }
 
  private:
   using clock = std::chrono::steady_clock;
   static double seconds(clock::time_point a, clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
   const RenderArgs& a_;
-  engine::PanoRenderOptions o_;
+  render::PanoRenderOptions o_;
   isp::IspOptions iso_;
   bool recording_ = false;
-  std::unique_ptr<engine::RecordingReader> rec_;
+  std::unique_ptr<io::RecordingReader> rec_;
   Rig rig_;
   int64_t first_ = 0, last_ = 0;
   std::vector<cv::Mat> gains_;  // flat-gain maps of the rig's photometric model (empty: none)
-  std::unique_ptr<engine::PanoRenderer> renderer_;
+  std::unique_ptr<render::PanoRenderer> renderer_;
 };
 
 void render(dist::Comm& comm, const RenderArgs& a) {
@@ -159,7 +161,7 @@ void render(dist::Comm& comm, const RenderArgs& a) {
   const auto t_start = clock::now();
   const bool root = comm.rank() == 0;
   // Options: the same on every rank, so an error here is every rank's (given once).
-  engine::PanoRenderOptions o;
+  render::PanoRenderOptions o;
   isp::IspOptions iso;
   Size2 size{0, 0};
   dist::Rank0 rank0 = dist::Rank0::kWorks;
@@ -217,7 +219,7 @@ void render(dist::Comm& comm, const RenderArgs& a) {
       develop_s += t.develop;
       for (int r = 0; r < a.repeat; ++r) {
         last_out = job.output(i);
-        render_s += engine::render_to_file(job.renderer(), last_out);
+        render_s += io::render_to_file(job.renderer(), last_out);
         ++rendered;
         progress.step();
       }
@@ -323,10 +325,10 @@ void render(dist::Comm& comm, const RenderArgs& a) {
   nlohmann::json q = nullptr;
   if (!truth.empty()) {
     const std::string ext = last_out.extension().string();
-    const cv::Mat pano = (ext == ".tif" || ext == ".tiff") ? engine::read_tiff_rows(last_out) : read_image(last_out, cv::IMREAD_COLOR);
+    const cv::Mat pano = (ext == ".tif" || ext == ".tiff") ? io::read_tiff_rows(last_out) : read_image(last_out, cv::IMREAD_COLOR);
     q = {{"psnr_db", pano::psnr_db(pano, truth)}, {"ssim", pano::ssim(pano, truth)}};
   }
-  engine::PanoRenderer& renderer = job.renderer();
+  render::PanoRenderer& renderer = job.renderer();
   const auto mem = renderer.memory();
   const double total = std::chrono::duration<double>(clock::now() - t_start).count();
   const double per = rendered > 0 ? render_s / rendered : 0;

@@ -12,11 +12,11 @@
 #include "omma/core/grid.h"
 #include "omma/core/progress.h"
 #include "omma/core/rig.h"
-#include "omma/engine/engine.h"
+#include "omma/live/engine.h"
 
 namespace omma::app {
 namespace {
-extern "C" void on_signal(int) { engine::request_stop(); }
+extern "C" void on_signal(int) { live::request_stop(); }
 
 // "MIN-MAX" or "F" (frames/s).
 void parse_fps_range(const std::string& text, double* lo, double* hi) {
@@ -48,17 +48,17 @@ void add_run_command(CLI::App& root) {
       "(raw sensor link), a pattern with {id} (two-digit camera id).\n"
       "Sinks: FILE.mp4|mkv|avi, png:DIR or DIR/, cam:ID:SINK (one camera passed through), "
       "http:PORT (live view on 127.0.0.1: / 360-degree viewer, /stream.mjpg MJPEG, /frame.jpg, /stats.json).\n"
-      "Latency = mean age of a panorama's camera frames when it is rendered (README, 'Real-time engine').\n"
+      "Latency = mean age of a panorama's camera frames when it is rendered (docs/guide/live.md).\n"
       "A camera that ends or fails is dropped and the map recompiled without it. Ctrl-C or SIGTERM stops "
       "cleanly and leaves playable videos.");
   struct Opts {
     std::string rig, method = "linear", projection = "vr180", size = "1080x1080", cache, sim_fps = "44-56";
     std::vector<std::string> sources, sinks;
-    double duration = 0, fps = 30, source_fps = 30, first_timeout = 10, min_weight = engine::MapOptions{}.min_weight;
-    double sim_jitter = engine::SimCameraOptions{}.jitter_ms, sim_loop = engine::SimCameraOptions{}.loop_s;
+    double duration = 0, fps = 30, source_fps = 30, first_timeout = 10, min_weight = render::MapOptions{}.min_weight;
+    double sim_jitter = live::SimCameraOptions{}.jitter_ms, sim_loop = live::SimCameraOptions{}.loop_s;
     long frames = 0;
-    int threads = 0, camera_threads = engine::EngineOptions{}.max_camera_threads,
-        max_streams = engine::SinkOptions{}.max_streams;
+    int threads = 0, camera_threads = live::EngineOptions{}.max_camera_threads,
+        max_streams = live::SinkOptions{}.max_streams;
     bool loop = false, json = false, no_cache = false, depth = false, no_photometric = false;
   };
   static Opts o;
@@ -115,12 +115,12 @@ void add_run_command(CLI::App& root) {
   cmd->callback([] {
     set_json_mode(o.json);
     const Rig rig = design::load_rig_or_builtin(o.rig);
-    engine::EngineOptions eo;
+    live::EngineOptions eo;
     eo.map.method = pano::parse_method(o.method);
     const Size2 size = parse_size(o.size);
     eo.map.grid = PanoGrid{parse_projection(o.projection), size.width, size.height};
     eo.map.min_weight = o.min_weight;
-    eo.cache_dir = o.no_cache ? std::filesystem::path() : (o.cache.empty() ? engine::default_cache_dir() : std::filesystem::path(o.cache));
+    eo.cache_dir = o.no_cache ? std::filesystem::path() : (o.cache.empty() ? render::default_cache_dir() : std::filesystem::path(o.cache));
     eo.duration_s = o.duration;
     eo.max_frames = o.frames;
     eo.fps = o.fps;
@@ -129,23 +129,23 @@ void add_run_command(CLI::App& root) {
     eo.photometric = !o.no_photometric;
     eo.first_frame_timeout_s = o.first_timeout;
     eo.max_camera_threads = o.camera_threads;
-    engine::SourceOptions so;
+    live::SourceOptions so;
     so.fps = o.source_fps;
     so.loop = o.loop;
     so.sim.jitter_ms = o.sim_jitter;
     so.sim.loop_s = o.sim_loop;
     so.sim.progress = !o.json && progress_enabled();
     parse_fps_range(o.sim_fps, &so.sim.fps_min, &so.sim.fps_max);
-    auto sources = engine::open_sources(rig, o.sources, so);
-    std::vector<std::unique_ptr<engine::Sink>> sinks;
-    engine::SinkOptions sk;
+    auto sources = live::open_sources(rig, o.sources, so);
+    std::vector<std::unique_ptr<live::Sink>> sinks;
+    live::SinkOptions sk;
     sk.fps = o.fps > 0 ? o.fps : 30;
     sk.max_streams = o.max_streams;
     sk.projection = eo.map.grid.projection;
     sk.spherical_metadata = true;  // 360-degree metadata in mp4 and png outputs
     try {
       for (const auto& s : o.sinks)
-        sinks.push_back(engine::open_sink(s, rig, cv::Size(size.width, size.height), sk));
+        sinks.push_back(live::open_sink(s, rig, cv::Size(size.width, size.height), sk));
     } catch (...) {
       for (auto& s : sinks) s->abort();
       throw;
@@ -169,7 +169,7 @@ void add_run_command(CLI::App& root) {
     // A file-size limit (ulimit -f) then fails a write like a full disk does, instead of killing
     // the process before it can clean up.
     std::signal(SIGXFSZ, SIG_IGN);
-    const engine::EngineStats st = engine::run_engine(rig, std::move(sources), sinks, eo);
+    const live::EngineSummary st = live::run_engine(rig, std::move(sources), sinks, eo);
     std::signal(SIGINT, SIG_DFL);
     std::signal(SIGTERM, SIG_DFL);
     if (show && tty) std::fprintf(stderr, "\n");

@@ -19,7 +19,7 @@
 #include "omma/core/grid.h"
 #include "omma/core/io.h"
 #include "omma/core/log.h"
-#include "omma/core/metadata.h"
+#include "omma/io/metadata.h"
 #include "omma/core/rig.h"
 #include "omma/isp/isp.h"
 #include "omma/isp/photometric.h"
@@ -200,7 +200,7 @@ void run_stitch(const StitchArgs& a) {
     coverage = pano::coverage_map(rig, grid, opt.blend.search, opt.depth);
   if (!a.single_camera.empty()) single = pano::single_camera_map(coverage);
 
-  write_panorama(a.out, to_u8(pano_img), grid);  // JPEG/PNG with the 360-degree XMP
+  io::write_panorama(a.out, to_u8(pano_img), grid);  // JPEG/PNG with the 360-degree XMP
   if (!a.boundary.empty()) {
     write_image(a.boundary, to_u8(boundary));
     write_image(
@@ -254,7 +254,7 @@ void add_stitch_command(CLI::App& root) {
   cmd->add_option("--projection", a.projection,
                   "equirect (360x90 deg, dome axis on the top row), vr180 (180x180 deg, dome axis at the "
                   "centre), equirect-full (360x180) or equirect-100 (360x100); never mirrored: turning right "
-                  "moves right in the image (README, Conventions)")
+                  "moves right in the image (docs/guide/conventions.md)")
       ->capture_default_str();
   cmd->add_option("--size", a.size,
                   "Panorama size WxH in pixels [default: 1080x1080 vr180, 1920x512 equirect]");

@@ -1,19 +1,21 @@
 // Engine benchmarks: map compile time, our renderer against OpenCV
 // cv::remap (peer A), cv::detail::MultiBandBlender (peer B) and the memcpy bandwidth bound, on the
 // thesis prototype rig with random-texture frames, at 1080x1080 vr180 and 1920x512 equirect.
-// `omma bench --json` runs the same workloads (omma/engine/bench.h) and prints fps.
+// `omma bench --json` runs the same workloads (omma/bench/bench.h) and prints fps.
 #include <benchmark/benchmark.h>
 
 #include <map>
 #include <memory>
 
 #include "omma/design/prototype.h"
-#include "omma/engine/bench.h"
-#include "omma/engine/synthetic.h"
+#include "omma/bench/bench.h"
+#include "omma/testing/synthetic.h"
 
 namespace {
 using namespace omma;
-using namespace omma::engine;
+using namespace omma::render;
+using namespace omma::bench;
+using omma::testing::random_frames;
 
 const Rig& rig() {
   static const Rig r = design::thesis_prototype_rig();
@@ -71,7 +73,7 @@ void BM_RenderKernel(benchmark::State& state) {
   for (size_t c = 0; c < frames().size(); ++c) store.set(int(c), frames()[c]);
   cv::Mat out;
   const RenderOptions ro{.threads = 1, .kernel = k, .prefetch = state.range(1) != 0};
-  for (auto _ : state) render(map, store, out, ro);
+  for (auto _ : state) render::render(map, store, out, ro);
   state.SetLabel(to_string(k) + (ro.prefetch ? " prefetch" : " no prefetch"));
   state.counters["fps"] = benchmark::Counter(double(state.iterations()), benchmark::Counter::kIsRate);
 }
@@ -83,7 +85,7 @@ BENCHMARK(BM_RenderKernel)
 // Storing a frame into the row-pair store (per camera frame; the live engine does it for every
 // new frame of every camera).
 void BM_FrameStoreSet(benchmark::State& state) {
-  FrameStore store(StoreLayout::for_rig(rig()));
+  FrameStore store(render::StoreLayout::for_rig(rig()));
   int c = 0;
   for (auto _ : state) {
     store.set(c, frames()[c]);

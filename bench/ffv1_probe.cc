@@ -1,6 +1,6 @@
 // Measures what FFV1 (lossless, FFmpeg's libavcodec) would cost for the recorder: encode speed and
 // compression ratio of 12-bit RGGB mosaics, stored as gray12le (the whole mosaic) or as four
-// half-size planes gbrap12le (G1, B, R, G2). Used to choose the container (README "Recording");
+// half-size planes gbrap12le (G1, B, R, G2). Used to choose the container (docs/results/giga_bench.md);
 // not part of the build: docs/results/giga_bench.sh compiles it with g++ and pkg-config.
 //   ffv1_probe RAW.png [RAW.png ...]   (16-bit single-channel mosaics, 12-bit values)
 #include <chrono>

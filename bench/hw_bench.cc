@@ -8,7 +8,7 @@
 #include "omma/design/prototype.h"
 #include "omma/hw/pipeline.h"
 #include "omma/pano/stitch.h"
-#include "omma/sim/test_scenes.h"
+#include "omma/testing/test_scenes.h"
 
 namespace {
 using namespace omma;
@@ -20,8 +20,8 @@ struct Fixture {
   std::vector<cv::Mat> frames;
   PanoGrid grid{Projection::kVr180, 1080, 1080};
   Fixture() {
-    const cv::Mat tex = sim::testing::photo_texture(std::string(OMMA_DATA_DIR) + "/louvre.jpg", 1440);
-    frames = sim::testing::render_frames_u8(rig, tex);
+    const cv::Mat tex = testing::photo_texture(std::string(OMMA_DATA_DIR) + "/louvre.jpg", 1440);
+    frames = testing::render_frames_u8(rig, tex);
   }
 };
 const Fixture& fixture() {

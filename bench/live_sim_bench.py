@@ -7,7 +7,7 @@ shows in its 360-degree viewer for the whole run (the realistic load: the browse
 every frame on the same machine). It polls /stats.json every second and checks the targets:
 
   every camera delivers >= 44 frames/s, the panorama keeps >= 25 fps, the mean age of the frames in
-  a panorama (the engine's `latency_ms`, README "Real-time engine") stays below 50 ms, and does not
+  a panorama (the engine's `latency_ms`, docs/guide/live.md) stays below 50 ms, and does not
   grow (last minute against the first).
 
     bench/live_sim_bench.py [--seconds 300] [--omma build/omma] [--out live_sim_bench.json]

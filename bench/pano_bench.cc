@@ -7,14 +7,14 @@
 
 #include "omma/core/progress.h"
 #include "omma/pano/stitch.h"
-#include "omma/sim/test_scenes.h"
+#include "omma/testing/test_scenes.h"
 
 namespace {
 using namespace omma;
 
 struct Fixture {
-  Rig rig = sim::testing::small_rig(250);
-  std::vector<cv::Mat> frames = sim::testing::render_frames(rig, sim::testing::smooth_texture());
+  Rig rig = testing::small_rig(250);
+  std::vector<cv::Mat> frames = testing::render_frames(rig, testing::smooth_texture());
   PanoGrid grid{Projection::kVr180, 540, 540};
 };
 const Fixture& fixture() {

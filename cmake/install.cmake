@@ -18,7 +18,7 @@ install(TARGETS omma_all EXPORT ommaTargets)
 
 install(TARGETS omma RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/src/omma DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}
-        FILES_MATCHING PATTERN "*.h")
+        FILES_MATCHING PATTERN "*.h" PATTERN "testing" EXCLUDE PATTERN "bench" EXCLUDE)
 install(FILES ${PROJECT_SOURCE_DIR}/LICENSE ${PROJECT_SOURCE_DIR}/CHANGELOG.md
         DESTINATION ${CMAKE_INSTALL_DATADIR}/doc/omma)
 
@@ -37,7 +37,7 @@ if(OMMA_MPI_ENABLED)
   string(APPEND OMMA_PC_REQUIRES " ompi-cxx")
 endif()
 set(OMMA_PC_LIBS "")
-foreach(stage dist hw engine calib pano sim isp design core)
+foreach(stage dist hw live io render calib pano sim isp design core)
   if(TARGET omma_${stage})
     string(APPEND OMMA_PC_LIBS " -lomma_${stage}")
   endif()

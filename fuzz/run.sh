@@ -19,7 +19,7 @@ out=build-fuzz
 flags=(-std=c++20 -O1 -g -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined -Isrc
        -isystem /usr/include/eigen3 -isystem /usr/include/opencv4)
 core=(src/omma/core/{rig,camera,geometry,io,limits,frames,checksum,photometric}.cc)
-libs=(-lfmt -lopencv_core -lopencv_imgproc -lopencv_imgcodecs -lz)
+libs=(-lfmt -lopencv_core -lopencv_imgproc -lopencv_imgcodecs -lz -lxxhash)
 mkdir -p "$out"
 
 seed_link() {
@@ -91,7 +91,7 @@ for t in "${targets[@]}"; do
     link) srcs=(src/omma/isp/link.cc); max_len=4096 ;;
     rig) srcs=("${core[@]}"); max_len=4096 ;;
     pto) srcs=(src/omma/calib/pto.cc "${core[@]}"); max_len=1024 ;;  # a few image lines: each is a lens fit
-    map) srcs=(src/omma/engine/map_file.cc "${core[@]}"); max_len=131072 ;;
+    map) srcs=(src/omma/render/map_file.cc "${core[@]}"); max_len=131072 ;;
     *) echo "fuzz: unknown target $t" >&2; exit 2 ;;
   esac
   echo "fuzz: building $t" >&2

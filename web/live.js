@@ -1,5 +1,5 @@
 // omma's live page: the panorama in a 360-degree viewer (Pannellum), fed by /stream.mjpg, and the
-// engine's stats line. Served by `omma run --sink http:PORT` (src/omma/engine/sinks.h).
+// engine's stats line. Served by `omma run --sink http:PORT` (src/omma/live/sinks.h).
 //
 // The MJPEG stream is read with fetch() and split at its parts (each has a Content-Length); every
 // JPEG is drawn into a canvas that Pannellum shows as dynamic content, re-uploaded once per new
@@ -125,7 +125,7 @@ async function main() {
   }
 }
 
-// The stats line: the engine's own figures (/stats.json; latency as defined in the README).
+// The stats line: the engine's own figures (/stats.json; latency as defined in docs/guide/live.md).
 setInterval(async () => {
   try {
     const j = await (await fetch('/stats.json', { cache: 'no-store' })).json();

@@ -10,16 +10,16 @@
 
 #include "arrays.h"
 #include "bindings.h"
-#include "omma/engine/compiled_map.h"
-#include "omma/engine/render.h"
+#include "omma/render/compiled_map.h"
+#include "omma/render/render.h"
 
 namespace omma::py {
 
 namespace {
 
-engine::Kernel parse_kernel(const std::string& name) {
-  for (auto k : {engine::Kernel::kAuto, engine::Kernel::kScalar, engine::Kernel::kAvx2, engine::Kernel::kAvx512Vnni})
-    if (engine::to_string(k) == name) return k;
+render::Kernel parse_kernel(const std::string& name) {
+  for (auto k : {render::Kernel::kAuto, render::Kernel::kScalar, render::Kernel::kAvx2, render::Kernel::kAvx512Vnni})
+    if (render::to_string(k) == name) return k;
   throw std::invalid_argument("unknown kernel '" + name + "' (use auto, scalar, avx2 or avx512-vnni)");
 }
 
@@ -41,8 +41,8 @@ class Engine {
     render_.kernel = parse_kernel(kernel);
     const std::string cache = cache_dir.is_none() ? std::string() : py::str(cache_dir).cast<std::string>();
     py::gil_scoped_release release;
-    load_ = engine::compile_map_cached(rig_, opt_, cache);
-    store_ = engine::FrameStore(load_.map.layout);
+    load_ = render::compile_map_cached(rig_, opt_, cache);
+    store_ = render::FrameStore(load_.map.layout);
   }
 
   // Copies the frames into the store (no Python objects touched: call without the GIL).
@@ -90,7 +90,7 @@ class Engine {
       std::lock_guard lock(mu_);
       if (!f.empty()) set_frames_locked(f);
       if (!have_frames_) throw std::invalid_argument("no frames yet: pass frames to render() or set_frames() first");
-      engine::render(load_.map, store_, target, render_);
+      render::render(load_.map, store_, target, render_);
     }
     if (target.data != data) throw std::logic_error("Engine.render: the output was reallocated");
     return result;
@@ -109,22 +109,22 @@ class Engine {
     const auto t0 = std::chrono::steady_clock::now();
     for (int i = 0; i < iterations; ++i) {
       if (!f.empty()) set_frames_locked(f);
-      engine::render(load_.map, store_, out, render_);
+      render::render(load_.map, store_, out, render_);
     }
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }
 
   const Rig& rig() const { return rig_; }
-  const engine::MapOptions& options() const { return opt_; }
-  const engine::MapLoad& load() const { return load_; }
-  const engine::RenderOptions& render_options() const { return render_; }
+  const render::MapOptions& options() const { return opt_; }
+  const render::MapLoad& load() const { return load_; }
+  const render::RenderOptions& render_options() const { return render_; }
 
  private:
   Rig rig_;
-  engine::MapOptions opt_;
-  engine::RenderOptions render_;
-  engine::MapLoad load_;
-  engine::FrameStore store_;
+  render::MapOptions opt_;
+  render::RenderOptions render_;
+  render::MapLoad load_;
+  render::FrameStore store_;
   bool have_frames_ = false;
   std::mutex mu_;
 };
@@ -166,7 +166,7 @@ void add_engine(py::module_& m) {
       })
       .def_property_readonly("kernel", [](const Engine& e) {
         const auto k = e.render_options().kernel;
-        return engine::to_string(k == engine::Kernel::kAuto || !engine::kernel_available(k) ? engine::best_kernel() : k);
+        return render::to_string(k == render::Kernel::kAuto || !render::kernel_available(k) ? render::best_kernel() : k);
       })
       .def("__repr__", [](const Engine& e) {
         return fmt::format("<omma.Engine {} {} {}x{}, {} cameras, {:.1f} B/px>", pano::to_string(e.options().method),

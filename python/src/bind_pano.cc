@@ -10,7 +10,7 @@
 #include "omma/core/frames.h"
 #include "omma/core/grid.h"
 #include "omma/core/io.h"
-#include "omma/core/metadata.h"
+#include "omma/io/metadata.h"
 #include "omma/pano/maps.h"
 #include "omma/pano/quality.h"
 #include "omma/pano/stitch.h"
@@ -125,15 +125,15 @@ void add_pano(py::module_& m) {
         spec.allow_bgra = true;
         const cv::Mat m = mat_from_array(image, "image", spec);
         if (projection.is_none()) return write_image(path, m);
-        write_panorama(path, m, PanoGrid{parse_projection(projection.cast<std::string>()), m.cols, m.rows});
+        io::write_panorama(path, m, PanoGrid{parse_projection(projection.cast<std::string>()), m.cols, m.rows});
       },
       py::arg("path"), py::arg("image"), py::arg("projection") = py::none(),
       "Writes an image atomically (format from the extension). With a projection (vr180, equirect,\n"
-      "equirect-full) a JPEG or PNG panorama carries the 360-degree GPano XMP (omma/core/metadata.h).");
+      "equirect-full) a JPEG or PNG panorama carries the 360-degree GPano XMP (omma/io/metadata.h).");
   m.def(
       "add_spherical_video_metadata",
       [](const std::filesystem::path& path, const std::string& projection, const py::object& size) {
-        add_spherical_video_metadata(path, grid_from(projection, size));
+        io::add_spherical_video_metadata(path, grid_from(projection, size));
       },
       py::arg("path"), py::arg("projection"), py::arg("size"),
       "Adds Spherical Video V2 metadata (st3d, sv3d) for a panorama video of this projection and size\n"

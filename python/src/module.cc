@@ -9,7 +9,7 @@
 #include "omma/core/log.h"
 #include "omma/core/progress.h"
 #include "omma/core/rig.h"
-#include "omma/engine/sinks.h"
+#include "omma/live/sinks.h"
 #include "omma/sim/scene.h"
 
 namespace omma::py {
@@ -67,7 +67,7 @@ void add_errors(py::module_& m) {
       PyErr_SetString(io_error, e.what());
     } catch (const sim::SceneError& e) {
       PyErr_SetString(scene_error, e.what());
-    } catch (const engine::SinkError& e) {
+    } catch (const live::SinkError& e) {
       PyErr_SetString(sink_error, e.what());
     } catch (const nlohmann::json::exception& e) {
       PyErr_SetString(PyExc_ValueError, e.what());

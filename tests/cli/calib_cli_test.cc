@@ -1,10 +1,10 @@
 // CLI tests for `omma calibrate`, `omma rig-diff` and `omma pto` (calibration, thesis §3.6).
-// Frames come from the small far-field renderer of src/omma/sim/test_scenes.h.
+// Frames come from the small far-field renderer of src/omma/testing/test_scenes.h.
 #include <fstream>
 
 #include <gtest/gtest.h>
 
-#include "omma/sim/test_scenes.h"
+#include "omma/testing/test_scenes.h"
 #include "omma/core/frames.h"
 #include "tests/cli/cli_util.h"
 
@@ -78,7 +78,7 @@ TEST(CalibCli, CalibrateThenRigDiffMeetsTargets) {
 
 TEST(CalibCli, TexturelessFramesFailWithoutOutput) {
   const fs::path dir = temp_dir("calib-flat");
-  const Rig nominal = sim::testing::test_dome();
+  const Rig nominal = testing::test_dome();
   save_rig(nominal, dir / "rig.json");
   fs::create_directories(dir / "frames");
   for (const auto& c : nominal.cameras)
@@ -100,7 +100,7 @@ TEST(CalibCli, TexturelessFramesFailWithoutOutput) {
 
 TEST(CalibCli, PtoExportImportRoundTripAndBadInput) {
   const fs::path dir = temp_dir("calib-pto");
-  const Rig truth = sim::testing::perturb(sim::testing::test_dome(), {}, 3);
+  const Rig truth = testing::perturb(testing::test_dome(), {}, 3);
   save_rig(truth, dir / "rig.json");
   const RunResult e = run_omma("pto export " + (dir / "rig.json").string() + " " + (dir / "rig.pto").string() + " --json");
   ASSERT_EQ(e.exit_code, 0) << e.err;

@@ -7,7 +7,7 @@
 #include <sstream>
 #include <sys/wait.h>
 
-#include "omma/sim/test_scenes.h"
+#include "omma/testing/test_scenes.h"
 
 namespace omma::test {
 namespace fs = std::filesystem;
@@ -42,11 +42,11 @@ std::string data_dir() { return OMMA_DATA_DIR; }
 
 fs::path louvre_frames_folder(const std::string& tag) {
   const fs::path dir = temp_dir(tag);
-  const Rig rig = sim::testing::small_rig(64);
-  const cv::Mat tex = sim::testing::photo_texture(data_dir() + "/louvre.jpg", 360);
+  const Rig rig = testing::small_rig(64);
+  const cv::Mat tex = testing::photo_texture(data_dir() + "/louvre.jpg", 360);
   const PanoGrid grid{Projection::kVr180, 128, 128};
-  sim::testing::write_frames_folder(dir, rig, sim::testing::render_frames(rig, tex),
-                                     sim::testing::render_truth(grid, tex));
+  testing::write_frames_folder(dir, rig, testing::render_frames(rig, tex),
+                                     testing::render_truth(grid, tex));
   return dir;
 }
 

@@ -27,7 +27,7 @@ std::filesystem::path temp_dir(const std::string& tag);
 std::string data_dir();  // ../shared/data beside the source tree
 
 // A fresh folder (temp_dir(tag)) with rig.json, cam_XX.png (the 15-camera test rig of 64 px cameras
-// on a 5 mm dome, sim/test_scenes.h) and truth.png (vr180 128x128) of the far-field louvre.jpg.
+// on a 5 mm dome, testing/test_scenes.h) and truth.png (vr180 128x128) of the far-field louvre.jpg.
 std::filesystem::path louvre_frames_folder(const std::string& tag);
 
 // `omma eval --pano PANO --truth TRUTH --json`: its PSNR (dB); a failing eval fails the test.

@@ -6,7 +6,7 @@
 #include <fstream>
 
 #include "omma/design/prototype.h"
-#include "omma/sim/test_scenes.h"
+#include "omma/testing/test_scenes.h"
 #include "tests/cli/cli_util.h"
 
 namespace omma::test {
@@ -17,8 +17,8 @@ namespace fs = std::filesystem;
 fs::path make_scene(const std::string& tag) {
   const fs::path dir = temp_dir(tag);
   const Rig rig = design::thesis_prototype_rig();
-  const cv::Mat tex = sim::testing::photo_texture(data_dir() + "/louvre.jpg", 1440);
-  sim::testing::write_frames_folder(dir, rig, sim::testing::render_frames(rig, tex));
+  const cv::Mat tex = testing::photo_texture(data_dir() + "/louvre.jpg", 1440);
+  testing::write_frames_folder(dir, rig, testing::render_frames(rig, tex));
   return dir;
 }
 

@@ -1,6 +1,6 @@
 // 360-degree metadata of omma's outputs as outside tools read it: exiftool
 // (Debian libimage-exiftool-perl) on `omma stitch` JPEG/PNG panoramas, ffprobe (Debian ffmpeg) on
-// `omma run` MP4 videos. Layout facts: omma/core/metadata.h.
+// `omma run` MP4 videos. Layout facts: omma/io/metadata.h.
 #include <cstdio>
 #include <filesystem>
 #include <memory>

@@ -5,7 +5,7 @@
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
 
-#include "omma/sim/test_scenes.h"
+#include "omma/testing/test_scenes.h"
 #include "tests/cli/cli_util.h"
 
 namespace omma::test {

@@ -5,7 +5,7 @@
 #include <filesystem>
 
 #include "omma/core/rig.h"
-#include "omma/sim/test_scenes.h"
+#include "omma/testing/test_scenes.h"
 #include "tests/cli/cli_util.h"
 
 namespace omma::test {
@@ -14,7 +14,7 @@ namespace fs = std::filesystem;
 
 TEST(RawStitchCli, IspDevelopedFramesMatchTheRgbPath) {
   const fs::path d = temp_dir("rawstitch");
-  save_rig(sim::testing::small_rig(64), d / "rig.json");
+  save_rig(testing::small_rig(64), d / "rig.json");
   const RunResult sim = run_omma("simulate --rig " + (d / "rig.json").string() + " --scene photo:" + data_dir() +
                                  "/louvre.jpg --raw --color-gain 0 --truth-size 128x128 --out " +
                                  (d / "f").string());

@@ -12,7 +12,7 @@
 #include <gtest/gtest.h>
 
 #include "omma/design/prototype.h"
-#include "omma/engine/recording.h"
+#include "omma/io/recording.h"
 #include "tests/cli/cli_util.h"
 
 namespace omma::test {
@@ -32,10 +32,10 @@ class RenderMpi : public ::testing::Test {
     dir_ = new fs::path(temp_dir("render-mpi"));
     Rig rig = *design::builtin_rig("gigaeye-44-skip5");
     rig.cameras.resize(12);
-    engine::RecordingManifest m;
+    io::RecordingManifest m;
     m.rig = rig;
     m.fps = 10;
-    engine::RecordingWriter w(rec(), m);
+    io::RecordingWriter w(rec(), m);
     for (int s = 0; s < kSets; ++s)
       for (int c = 0; c < 12; ++c) {
         cv::Mat raw(rig.cameras[c].in.height, rig.cameras[c].in.width, CV_16UC1);

@@ -17,7 +17,7 @@ import time
 RTL = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 # The frame memories (24 x 62,500 x 16 bit, four read ports) are not synthesized: their block RAM is
-# counted in the README (Yosys takes very long over 24 Mbit and would only replicate the arrays).
+# counted in docs/results/rtl_synth.md (Yosys takes very long over 24 Mbit and would only replicate the arrays).
 FRONT = ["common/ram_sdp.sv", "frontend/link_deser.sv", "frontend/bayer_store.sv",
          "frontend/demosaic_bilinear.sv", "frontend/single_cam_top.sv"]
 PIPE = ["GEN/omma_hw_pkg.sv", "pipeline/omma_arith_pkg.sv", "common/ram_sdp.sv", "pipeline/config_regs.sv",

@@ -23,7 +23,7 @@
 #include "omma/hw/pipeline.h"
 #include "omma/hw/regmap.h"
 #include "omma/isp/link.h"
-#include "omma/sim/test_scenes.h"
+#include "omma/testing/test_scenes.h"
 #include "omma/sim/scene.h"
 #include "omma/sim/simulate.h"
 #include "verilated.h"
@@ -50,8 +50,8 @@ inline const std::vector<cv::Mat>& colon_frames() {
 
 inline const std::vector<cv::Mat>& louvre_frames() {
   static const std::vector<cv::Mat> frames = [] {
-    return sim::testing::render_frames_u8(
-        rig24(), sim::testing::photo_texture(std::string(OMMA_DATA_DIR) + "/louvre.jpg", 1440));
+    return testing::render_frames_u8(
+        rig24(), testing::photo_texture(std::string(OMMA_DATA_DIR) + "/louvre.jpg", 1440));
   }();
   return frames;
 }

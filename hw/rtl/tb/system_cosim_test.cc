@@ -35,12 +35,12 @@ TEST(RtlSystem, SerialLinksToPanoramaMatchIspAndModelBitForBit) {
   link.width = link.height = 40;
   // raw frames: the Louvre seen by each camera, mosaicked RGGB, 10 bits (8-bit render << 2 plus
   // random low bits)
-  const cv::Mat tex = sim::testing::photo_texture(std::string(OMMA_DATA_DIR) + "/louvre.jpg", 720);
+  const cv::Mat tex = testing::photo_texture(std::string(OMMA_DATA_DIR) + "/louvre.jpg", 720);
   std::mt19937 rng(5);
   std::vector<isp::ChipStream> streams;
   std::vector<cv::Mat> frames;  // what the model sees
   long damaged = 0;
-  for (const cv::Mat& f : sim::testing::render_frames(rig, tex)) {
+  for (const cv::Mat& f : testing::render_frames(rig, tex)) {
     cv::Mat bgr16;
     to_u8(f).convertTo(bgr16, CV_16UC3, 4.0);
     const cv::Mat raw = isp::mosaic_rggb(bgr16);

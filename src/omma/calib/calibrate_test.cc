@@ -12,7 +12,7 @@
 
 #include "omma/calib/photometric.h"
 #include "omma/calib/rig_diff.h"
-#include "omma/sim/test_scenes.h"
+#include "omma/testing/test_scenes.h"
 #include "omma/design/prototype.h"
 #include "omma/pano/quality.h"
 #include "omma/pano/stitch.h"
@@ -21,7 +21,6 @@
 
 namespace omma::calib {
 namespace {
-namespace testing = ::omma::sim::testing;  // the small exact renderers (sim/test_scenes.h)
 
 const PanoGrid kGrid{Projection::kEquirect, 720, 180};
 const char* kPerturb = "orient=2,focal=0.03,center=5,k1=0.05";  // the assumed manufacturing errors
@@ -151,7 +150,7 @@ TEST(Calibrate, ColonNearFieldCalibration) {
 // The thesis's calibration (§3.6): several shots of the static, well-lit 35 mm calibration tube,
 // averaged, flat-fielded with shots of a white target, wall points constrained to the tube
 // (CalibrationOptions::tube_diameter_mm). The full figures (8 shots, three seeds: every accuracy
-// target met) come from docs/results/tube_calibration.sh (README); this test keeps CI shorter
+// target met) come from docs/results/tube_calibration.sh (docs/results/tube_calibration.md); this test keeps CI shorter
 // (~30 s of CPU) with 2 shots, one dense round and SIFT without upsampling. Measured (seed 1):
 // orientation median 0.19 deg (max 0.30), focal 0.33 % (max 0.61), centre 0.59 px, RMS 0.058 px
 // (with SIFT upsampled: 0.16 / 0.33 deg at 42 s; 8 shots, full settings: 0.089 / 0.165 deg).
@@ -184,7 +183,7 @@ TEST(Calibrate, CalibrationTubeFewShots) {
               d.focal_error_rel.median, d.focal_error_rel.max, d.center_error_px.median, r.rms_px, r.tracks);
   EXPECT_TRUE(r.uncalibrated_ids.empty());
   // Measured 0.158 deg (max 0.260), 0.32 %, 0.55 px (0.19 / 0.30 deg with the tube's tilt estimated).
-  EXPECT_LT(d.orientation_error_deg.median, 0.25);  // target 0.1 with 8 shots (met there, README)
+  EXPECT_LT(d.orientation_error_deg.median, 0.25);  // target 0.1 with 8 shots (met there: docs/results/tube_calibration.md)
   EXPECT_LT(d.orientation_error_deg.max, 0.45);     // target 0.3 with 8 shots
   EXPECT_LT(d.focal_error_rel.median, 0.005);
   EXPECT_LT(d.center_error_px.median, 1.0);

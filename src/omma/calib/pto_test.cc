@@ -13,7 +13,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "omma/calib/rig_diff.h"
-#include "omma/sim/test_scenes.h"
+#include "omma/testing/test_scenes.h"
 #include "omma/core/frames.h"
 #include "omma/calib/photometric.h"
 #include "omma/core/srgb.h"
@@ -22,7 +22,6 @@
 
 namespace omma::calib {
 namespace {
-namespace testing = ::omma::sim::testing;  // the small exact renderers (sim/test_scenes.h)
 namespace fs = std::filesystem;
 
 std::string strip_omma_comments(const std::string& text) {
@@ -186,7 +185,7 @@ TEST(Pto, MalformedAndTruncatedProjectsAreRefused) {
 // world the right way round, conventions.h (G1), pto.h), agrees with the reference stitcher's
 // nearest-neighbour panorama (omma stitch --method nn) on the covered region, and its mirror image
 // does not (so the test tells the two handednesses apart). Frames: the small far-field renderer of
-// sim/test_scenes.h with a perturbed rig (shifted centres, k1, focal, rotations) so that every
+// testing/test_scenes.h with a perturbed rig (shifted centres, k1, focal, rotations) so that every
 // converted parameter matters.
 TEST(Pto, NonaRendersOurExportLikeOurNearestNeighbourStitch) {
   if (std::system("which nona >/dev/null 2>&1") != 0) GTEST_SKIP() << "nona (hugin-tools) not installed";

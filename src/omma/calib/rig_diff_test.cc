@@ -3,11 +3,10 @@
 
 #include <gtest/gtest.h>
 
-#include "omma/sim/test_scenes.h"
+#include "omma/testing/test_scenes.h"
 
 namespace omma::calib {
 namespace {
-namespace testing = ::omma::sim::testing;  // the small exact renderers (sim/test_scenes.h)
 
 RigCamera rotated(RigCamera c, const Vec3& axis_camera, double angle_rad) {
   // Rotation about an axis given in the camera's own frame (t, u, v coordinates).

@@ -60,7 +60,7 @@ namespace omma {
 inline constexpr double kPi = 3.14159265358979323846;
 
 // Version of the panorama grid convention above, part of every cache key that depends on it (map
-// files, engine/compiled_map.h): 1 = the mirrored grids of omma 0.1 (phi grew to the right, vr180's
+// files, render/compiled_map.h): 1 = the mirrored grids of omma 0.1 (phi grew to the right, vr180's
 // right was +x); 2 = (G1)/(G2), the world the right way round.
 inline constexpr int kGridConvention = 2;
 constexpr double deg2rad(double deg) { return deg * kPi / 180.0; }

@@ -13,14 +13,14 @@ namespace omma {
 inline constexpr int kMaxImageSide = 16384;
 inline constexpr std::int64_t kMaxImagePixels = std::int64_t(1) << 28;
 
-// Panoramas rendered band by band (`omma render`, engine/pano_render.h: the Giga-Eye's 17700 x 4650)
+// Panoramas rendered band by band (`omma render`, render/pano_render.h: the Giga-Eye's 17700 x 4650)
 // may be larger: at most 65536 pixels a side and 2^30 pixels in all, while each band (a map's
 // window, as wide as the panorama) holds at most kMaxImagePixels; 2^30 keeps every pixel index of the whole panorama
 // in a signed 32-bit int.
 inline constexpr int kMaxBandedSide = 65536;
 inline constexpr std::int64_t kMaxBandedPixels = std::int64_t(1) << 30;
 
-// Cameras per rig. The compiled map (engine/compiled_map.h) addresses the frame store with 32-bit
+// Cameras per rig. The compiled map (render/compiled_map.h) addresses the frame store with 32-bit
 // offsets in units of 2 bytes, i.e. at most 8 GiB of store: 6 bytes per pixel (row pairs) times the
 // widest camera's width times the sum of the heights, e.g. 22 906 cameras of 250 x 250, or 44 of the
 // Giga-Eye's 2592 x 1944 in 1.3 GiB; the live engine runs one thread per camera. 4096 bounds both the

@@ -10,6 +10,7 @@
 #include <csignal>
 #include <cstring>
 #include <deque>
+#include <functional>
 #include <fstream>
 #include <map>
 #include <mutex>
@@ -23,7 +24,7 @@
 #include "omma/core/io.h"
 #include "omma/core/log.h"
 #include "omma/core/progress.h"
-#include "omma/dist/checksum.h"
+#include "omma/core/checksum.h"
 #include "omma/dist/worker_thread.h"
 
 namespace omma::dist {
@@ -360,71 +361,65 @@ void check_all_ranks(Comm& comm, const std::string& my_error, const std::string&
   broadcast_verdict(comm, msg);
 }
 
-RunSummary run_job(Comm& comm, Job& job, const RunOptions& options) {
-  const auto t_start = Clock::now();
-  const int rank = comm.rank(), size = comm.size();
-  const bool root = rank == 0;
-  const std::string host = comm.host();
-  RunSummary sum;
-  sum.ranks = size;
-  sum.mpi = comm.is_mpi();
-  sum.rank0 = size == 1 ? Rank0::kWorks : options.rank0;
-  const fs::path jpath = journal_path(options.manifest);
+namespace {
 
-  // Phase 1, rank 0: options, ranks against items, output folders, setup, the earlier run's records.
-  std::string error;
-  json params;
-  std::map<int64_t, ItemRecord> previous;  // item -> the earlier run's record of its output
-  if (root) {
-    bool own = false;  // the runner's own checks need no rank name
-    try {
-      if (std::string why; !options.IsValid(&why)) throw std::invalid_argument(why);
-      job.open();
-      const int64_t n = job.items();
-      if (n < 1) throw std::invalid_argument("there is nothing to make (0 items)");
-      const int workers = size - (sum.rank0 == Rank0::kServes ? 1 : 0);
-      own = workers > n;
-      if (own)
-        throw std::invalid_argument(fmt::format(
-            "{} ranks{} for {} {}: start at most {} (mpirun -np {})", size,
-            sum.rank0 == Rank0::kServes ? " (rank 0 only serves)" : "", n, options.label,
-            n + (sum.rank0 == Rank0::kServes ? 1 : 0), n + (sum.rank0 == Rank0::kServes ? 1 : 0)));
-      for (const auto& d : output_folders(job, options.manifest)) check_writable(d, rank);
-      job.setup();
-      params = job.parameters();
-      if (options.resume) {
-        auto by_path = previous_records(options.manifest, params);
-        for (int64_t i = 0; i < n && !by_path.empty(); ++i) {
-          const auto it = by_path.find(job.output(i).string());
-          if (it == by_path.end()) continue;
-          it->second.item = i;
-          previous[i] = it->second;
-        }
+// Phase 1, rank 0: options, ranks against items, output folders, set-up, the earlier run's records
+// (item -> its record) when resuming. Returns the error ("" if none), named by rank where needed.
+std::string prepare_root(Comm& comm, Job& job, const RunOptions& options, const RunSummary& sum, json& params,
+                         std::map<int64_t, ItemRecord>& previous) {
+  const int size = comm.size();
+  bool own = false;  // the runner's own checks need no rank name
+  try {
+    if (std::string why; !options.IsValid(&why)) throw std::invalid_argument(why);
+    job.open();
+    const int64_t n = job.items();
+    if (n < 1) throw std::invalid_argument("there is nothing to make (0 items)");
+    const int workers = size - (sum.rank0 == Rank0::kServes ? 1 : 0);
+    own = workers > n;
+    if (own)
+      throw std::invalid_argument(fmt::format(
+          "{} ranks{} for {} {}: start at most {} (mpirun -np {})", size,
+          sum.rank0 == Rank0::kServes ? " (rank 0 only serves)" : "", n, options.label,
+          n + (sum.rank0 == Rank0::kServes ? 1 : 0), n + (sum.rank0 == Rank0::kServes ? 1 : 0)));
+    for (const auto& d : output_folders(job, options.manifest)) check_writable(d, 0);
+    job.setup();
+    params = job.parameters();
+    if (options.resume) {
+      auto by_path = previous_records(options.manifest, params);
+      for (int64_t i = 0; i < n && !by_path.empty(); ++i) {
+        const auto it = by_path.find(job.output(i).string());
+        if (it == by_path.end()) continue;
+        it->second.item = i;
+        previous[i] = it->second;
       }
-    } catch (const std::exception& e) {
-      error = size > 1 && !own ? fmt::format("rank 0 ({}): {}", host, e.what()) : e.what();
     }
+  } catch (const std::exception& e) {
+    return size > 1 && !own ? fmt::format("rank 0 ({}): {}", comm.host(), e.what()) : e.what();
   }
-  broadcast_verdict(comm, error);
+  return "";
+}
 
-  // Phase 2, the other ranks: setup, output folders.
-  error.clear();
-  if (!root) {
-    try {
-      job.open();
-      for (const auto& d : output_folders(job, options.manifest)) check_writable(d, rank);
-      job.setup();
-    } catch (const std::exception& e) {
-      error = e.what();
-    }
+// Phase 2, the other ranks: set-up, output folders. Returns the error ("" if none).
+std::string prepare_worker(Comm& comm, Job& job, const RunOptions& options) {
+  try {
+    job.open();
+    for (const auto& d : output_folders(job, options.manifest)) check_writable(d, comm.rank());
+    job.setup();
+  } catch (const std::exception& e) {
+    return e.what();
   }
-  check_all_ranks(comm, error, "");
+  return "";
+}
 
-  // Phase 3, every rank: verify a share of the earlier run's outputs (every size-th).
+// Phase 3, every rank: verifies its share (every size-th) of the earlier run's outputs; rank 0
+// gets every rank's list of verified items (JSON arrays).
+std::vector<std::string> verify_previous(Comm& comm, Job& job, const RunOptions& options,
+                                         const std::map<int64_t, ItemRecord>& previous) {
+  const int rank = comm.rank(), size = comm.size();
   json to_check = json::array();
-  if (root)
+  if (rank == 0)
     for (const auto& [i, r] : previous) to_check.push_back(r.to_json());
-  to_check = json::parse(comm.broadcast(root ? to_check.dump() : std::string()));
+  to_check = json::parse(comm.broadcast(rank == 0 ? to_check.dump() : std::string()));
   json verified = json::array();
   for (size_t k = rank; k < to_check.size(); k += size) {
     const ItemRecord r = ItemRecord::from_json(to_check[k]);
@@ -436,18 +431,109 @@ RunSummary run_job(Comm& comm, Job& job, const RunOptions& options) {
     } catch (const std::exception&) {
     }
   }
-  const auto all_verified = comm.gather(verified.dump());
+  return comm.gather(verified.dump());
+}
 
-  if (!root) {
-    // Worker: ask for items until told to stop; report each result with the next request.
-    std::string report = "null";
-    for (;;) {
-      comm.send(0, kTagRequest, report);
-      const Message m = comm.recv();
-      const int64_t item = json::parse(m.data).get<int64_t>();
-      if (item < 0) break;
-      report = result_to_json(run_one(job, item, rank, host)).dump();
+// A worker rank: asks for items until told to stop; reports each result with the next request.
+void work(Comm& comm, Job& job) {
+  std::string report = "null";
+  for (;;) {
+    comm.send(0, kTagRequest, report);
+    const Message m = comm.recv();
+    const int64_t item = json::parse(m.data).get<int64_t>();
+    if (item < 0) break;
+    report = result_to_json(run_one(job, item, comm.rank(), comm.host())).dump();
+  }
+}
+
+// Temporaries of interrupted writes (killed ranks) beside the outputs: one listing per output folder.
+void remove_stale_temporaries(Job& job, int64_t items) {
+  std::map<fs::path, std::set<std::string>> names;  // folder -> output file names
+  for (int64_t i = 0; i < items; ++i) {
+    const fs::path p = job.output(i);
+    names[p.has_parent_path() ? p.parent_path() : fs::path(".")].insert(p.filename().string());
+  }
+  for (const auto& [dir, outs] : names)
+    for (const auto& e : fs::directory_iterator(dir)) {
+      const std::string name = e.path().filename().string();
+      const auto at = name.rfind(".tmp");
+      if (at == std::string::npos) continue;
+      // The output a temporary would belong to: "NAME.tmpN" -> NAME; ".STEM.tmpN.EXT" -> STEM.EXT.
+      std::vector<std::string> owners{name.substr(0, at)};
+      if (name[0] == '.') {
+        const auto dot = name.find('.', at + 4);
+        owners.push_back(name.substr(1, at - 1) + (dot == std::string::npos ? "" : name.substr(dot)));
+      }
+      for (const auto& o : owners)
+        if (outs.count(o) && is_temporary_of(e.path(), dir / o)) {
+          spdlog::info("removing {} (left by an interrupted write)", e.path().string());
+          fs::remove(e.path());
+          break;
+        }
     }
+}
+
+// Rank 0 serves the items in `todo` to the workers (and works on them itself with kWorks) until
+// every worker is told to stop; `accept` takes each result with the rank that made it.
+void serve(Comm& comm, Job& job, Rank0 rank0, std::deque<int64_t>& todo,
+           const std::function<void(const ItemResult&, int)>& accept) {
+  std::optional<WorkerThread<ItemResult>> local;
+  if (rank0 == Rank0::kWorks) {
+    local.emplace([&job, host = comm.host()](int64_t item) { return run_one(job, item, 0, host); });
+    if (!todo.empty()) {
+      local->assign(todo.front());
+      todo.pop_front();
+    }
+  }
+  int remote = comm.size() - 1;  // workers not yet told to stop
+  while (remote > 0 || (local && local->busy())) {
+    if (local && local->busy()) {
+      if (auto r = local->wait_result(remote > 0 ? std::chrono::microseconds(500) : std::chrono::hours(1))) {
+        accept(*r, 0);
+        if (!todo.empty()) {
+          local->assign(todo.front());
+          todo.pop_front();
+        }
+      }
+    }
+    if (remote > 0) {
+      if (auto m = comm.try_recv()) {
+        const json report = json::parse(m->data);
+        if (!report.is_null()) accept(result_from_json(report), m->source);
+        int64_t next = -1;
+        if (!todo.empty()) {
+          next = todo.front();
+          todo.pop_front();
+        } else {
+          --remote;
+        }
+        comm.send(m->source, kTagAssign, json(next).dump());
+      } else if (!(local && local->busy())) {
+        std::this_thread::sleep_for(std::chrono::microseconds(500));
+      }
+    }
+  }
+}
+
+}  // namespace
+
+RunSummary run_job(Comm& comm, Job& job, const RunOptions& options) {
+  const auto t_start = Clock::now();
+  const int size = comm.size();
+  const bool root = comm.rank() == 0;
+  RunSummary sum;
+  sum.ranks = size;
+  sum.mpi = comm.is_mpi();
+  sum.rank0 = size == 1 ? Rank0::kWorks : options.rank0;
+  const fs::path jpath = journal_path(options.manifest);
+
+  json params;
+  std::map<int64_t, ItemRecord> previous;  // item -> the earlier run's record of its output
+  broadcast_verdict(comm, root ? prepare_root(comm, job, options, sum, params, previous) : "");
+  check_all_ranks(comm, root ? "" : prepare_worker(comm, job, options), "");
+  const auto all_verified = verify_previous(comm, job, options, previous);
+  if (!root) {
+    work(comm, job);
     broadcast_verdict(comm, "");
     sum.seconds = since(t_start);
     return sum;
@@ -474,30 +560,7 @@ RunSummary run_job(Comm& comm, Job& job, const RunOptions& options) {
   std::string failure;
   Journal journal;
   try {
-    // Temporaries of interrupted writes (killed ranks): one listing per output folder.
-    std::map<fs::path, std::set<std::string>> names;  // folder -> output file names
-    for (int64_t i = 0; i < sum.items; ++i) {
-      const fs::path p = job.output(i);
-      names[p.has_parent_path() ? p.parent_path() : fs::path(".")].insert(p.filename().string());
-    }
-    for (const auto& [dir, outs] : names)
-      for (const auto& e : fs::directory_iterator(dir)) {
-        const std::string name = e.path().filename().string();
-        const auto at = name.rfind(".tmp");
-        if (at == std::string::npos) continue;
-        // The output a temporary would belong to: "NAME.tmpN" -> NAME; ".STEM.tmpN.EXT" -> STEM.EXT.
-        std::vector<std::string> owners{name.substr(0, at)};
-        if (name[0] == '.') {
-          const auto dot = name.find('.', at + 4);
-          owners.push_back(name.substr(1, at - 1) + (dot == std::string::npos ? "" : name.substr(dot)));
-        }
-        for (const auto& o : owners)
-          if (outs.count(o) && is_temporary_of(e.path(), dir / o)) {
-            spdlog::info("removing {} (left by an interrupted write)", e.path().string());
-            fs::remove(e.path());
-            break;
-          }
-      }
+    remove_stale_temporaries(job, sum.items);
     journal.open(jpath, params);
     for (const auto& r : records)
       if (r) journal.append(r->to_json());
@@ -510,7 +573,7 @@ RunSummary run_job(Comm& comm, Job& job, const RunOptions& options) {
   sum.setup_seconds = since(t_start);
 
   Progress progress(options.label, todo.size(), options.progress && !todo.empty());
-  auto accept = [&](const ItemResult& res, int from) {
+  serve(comm, job, sum.rank0, todo, [&](const ItemResult& res, int from) {
     if (!res.error.empty()) {
       if (failure.empty())
         failure = fmt::format("{}{}: {}", size > 1 ? fmt::format("rank {} ({}), ", from, res.host) : "",
@@ -526,45 +589,7 @@ RunSummary run_job(Comm& comm, Job& job, const RunOptions& options) {
     }
     records[res.item] = *res.record;
     progress.step();
-  };
-  {
-    std::optional<WorkerThread<ItemResult>> local;
-    if (sum.rank0 == Rank0::kWorks) {
-      local.emplace([&job, &host](int64_t item) { return run_one(job, item, 0, host); });
-      if (!todo.empty()) {
-        local->assign(todo.front());
-        todo.pop_front();
-      }
-    }
-    int remote = size - 1;  // workers not yet told to stop
-    while (remote > 0 || (local && local->busy())) {
-      if (local && local->busy()) {
-        if (auto r = local->wait_result(remote > 0 ? std::chrono::microseconds(500) : std::chrono::hours(1))) {
-          accept(*r, 0);
-          if (!todo.empty()) {
-            local->assign(todo.front());
-            todo.pop_front();
-          }
-        }
-      }
-      if (remote > 0) {
-        if (auto m = comm.try_recv()) {
-          const json report = json::parse(m->data);
-          if (!report.is_null()) accept(result_from_json(report), m->source);
-          int64_t next = -1;
-          if (!todo.empty()) {
-            next = todo.front();
-            todo.pop_front();
-          } else {
-            --remote;
-          }
-          comm.send(m->source, kTagAssign, json(next).dump());
-        } else if (!(local && local->busy())) {
-          std::this_thread::sleep_for(std::chrono::microseconds(500));
-        }
-      }
-    }
-  }
+  });
   progress.finish();
 
   sum.seconds = since(t_start);

@@ -3,7 +3,7 @@
 //
 // Scheduling: dynamic. Rank 0 hands out items in order, one at a time, as ranks ask for work (items
 // differ in cost: frame sets with more cameras, slower files); by default rank 0 also works, on a
-// second thread, while its main thread serves the others (RunOptions::rank0; README "Rendering on
+// second thread, while its main thread serves the others (RunOptions::rank0; docs/results/mpi_bench.md "Rendering on
 // a cluster" has the measurement).
 //
 // Outputs: each item writes its output under its final name atomically (temporary name, rename:

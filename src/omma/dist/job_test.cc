@@ -11,7 +11,7 @@
 #include <gtest/gtest.h>
 
 #include "omma/core/io.h"
-#include "omma/dist/checksum.h"
+#include "omma/core/checksum.h"
 
 namespace omma::dist {
 namespace {

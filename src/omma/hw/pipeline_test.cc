@@ -15,7 +15,7 @@
 #include "omma/pano/maps.h"
 #include "omma/pano/quality.h"
 #include "omma/pano/stitch.h"
-#include "omma/sim/test_scenes.h"
+#include "omma/testing/test_scenes.h"
 #include "omma/sim/simulate.h"
 #include "omma/sim/render.h"
 #include "omma/core/photometric.h"
@@ -33,8 +33,8 @@ const Rig& rig24() {
 
 const std::vector<cv::Mat>& louvre_frames() {
   static const std::vector<cv::Mat> frames = [] {
-    return sim::testing::render_frames_u8(
-        rig24(), sim::testing::photo_texture(std::string(OMMA_DATA_DIR) + "/louvre.jpg", 1440));
+    return testing::render_frames_u8(
+        rig24(), testing::photo_texture(std::string(OMMA_DATA_DIR) + "/louvre.jpg", 1440));
   }();
   return frames;
 }

@@ -12,7 +12,7 @@
 // D = +infinity (s = 0) gives w_i = w: exactly the thesis's model, bit for bit (the code takes w
 // itself). In camera i's frame (t, u, v), with b = q - c_i:
 //     x = (w.u + s b.u) / (w.t + s b.t),   y = (w.v + s b.v) / (w.t + s b.t)        (eq. 2.4, 5.21)
-// which is what the engine's depth-adaptive renderer evaluates per tap (engine/depth_render.h).
+// which is what the engine's depth-adaptive renderer evaluates per tap (render/depth_render.h).
 // The weights keep the thesis's orthographic distance |r_i| (eq. 2.5): the distance of camera i's
 // centre from the observer's ray q + t w, which does not depend on D (how far camera i's viewpoint
 // is from the observer's, i.e. how much parallax it adds where D is wrong).

@@ -19,7 +19,7 @@
 #include "omma/pano/stitch.h"
 #include "omma/pano/surface.h"
 #include "omma/pano/sweep.h"
-#include "omma/sim/test_scenes.h"
+#include "omma/testing/test_scenes.h"
 #include "omma/sim/simulate.h"
 
 namespace omma::pano {
@@ -28,9 +28,9 @@ namespace {
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
 TEST(PanoSurface, InfinityIsTheThesisModelExactly) {
-  const Rig rig = sim::testing::small_rig(64);
+  const Rig rig = testing::small_rig(64);
   const PanoGrid grid{Projection::kVr180, 96, 96};
-  const auto frames = sim::testing::render_frames(rig, sim::testing::smooth_texture(), sim::testing::NearSphere{
+  const auto frames = testing::render_frames(rig, testing::smooth_texture(), testing::NearSphere{
       15.0 * direction_from_spherical(deg2rad(45), deg2rad(30)), 3.0, cv::Vec3f(1, 1, 1)});
   const cv::Mat inf_depth(grid.height, grid.width, CV_32FC1, cv::Scalar(kInf));
   for (Method m : all_methods()) {
@@ -57,7 +57,7 @@ TEST(PanoSurface, InfinityIsTheThesisModelExactly) {
 }
 
 TEST(PanoSurface, SphereGeometry) {
-  const Rig rig = sim::testing::small_rig(64);
+  const Rig rig = testing::small_rig(64);
   const PanoGrid grid{Projection::kVr180, 32, 32};
   // From the centre every direction meets the sphere at R; from an offset q, |q + D w| = R.
   const cv::Mat d0 = sphere_depth(rig, grid, 20);
@@ -225,7 +225,7 @@ TEST(PanoDepth, FarFieldNotWorseThanInfinity) {
   cv::divide(1.0, est.depth, inv);
   std::printf("louvre vr180 270x270 mrf: inf %.2f dB, estimate %.2f dB (median depth %.0f mm)\n", inf, with,
               1 / cv::mean(inv)[0]);
-  EXPECT_GT(with, inf - 0.2);  // measured 25.93 and 25.93 dB (540x540 louvre and lake: README "Depth")
+  EXPECT_GT(with, inf - 0.2);  // measured 25.93 and 25.93 dB (540x540 louvre and lake: docs/results/depth_table.md)
 }
 
 }  // namespace

@@ -1,5 +1,5 @@
 // Every method on the thesis's 24-camera prototype dome (design::thesis_prototype_rig) with far-field
-// photographs (noise-free minimal renderer of sim/test_scenes.h): PSNR / SSIM / seam PSNR against the
+// photographs (noise-free minimal renderer of testing/test_scenes.h): PSNR / SSIM / seam PSNR against the
 // ideal panorama. The test prints the table (colon_test.cc adds the simulated colon).
 #include "omma/design/prototype.h"
 
@@ -11,11 +11,10 @@
 #include "omma/pano/maps.h"
 #include "omma/pano/quality.h"
 #include "omma/pano/stitch.h"
-#include "omma/sim/test_scenes.h"
+#include "omma/testing/test_scenes.h"
 
 namespace omma::pano {
 namespace {
-namespace testing = ::omma::sim::testing;  // the small exact renderers (sim/test_scenes.h)
 
 std::map<Method, EvalResult> table(const Rig& rig, const cv::Mat& tex, const PanoGrid& grid,
                                    const char* label) {

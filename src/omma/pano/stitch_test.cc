@@ -10,11 +10,10 @@
 
 #include "omma/pano/maps.h"
 #include "omma/pano/quality.h"
-#include "omma/sim/test_scenes.h"
+#include "omma/testing/test_scenes.h"
 
 namespace omma::pano {
 namespace {
-namespace testing = ::omma::sim::testing;  // the small exact renderers (sim/test_scenes.h)
 
 struct Scene {
   Rig rig;

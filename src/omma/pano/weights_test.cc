@@ -5,11 +5,10 @@
 
 #include <cmath>
 
-#include "omma/sim/test_scenes.h"
+#include "omma/testing/test_scenes.h"
 
 namespace omma::pano {
 namespace {
-namespace testing = ::omma::sim::testing;  // the small exact renderers (sim/test_scenes.h)
 
 TEST(PanoWeights, StaticWeightsSumToOneAndReduceToSingleCamera) {
   const Rig rig = testing::small_rig(32);

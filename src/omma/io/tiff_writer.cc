@@ -1,0 +1,154 @@
+#include "omma/io/tiff_writer.h"
+
+#include <algorithm>
+#include <string>
+#include <vector>
+
+#include <fmt/format.h>
+#include <tiffio.h>
+#include <unistd.h>
+
+#include "omma/core/io.h"
+
+namespace omma::io {
+
+struct BigTiffWriter::Impl {
+  std::filesystem::path final_path, tmp_path;
+  TIFF* tif = nullptr;
+  std::vector<uint8_t> row;
+};
+
+BigTiffWriter::BigTiffWriter(const std::filesystem::path& path, int width, int height, bool deflate,
+                             int rows_per_strip)
+    : impl_(std::make_unique<Impl>()), width_(width), height_(height) {
+  if (width < 1 || height < 1) throw IoError(fmt::format("TIFF size {}x{} must be positive", width, height));
+  impl_->final_path = path;
+  impl_->tmp_path = path;
+  impl_->tmp_path += fmt::format(".tmp{}", ::getpid());
+  TIFFSetWarningHandler(nullptr);
+  impl_->tif = TIFFOpen(impl_->tmp_path.c_str(), "w8");  // "8": BigTIFF
+  if (!impl_->tif) throw IoError("cannot create '" + impl_->tmp_path.string() + "'");
+  TIFF* t = impl_->tif;
+  TIFFSetField(t, TIFFTAG_IMAGEWIDTH, uint32_t(width));
+  TIFFSetField(t, TIFFTAG_IMAGELENGTH, uint32_t(height));
+  TIFFSetField(t, TIFFTAG_SAMPLESPERPIXEL, 3);
+  TIFFSetField(t, TIFFTAG_BITSPERSAMPLE, 8);
+  TIFFSetField(t, TIFFTAG_PHOTOMETRIC, PHOTOMETRIC_RGB);
+  TIFFSetField(t, TIFFTAG_PLANARCONFIG, PLANARCONFIG_CONTIG);
+  TIFFSetField(t, TIFFTAG_ORIENTATION, ORIENTATION_TOPLEFT);
+  TIFFSetField(t, TIFFTAG_ROWSPERSTRIP, uint32_t(std::max(1, rows_per_strip)));
+  TIFFSetField(t, TIFFTAG_COMPRESSION, deflate ? COMPRESSION_ADOBE_DEFLATE : COMPRESSION_NONE);
+  if (deflate) TIFFSetField(t, TIFFTAG_PREDICTOR, PREDICTOR_HORIZONTAL);
+  TIFFSetField(t, TIFFTAG_SOFTWARE, "omma render");
+  impl_->row.resize(size_t(width) * 3);
+}
+
+BigTiffWriter::~BigTiffWriter() {
+  if (impl_ && impl_->tif) {
+    TIFFClose(impl_->tif);
+    std::error_code ec;
+    std::filesystem::remove(impl_->tmp_path, ec);
+  }
+}
+
+void BigTiffWriter::write_rows(const cv::Mat& band) {
+  if (band.type() != CV_8UC3 || band.cols != width_)
+    throw std::invalid_argument(fmt::format("TIFF rows must be CV_8UC3 with {} columns", width_));
+  if (next_row_ + band.rows > height_) throw std::invalid_argument("more TIFF rows than the image has");
+  for (int r = 0; r < band.rows; ++r, ++next_row_) {
+    const uint8_t* s = band.ptr<uint8_t>(r);
+    uint8_t* d = impl_->row.data();
+    for (int c = 0; c < width_; ++c) {  // BGR -> RGB
+      d[3 * c] = s[3 * c + 2];
+      d[3 * c + 1] = s[3 * c + 1];
+      d[3 * c + 2] = s[3 * c];
+    }
+    if (TIFFWriteScanline(impl_->tif, d, uint32_t(next_row_), 0) < 0)
+      throw IoError(fmt::format("cannot write row {} of '{}' (disk full?)", next_row_, impl_->tmp_path.string()));
+  }
+}
+
+void BigTiffWriter::finish() {
+  if (next_row_ != height_)
+    throw IoError(fmt::format("'{}': {} of {} rows written", impl_->final_path.string(), next_row_, height_));
+  TIFF* t = impl_->tif;
+  impl_->tif = nullptr;
+  const bool ok = TIFFFlush(t) == 1;
+  TIFFClose(t);
+  std::error_code ec;
+  if (!ok) {
+    std::filesystem::remove(impl_->tmp_path, ec);
+    throw IoError("cannot finish '" + impl_->final_path.string() + "' (disk full?)");
+  }
+  std::filesystem::rename(impl_->tmp_path, impl_->final_path, ec);
+  if (ec) {
+    std::filesystem::remove(impl_->tmp_path, ec);
+    throw IoError("cannot rename onto '" + impl_->final_path.string() + "'");
+  }
+}
+
+namespace {
+struct TiffIn {
+  TIFF* t;
+  explicit TiffIn(const std::filesystem::path& p) : t(TIFFOpen(p.c_str(), "r")) {
+    if (!t) throw IoError("cannot read TIFF '" + p.string() + "'");
+  }
+  ~TiffIn() { TIFFClose(t); }
+};
+}  // namespace
+
+cv::Size tiff_size(const std::filesystem::path& path) {
+  TIFFSetWarningHandler(nullptr);
+  TiffIn in(path);
+  uint32_t w = 0, h = 0;
+  TIFFGetField(in.t, TIFFTAG_IMAGEWIDTH, &w);
+  TIFFGetField(in.t, TIFFTAG_IMAGELENGTH, &h);
+  return {int(w), int(h)};
+}
+
+cv::Mat read_tiff_rows(const std::filesystem::path& path, int row0, int rows) {
+  TIFFSetWarningHandler(nullptr);
+  TiffIn in(path);
+  uint32_t w = 0, h = 0;
+  uint16_t spp = 0, bps = 0, planar = PLANARCONFIG_CONTIG;
+  TIFFGetField(in.t, TIFFTAG_IMAGEWIDTH, &w);
+  TIFFGetField(in.t, TIFFTAG_IMAGELENGTH, &h);
+  TIFFGetFieldDefaulted(in.t, TIFFTAG_SAMPLESPERPIXEL, &spp);
+  TIFFGetFieldDefaulted(in.t, TIFFTAG_BITSPERSAMPLE, &bps);
+  TIFFGetFieldDefaulted(in.t, TIFFTAG_PLANARCONFIG, &planar);
+  if (rows < 0) rows = int(h) - row0;
+  if (row0 < 0 || rows < 0 || row0 + rows > int(h))
+    throw IoError(fmt::format("'{}': rows {}..{} outside the image of {} rows", path.string(), row0, row0 + rows, h));
+  cv::Mat out(rows, int(w), CV_8UC3);
+  if (bps == 8 && spp >= 3 && planar == PLANARCONFIG_CONTIG && !TIFFIsTiled(in.t)) {
+    std::vector<uint8_t> line(TIFFScanlineSize64(in.t));
+    // Strips must be decoded from their start: read from the first row of row0's strip.
+    uint32_t rps = 0;
+    TIFFGetFieldDefaulted(in.t, TIFFTAG_ROWSPERSTRIP, &rps);
+    const int first = rps ? int(row0 / rps * rps) : 0;
+    for (int r = first; r < row0 + rows; ++r) {
+      if (TIFFReadScanline(in.t, line.data(), uint32_t(r), 0) < 0)
+        throw IoError(fmt::format("'{}': cannot read row {}", path.string(), r));
+      if (r < row0) continue;
+      uint8_t* d = out.ptr<uint8_t>(r - row0);
+      for (uint32_t c = 0; c < w; ++c) {
+        d[3 * c] = line[spp * c + 2];
+        d[3 * c + 1] = line[spp * c + 1];
+        d[3 * c + 2] = line[spp * c];
+      }
+    }
+    return out;
+  }
+  // Anything else: libtiff's RGBA reader (whole image).
+  std::vector<uint32_t> rgba(size_t(w) * h);
+  if (!TIFFReadRGBAImageOriented(in.t, w, h, rgba.data(), ORIENTATION_TOPLEFT, 0))
+    throw IoError("cannot decode TIFF '" + path.string() + "'");
+  for (int r = 0; r < rows; ++r)
+    for (uint32_t c = 0; c < w; ++c) {
+      const uint32_t p = rgba[size_t(row0 + r) * w + c];
+      out.at<cv::Vec3b>(r, int(c)) = {uint8_t(TIFFGetB(p)), uint8_t(TIFFGetG(p)), uint8_t(TIFFGetR(p))};
+    }
+  return out;
+}
+
+}  // namespace omma::io

@@ -1,0 +1,48 @@
+// The recorder (thesis §7.2, done in software): N free-running camera sources, each in its own
+// thread, their frames converted to 12-bit RGGB mosaics (recording.h, to_raw_mosaic), time-stamped
+// when they arrive and numbered by the source's own count, queued, and written by one writer
+// thread into a recording. A frame that finds its camera's queue full is dropped (its sequence
+// number is skipped, so readers count it). Stops after `duration_s`, after `frames` frames per
+// camera, when every source has ended, or when `stop` is set (SIGINT); a write error (a full
+// disk) stops it too: what was written stays readable and the error is in the summary.
+#pragma once
+
+#include <atomic>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "omma/io/recording.h"
+#include "omma/live/sources.h"
+
+namespace omma::live {
+
+struct RecordOptions {
+  double duration_s = 0;     // 0 = no limit
+  int64_t frames = 0;        // frames per camera; 0 = no limit
+  int queue_frames = 4;      // per camera
+  double flush_interval_s = 0.5;
+  std::string sensor_mode = "full";
+  double clock_mhz = 0;
+  double fps = 30;           // nominal rate (matching period) written to the manifest
+  bool progress = true;
+  const std::atomic<bool>* stop = nullptr;
+  bool IsValid(std::string* why = nullptr) const;
+};
+
+struct RecordSummary {
+  std::vector<int64_t> frames;   // written per camera
+  std::vector<int64_t> dropped;  // dropped for a full queue per camera
+  uint64_t bytes = 0;            // pixel bytes written
+  double seconds = 0;
+  std::string error;             // empty, or why the recording stopped early (disk full, a source)
+  double mb_per_s() const { return seconds > 0 ? bytes / 1e6 / seconds : 0; }
+};
+
+// Records `sources` (one per camera of manifest.rig, rig order) into `dir`. Throws RecordingError if
+// the recording cannot be created; later errors end the recording and are reported in the summary.
+RecordSummary record(std::vector<std::unique_ptr<CameraSource>> sources, const std::filesystem::path& dir,
+                     io::RecordingManifest manifest, const RecordOptions& options);
+
+}  // namespace omma::live

@@ -1,0 +1,416 @@
+#include "omma/live/sinks.h"
+
+#include <cmath>
+#include <atomic>
+#include <condition_variable>
+#include <cstdio>
+#include <filesystem>
+#include <mutex>
+#include <optional>
+#include <thread>
+
+#include <fmt/format.h>
+#include <httplib.h>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/videoio.hpp>
+#include <spdlog/spdlog.h>
+
+#include "omma/core/io.h"
+#include "omma/io/metadata.h"
+#include "omma/live/web_assets.h"
+
+namespace omma::live {
+namespace fs = std::filesystem;
+namespace {
+
+std::string lower(std::string s) {
+  for (auto& c : s) c = char(std::tolower((unsigned char)c));
+  return s;
+}
+
+// Removes a temporary file that an earlier run writing `target` left behind (it was killed before
+// it could finish), naming it in a warning.
+void remove_leftover(const fs::path& tmp, const fs::path& target) {
+  std::error_code ec;
+  if (!fs::exists(tmp, ec)) return;
+  fs::remove(tmp, ec);
+  spdlog::warn("{} the temporary file {} of an interrupted earlier run writing {}", ec ? "could not remove" : "removed",
+               tmp.string(), target.string());
+}
+
+class VideoSink : public Sink {
+ public:
+  VideoSink(const fs::path& path, cv::Size size, double fps, std::optional<Projection> projection)
+      : path_(path), size_(size), projection_(projection) {
+    const std::string ext = lower(path.extension().string());
+    const int fourcc = ext == ".mp4" ? cv::VideoWriter::fourcc('m', 'p', '4', 'v')
+                                     : cv::VideoWriter::fourcc('M', 'J', 'P', 'G');
+    const fs::path dir = path.has_parent_path() ? path.parent_path() : fs::path(".");
+    std::error_code ec;
+    if (!fs::is_directory(dir, ec)) throw SinkError("cannot write video " + path.string() + ": folder " + dir.string() + " does not exist");
+    tmp_ = dir / fmt::format(".{}.partial{}", path.stem().string(), ext);  // (fmt: GCC 12 -Wrestrict false positive on "." + string)
+    remove_leftover(tmp_, path_);
+    if (!writer_.open(tmp_.string(), cv::CAP_FFMPEG, fourcc, fps, size, true) || !writer_.isOpened()) {
+      fs::remove(tmp_, ec);
+      throw SinkError("cannot write video " + path.string() + " (VideoWriter did not open; folder writable?)");
+    }
+  }
+  ~VideoSink() override { abort(); }
+  void write(const cv::Mat& pano, const render::FrameStore&) override { writer_.write(pano); ++frames_; }
+  void finish() override {
+    if (done_) return;
+    done_ = true;
+    writer_.release();
+    std::error_code ec;
+    if (frames_ == 0) {
+      fs::remove(tmp_, ec);
+      throw SinkError("no frames were rendered: video " + path_.string() + " not written");
+    }
+    // VideoWriter reports no write errors: check that the file plays to its last frame before it
+    // takes the final name (a full disk leaves a file without its index, or short).
+    if (const std::string bad = check_playable(); !bad.empty()) {
+      fs::remove(tmp_, ec);
+      throw SinkError("video " + path_.string() + " could not be written completely (disk full?): " + bad +
+                      "; nothing was left under its name");
+    }
+    // 360-degree metadata (metadata.h) in the checked file, rewritten atomically with its frames
+    // unchanged. The rewrite needs room for a second copy: if it fails, the video is kept untagged.
+    if (projection_ && lower(path_.extension().string()) == ".mp4") {
+      try {
+        io::add_spherical_video_metadata(tmp_, PanoGrid{*projection_, size_.width, size_.height});
+      } catch (const IoError& e) {
+        spdlog::warn("{} (the video is kept without 360-degree metadata)", e.what());
+      }
+    }
+    fs::rename(tmp_, path_, ec);
+    if (ec) {
+      fs::remove(tmp_, ec);
+      throw SinkError("cannot move video into place at " + path_.string());
+    }
+  }
+  void abort() override {
+    if (done_) return;
+    done_ = true;
+    writer_.release();
+    std::error_code ec;
+    fs::remove(tmp_, ec);
+  }
+  std::string describe() const override { return path_.string(); }
+
+ private:
+  // Empty if the temporary file opens, holds the frames written and decodes its last one.
+  std::string check_playable() const {
+    cv::VideoCapture cap;
+    if (!cap.open(tmp_.string(), cv::CAP_FFMPEG) || !cap.isOpened()) return "it does not open";
+    const long count = long(cap.get(cv::CAP_PROP_FRAME_COUNT));
+    // Matroska gives the count from its duration (+-1 frame); MP4 and AVI exactly.
+    if (count < frames_ - 1) return fmt::format("it holds {} of {} frames", count, frames_);
+    cap.set(cv::CAP_PROP_POS_FRAMES, double(std::min(count, frames_) - 1));
+    cv::Mat last;
+    if (!cap.read(last) || last.empty()) return "its last frame does not decode";
+    return {};
+  }
+  fs::path path_, tmp_;
+  cv::Size size_;
+  std::optional<Projection> projection_;
+  cv::VideoWriter writer_;
+  long frames_ = 0;
+  bool done_ = false;
+};
+
+class PngSink : public Sink {
+ public:
+  PngSink(const fs::path& dir, cv::Size size, std::optional<Projection> projection) : dir_(dir) {
+    if (projection) grid_ = PanoGrid{*projection, size.width, size.height};
+    std::error_code ec;
+    fs::create_directories(dir, ec);
+    if (ec || !fs::is_directory(dir)) throw SinkError("cannot create PNG folder " + dir.string() + ": " + ec.message());
+    // Temporary files of frames (core/io.h: .frame_NNNNNN.tmpRANDOM.png) left by a killed run.
+    for (const auto& e : fs::directory_iterator(dir, ec)) {
+      const std::string name = e.path().filename().string();
+      if (name.rfind(".frame_", 0) == 0 && name.find(".tmp") != std::string::npos && e.path().extension() == ".png")
+        remove_leftover(e.path(), dir / name.substr(1, name.find(".tmp") - 1).append(".png"));
+    }
+    // Probe that the folder is writable.
+    const fs::path probe = dir / ".omma-write-probe";
+    FILE* f = std::fopen(probe.c_str(), "wb");
+    if (!f) throw SinkError("cannot write into PNG folder " + dir.string());
+    std::fclose(f);
+    fs::remove(probe, ec);
+  }
+  void write(const cv::Mat& pano, const render::FrameStore&) override {
+    char name[32];
+    std::snprintf(name, sizeof name, "frame_%06ld.png", n_++);
+    if (grid_) io::write_panorama(dir_ / name, pano, *grid_);  // with the 360-degree XMP
+    else write_image(dir_ / name, pano);
+  }
+  std::string describe() const override { return "png:" + dir_.string(); }
+
+ private:
+  fs::path dir_;
+  std::optional<PanoGrid> grid_;
+  long n_ = 0;
+};
+
+class PassthroughSink : public Sink {
+ public:
+  PassthroughSink(int cam, std::unique_ptr<Sink> inner) : cam_(cam), inner_(std::move(inner)) {}
+  void write(const cv::Mat&, const render::FrameStore& store) override {
+    const cv::Mat frame = store.camera(cam_).clone();
+    inner_->write(frame, store);
+  }
+  void finish() override { inner_->finish(); }
+  void abort() override { inner_->abort(); }
+  std::string describe() const override { return "camera " + std::to_string(cam_) + " -> " + inner_->describe(); }
+
+ private:
+  int cam_;
+  std::unique_ptr<Sink> inner_;
+};
+
+// The live view (sinks.h). The page and its viewer are files of web/, embedded at build time
+// (web_assets.h).
+class HttpSink : public Sink {
+ public:
+  HttpSink(int port, cv::Size size, const SinkOptions& opt)
+      : port_(port), quality_(opt.jpeg_quality), max_streams_(opt.max_streams) {
+    if (max_streams_ < 1 || max_streams_ > kMaxStreams)
+      throw SinkError(fmt::format("live view: the stream limit must be 1-{}, got {}", kMaxStreams, max_streams_));
+    config_ = nlohmann::json{{"projection", to_string(opt.projection)},
+                             {"width", size.width},
+                             {"height", size.height},
+                             {"max_streams", max_streams_},
+                             {"viewer", viewer_embedded()}}
+                  .dump();
+    // Streams hold a worker each for as long as they play; the pool has `max_streams` workers for
+    // them and kSpareWorkers more, so the page, the stats and single frames always find one.
+    const size_t workers = size_t(max_streams_) + kSpareWorkers;
+    server_.new_task_queue = [workers] { return new httplib::ThreadPool(workers); };
+    server_.Get("/", [](const httplib::Request&, httplib::Response& res) { serve_asset("/live.html", res); });
+    server_.Get(R"(/viewer/([A-Za-z0-9_.-]+))", [](const httplib::Request& req, httplib::Response& res) {
+      serve_asset(fmt::format("/{}", std::string(req.matches[1])), res);  // (fmt: GCC 12 -Wrestrict)
+    });
+    server_.Get("/favicon.ico", [](const httplib::Request&, httplib::Response& res) { res.status = 204; });
+    server_.Get("/config.json", [this](const httplib::Request&, httplib::Response& res) {
+      res.set_content(config_, "application/json");
+    });
+    server_.Get("/stats.json", [this](const httplib::Request&, httplib::Response& res) {
+      res.set_header("Cache-Control", "no-cache");
+      std::lock_guard<std::mutex> lock(mutex_);
+      res.set_content(stats_.dump(), "application/json");
+    });
+    server_.Get("/frame.jpg", [this](const httplib::Request&, httplib::Response& res) {
+      std::unique_lock<std::mutex> lock(mutex_);
+      cv_.wait_for(lock, std::chrono::seconds(2), [&] { return seq_ > 0 || stopping_; });
+      if (jpeg_.empty()) {
+        res.status = 503;
+        res.set_content("no frame yet", "text/plain");
+        return;
+      }
+      res.set_header("Cache-Control", "no-cache");
+      res.set_content(std::string(jpeg_.begin(), jpeg_.end()), "image/jpeg");
+    });
+    server_.Get("/stream.mjpg", [this](const httplib::Request&, httplib::Response& res) {
+      if (streams_.fetch_add(1) >= max_streams_) {
+        streams_.fetch_sub(1);
+        res.status = 503;
+        res.set_header("Retry-After", "5");
+        res.set_content(fmt::format("omma live view: {} viewers are streaming already (the limit)", max_streams_),
+                        "text/plain");
+        return;
+      }
+      auto last = std::make_shared<long>(0);
+      res.set_header("Cache-Control", "no-cache");
+      res.set_chunked_content_provider(
+          "multipart/x-mixed-replace; boundary=ommaframe",
+          [this, last](size_t, httplib::DataSink& sink) {
+            std::vector<uchar> jpeg;
+            {
+              std::unique_lock<std::mutex> lock(mutex_);
+              cv_.wait_for(lock, std::chrono::milliseconds(500), [&] { return seq_ > *last || stopping_; });
+              if (stopping_) {
+                sink.done();
+                return false;
+              }
+              if (seq_ == *last) return sink.is_writable();  // nothing new yet; keep a live connection
+              *last = seq_;
+              jpeg = jpeg_;
+            }
+            const std::string head = "--ommaframe\r\nContent-Type: image/jpeg\r\nContent-Length: " +
+                                     std::to_string(jpeg.size()) + "\r\n\r\n";
+            if (!sink.write(head.data(), head.size())) return false;
+            if (!sink.write(reinterpret_cast<const char*>(jpeg.data()), jpeg.size())) return false;
+            return sink.write("\r\n", 2);
+          },
+          [this](bool) { streams_.fetch_sub(1); });
+    });
+    server_.set_keep_alive_max_count(1);
+    // SO_REUSEADDR only: httplib's default also sets SO_REUSEPORT, which would let a second server
+    // bind a port that is already in use.
+    server_.set_socket_options([](socket_t sock) {
+      int yes = 1;
+      setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, reinterpret_cast<const void*>(&yes), sizeof(yes));
+    });
+    if (!server_.bind_to_port("127.0.0.1", port))
+      throw SinkError("cannot serve the live view on 127.0.0.1:" + std::to_string(port) +
+                      " (port in use or not permitted)");
+    thread_ = std::thread([this] {
+      try {
+        server_.listen_after_bind();
+      } catch (const std::exception& e) {  // e.g. the worker threads could not be started
+        spdlog::error("live view on 127.0.0.1:{} stopped: {}", port_, e.what());
+      }
+    });
+    try {
+      encoder_ = std::thread([this] { encode(); });
+    } catch (...) {
+      stop();
+      throw;
+    }
+    spdlog::info("live view: http://127.0.0.1:{}/", port);
+  }
+  ~HttpSink() override { stop(); }
+  // The panorama is JPEG-encoded in the sink's own thread, so that encoding never slows the render
+  // loop; if the encoder is still busy with the previous panorama, the newer one replaces it.
+  void write(const cv::Mat& pano, const render::FrameStore&) override {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      pano.copyTo(pending_);
+      has_pending_ = true;
+    }
+    cv_.notify_all();
+  }
+  void set_stats(const nlohmann::json& s) override {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stats_ = s;
+    stats_["viewers"] = streams_.load();
+  }
+  void finish() override { stop(); }
+  void abort() override { stop(); }
+  std::string describe() const override { return "http://127.0.0.1:" + std::to_string(port_) + "/"; }
+
+ private:
+  static constexpr int kSpareWorkers = 4;
+  static constexpr int kMaxStreams = 256;  // each stream is a thread
+  static void serve_asset(const std::string& path, httplib::Response& res) {
+    const WebAsset* a = find_web_asset(path);
+    if (!a) {
+      res.status = 404;
+      return;
+    }
+    res.set_content(std::string(a->data), std::string(a->type));
+  }
+  void encode() {
+    cv::Mat pano;
+    std::vector<uchar> buf;
+    for (;;) {
+      {
+        std::unique_lock<std::mutex> lock(mutex_);
+        cv_.wait(lock, [&] { return has_pending_ || stopping_; });
+        if (stopping_) return;
+        cv::swap(pano, pending_);
+        has_pending_ = false;
+      }
+      cv::imencode(".jpg", pano, buf, {cv::IMWRITE_JPEG_QUALITY, quality_});
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        jpeg_.swap(buf);
+        ++seq_;
+      }
+      cv_.notify_all();
+    }
+  }
+  void stop() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (stopping_) return;
+      stopping_ = true;
+    }
+    cv_.notify_all();
+    server_.stop();
+    if (thread_.joinable()) thread_.join();
+    if (encoder_.joinable()) encoder_.join();
+  }
+  int port_, quality_, max_streams_;
+  std::string config_;
+  httplib::Server server_;
+  std::thread thread_, encoder_;
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  cv::Mat pending_;          // the newest panorama, not encoded yet
+  bool has_pending_ = false;
+  std::vector<uchar> jpeg_;  // the newest encoded one, number seq_
+  long seq_ = 0;
+  bool stopping_ = false;
+  std::atomic<int> streams_{0};
+  nlohmann::json stats_ = nlohmann::json::object();
+};
+
+int parse_port(const std::string& spec, const std::string& text) {
+  try {
+    size_t pos = 0;
+    const int p = std::stoi(text, &pos);
+    if (pos == text.size() && p > 0 && p < 65536) return p;
+  } catch (const std::exception&) {
+  }
+  throw SinkError("sink '" + spec + "': expected a port number 1-65535");
+}
+
+}  // namespace
+
+bool SinkOptions::IsValid(std::string* why) const {
+  auto fail = [&](const std::string& m) {
+    if (why) *why = m;
+    return false;
+  };
+  if (!(fps > 0) || !std::isfinite(fps)) return fail("fps must be a positive number");
+  if (jpeg_quality < 1 || jpeg_quality > 100) return fail("jpeg quality must be 1..100");
+  if (max_streams < 1) return fail("max streams must be >= 1");
+  return true;
+}
+
+std::unique_ptr<Sink> open_sink(const std::string& spec, const Rig& rig, cv::Size pano_size, const SinkOptions& opt) {
+  if (std::string why; !opt.IsValid(&why)) throw SinkError("sink '" + spec + "': " + why);
+  if (spec.rfind("http://", 0) == 0) {
+    const std::string rest = spec.substr(7);
+    const size_t colon = rest.rfind(':');
+    if (colon == std::string::npos) throw SinkError("sink '" + spec + "': expected http://127.0.0.1:PORT");
+    const std::string host = rest.substr(0, colon);
+    if (host != "127.0.0.1" && host != "localhost")
+      throw SinkError("sink '" + spec + "': the live view serves on 127.0.0.1 only");
+    std::string port = rest.substr(colon + 1);
+    if (!port.empty() && port.back() == '/') port.pop_back();
+    return std::make_unique<HttpSink>(parse_port(spec, port), pano_size, opt);
+  }
+  if (spec.rfind("http:", 0) == 0) return std::make_unique<HttpSink>(parse_port(spec, spec.substr(5)), pano_size, opt);
+  if (spec.rfind("cam:", 0) == 0) {
+    const std::string rest = spec.substr(4);
+    const size_t colon = rest.find(':');
+    if (colon == std::string::npos) throw SinkError("sink '" + spec + "': expected cam:ID:SINK");
+    int id = -1;
+    try {
+      id = std::stoi(rest.substr(0, colon));
+    } catch (const std::exception&) {
+      throw SinkError("sink '" + spec + "': expected cam:ID:SINK with a numeric camera id");
+    }
+    int index = -1;
+    for (size_t c = 0; c < rig.cameras.size(); ++c)
+      if (rig.cameras[c].id == id) index = int(c);
+    if (index < 0) throw SinkError("sink '" + spec + "': the rig has no camera id " + std::to_string(id));
+    const std::string inner = rest.substr(colon + 1);
+    if (inner.rfind("cam:", 0) == 0 || inner.rfind("http", 0) == 0)
+      throw SinkError("sink '" + spec + "': a passed-through camera goes to a video file or PNG folder");
+    const cv::Size size(rig.cameras[index].in.width, rig.cameras[index].in.height);
+    SinkOptions camera_opt = opt;
+    camera_opt.spherical_metadata = false;  // a camera's frames are not panoramas
+    return std::make_unique<PassthroughSink>(index, open_sink(inner, rig, size, camera_opt));
+  }
+  const auto metadata = opt.spherical_metadata ? std::optional(opt.projection) : std::nullopt;
+  if (spec.rfind("png:", 0) == 0) return std::make_unique<PngSink>(spec.substr(4), pano_size, metadata);
+  if (!spec.empty() && spec.back() == '/') return std::make_unique<PngSink>(spec, pano_size, metadata);
+  const std::string ext = lower(fs::path(spec).extension().string());
+  if (ext == ".mp4" || ext == ".mkv" || ext == ".avi") return std::make_unique<VideoSink>(spec, pano_size, opt.fps, metadata);
+  throw SinkError("sink '" + spec + "': use FILE.mp4|.mkv|.avi, png:DIR, DIR/, cam:ID:SINK or http:PORT");
+}
+
+}  // namespace omma::live

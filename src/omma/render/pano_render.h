@@ -1,0 +1,106 @@
+// Offline rendering of large panoramas (Giga-Eye, thesis ch. 7: 9000 x 2400 = 21.6 MP and
+// 17700 x 4650 = 82.3 MP over 360 x 100 deg, which the thesis stitched offline with a commercial
+// tool) from compiled maps, band by band.
+//
+// The output grid is cut into horizontal BANDS of `band_rows` rows. Each band has its own compiled
+// map (MapOptions::window: the same taps as one map of the whole grid, mrf neighbours across band
+// edges included), cached on disk like every map (compile_map_cached), and renders from ONE frame
+// store holding every camera (FrameStore, row pairs: 6 bytes per camera pixel). A frame set is
+// rendered band after band into a BandSink (an image in memory, or a file: io/pano_file.h), so memory
+// holds: the store, the band maps (resident, or one at a time with `resident_maps = false`), and
+// one band of output. PanoRenderer::memory() states it.
+//
+// Methods: the engine's (nn, linear, gaussian, mrf, mrf-spherical, sad: 8-bit fixed-point taps,
+// render.h) and kOffline ("hq"): render::reference_render's double-precision blend of every tap
+// (no dropped taps, no weight quantisation) per band, for a final master; about 100x slower.
+#pragma once
+
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "omma/render/compiled_map.h"
+#include "omma/render/frame_reader.h"
+#include "omma/render/render.h"
+#include "omma/isp/isp.h"
+
+namespace omma::render {
+
+struct PanoRenderOptions {
+  PanoGrid grid{Projection::kEquirect100, 9000, 2400};
+  pano::Method method = pano::Method::kMrf;
+  bool offline = false;          // the high-quality offline blend (see the file comment)
+  pano::BlendParams params;
+  double min_weight = 1.0 / 20;  // MapOptions::min_weight (engine methods)
+  int band_rows = 256;           // rows per band map (a multiple of kTileH is best)
+  bool resident_maps = true;     // keep every band map in memory (else load each from the cache)
+  std::filesystem::path cache_dir = default_cache_dir();  // empty: no cache (resident only)
+  RenderOptions render;
+  bool progress = true;          // progress bar on stderr while compiling maps
+  bool IsValid(std::string* why = nullptr) const;
+};
+
+// Receives the bands of one panorama, top to bottom: (first row, band CV_8UC3).
+using BandSink = std::function<void(int row0, const cv::Mat& band)>;
+
+struct PanoRenderMemory {
+  size_t store_bytes = 0;      // the frame store
+  size_t maps_bytes = 0;       // all band maps (resident) or the largest one
+  size_t band_bytes = 0;       // one output band
+  size_t total() const { return store_bytes + maps_bytes + band_bytes; }
+};
+
+class PanoRenderer {
+ public:
+  // Compiles (or loads from the cache) the band maps. Throws std::invalid_argument on bad options.
+  PanoRenderer(const Rig& rig, const PanoRenderOptions& options);
+  ~PanoRenderer();
+  const PanoRenderOptions& options() const { return opt_; }
+  int bands() const;
+  cv::Rect band(int i) const;  // rows of band i (the full width)
+  // Sets the developed frames (CV_8UC3 or anything FrameStore::set converts; rig order; one per
+  // camera) into the store. Throws std::invalid_argument naming a camera of the wrong size.
+  void set_frames(const std::vector<cv::Mat>& frames);
+  // Renders the frames last set, band by band, into `sink`.
+  void render(const BandSink& sink);
+  // Renders band i only (rows band(i)) into `out` (CV_8UC3): the unit a distributed renderer splits
+  // one panorama into (apps/split_render.h).
+  void render_band(int i, cv::Mat& out);
+  // The whole panorama in memory (small grids, tests).
+  cv::Mat render_image();
+  PanoRenderMemory memory() const;
+  double maps_seconds() const { return maps_seconds_; }   // compile or load time of the maps
+  int maps_from_cache() const { return maps_from_cache_; }
+
+ private:
+  const CompiledMap& band_map(int i, std::unique_ptr<CompiledMap>& scratch) const;
+  Rig rig_;
+  PanoRenderOptions opt_;
+  FrameStore store_;
+  std::vector<cv::Mat> frames_;  // offline: the developed frames
+  MapOptions band_options(int i) const;  // the map of band i: the panorama's grid, band(i) as window
+  std::vector<std::unique_ptr<CompiledMap>> maps_;
+  std::vector<std::filesystem::path> map_files_;
+  size_t largest_map_ = 0, all_maps_ = 0;
+  double maps_seconds_ = 0;
+  int maps_from_cache_ = 0;
+};
+
+// Times of one frame set's way from a reader to a file (seconds): io::render_frame_set.
+struct FrameSetTimes {
+  double read = 0, develop = 0, render = 0, write = 0;
+};
+
+// Frame set `set` of `reader` read and developed (ISP: demosaic, white balance; iso.bits is taken
+// from the reader): one CV_8UC3 frame per camera, black where the set lacks the camera (its weights
+// are not renormalised: the gap shows); times->read and ->develop filled when given. `gains`: the
+// rig's photometric model as flat-gain maps (isp::flat_gains_from_rig, computed once per rig):
+// cameras with a model are developed with it instead of the white balance; empty: none.
+std::vector<cv::Mat> develop_frame_set(const FrameSetReader& reader, int64_t set, isp::IspOptions iso,
+                                       FrameSetTimes* times = nullptr, const std::vector<cv::Mat>& gains = {});
+
+}  // namespace omma::render
