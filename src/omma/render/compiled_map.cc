@@ -256,192 +256,225 @@ bool MapOptions::IsValid(std::string* why) const {
   return true;
 }
 
-CompiledMap compile_map(const Rig& rig, const MapOptions& opt) {
-  if (std::string why; !opt.IsValid(&why)) throw std::invalid_argument("compile_map: " + why);
-  if (!opt.active.empty() && opt.active.size() != rig.cameras.size())
-    throw std::invalid_argument("compile_map: active set has " + std::to_string(opt.active.size()) +
-                                " entries for " + std::to_string(rig.cameras.size()) + " cameras");
-  CompiledMap map;
-  // The window of the grid this map covers (map pixel (c, r) = grid pixel (wx + c, wy + r)).
-  const cv::Rect win = opt.window.empty() ? cv::Rect(0, 0, opt.grid.width, opt.grid.height) : opt.window;
-  const int wx = win.x, wy = win.y;
-  auto grid_dir = [&](double x, double y) { return opt.grid.direction(x + wx, y + wy); };
-  map.width = win.width;
-  map.height = win.height;
-  map.method = opt.method;
-  map.sad_epsilon = static_cast<float>(opt.params.sad_epsilon);
-  map.layout = StoreLayout::for_rig(rig);
-  // The rig of the active cameras, and its camera index -> rig camera index.
-  const auto [sub, to_full] = active_cameras(rig, opt.active);
-  const int W = map.width, H = map.height;
-  const StoreLayout& L = map.layout;
+namespace {
+
+// The taps of a map's output pixels, block by block (eq. 2.3 contributors, the method's weights,
+// then the 8-bit fixed-point taps of compiled_map.h).
+class TapCompiler {
+ public:
+  TapCompiler(const Rig& rig, const MapOptions& opt, const cv::Rect& win, const StoreLayout& layout)
+      : opt_(opt), wx_(win.x), wy_(win.y), W_(win.width), H_(win.height), layout_(layout),
+        sad_(opt.method == pano::Method::kSad), needs_nb_(pano::uses_neighbours(opt.method)),
+        spherical_(opt.method == pano::Method::kMrfSpherical) {
+    ActiveRig active = active_cameras(rig, opt.active);
+    sub_ = std::move(active.rig);
+    to_full_ = std::move(active.to_full);
+    cam_half_.resize(sub_.cameras.size());
+    for (size_t c = 0; c < sub_.cameras.size(); ++c) cam_half_[c] = sub_.cameras[c].in.aov / 2;
+  }
+
   // The taps of the output pixels [c0, c1) x [r0, r1) (at most 16 x 16) into `px` (kTileW pixels per
-  // row, starting at pixel (pc, pr)). Each call uses the rig of the cameras whose cone of view
-  // (eq. 2.3) can reach these pixels (with a margin for the 4-neighbourhood of mrf): the taps are the
-  // same as with the full rig, at a fraction of the cost.
-  std::vector<double> cam_half(sub.cameras.size());
-  for (size_t c = 0; c < sub.cameras.size(); ++c) cam_half[c] = sub.cameras[c].in.aov / 2;
-  const bool sad = opt.method == pano::Method::kSad;
-  auto compute_taps = [&](int c0, int r0, int c1, int r1, PixelTaps* px, int pc, int pr) {
-    Rig tile_rig;
-    std::vector<int> tile_to_full;
-    if (opt.cull) {
-      tile_rig.name = sub.name;
-      tile_rig.dome = sub.dome;
+  // row, starting at pixel (pc, pr)).
+  void compute(int c0, int r0, int c1, int r1, PixelTaps* px, int pc, int pr) const {
+    Block b = block(c0, r0, c1, r1);
+    for (int row = r0; row < r1; ++row)
+      for (int col = c0; col < c1; ++col) {
+        PixelTaps& out = px[size_t(row - pr) * kTileW + (col - pc)];
+        if (b.rig.cameras.empty()) continue;
+        std::vector<pano::Tap> taps = weighted_taps(b, col, row);
+        if (!taps.empty()) encode(b, taps, out);
+      }
+  }
+
+ private:
+  // Per node: its contributors and, for the mrf family, their potentials (eq. 4.8), each computed
+  // once although every node is visited as the centre and as 4 neighbours.
+  struct Node {
+    std::vector<pano::Contributor> cs;
+    std::vector<double> phi;
+  };
+  // One block: the rig of the cameras that can reach it, and its nodes with a one-pixel border.
+  struct Block {
+    Rig rig;
+    std::vector<int> to_full;  // block camera -> rig camera
+    int bx0, by0, bx1, by1;
+    mutable std::vector<Node> found;
+    mutable std::vector<uint8_t> done;
+    mutable std::array<Node, 4> outside;
+  };
+
+  Vec3 grid_dir(double x, double y) const { return opt_.grid.direction(x + wx_, y + wy_); }
+
+  // The rig of the cameras whose cone of view (eq. 2.3) can reach the block's pixels (with a margin
+  // for the 4-neighbourhood of mrf): the taps are the same as with the full rig, at a fraction of the
+  // cost.
+  Block block(int c0, int r0, int c1, int r1) const {
+    Block b;
+    if (opt_.cull) {
+      b.rig.name = sub_.name;
+      b.rig.dome = sub_.dome;
       const Vec3 wc = grid_dir(0.5 * (c0 + c1), 0.5 * (r0 + r1));
       double radius = 0;
       for (double fy : {0.0, 0.5, 1.0})
         for (double fx : {0.0, 0.5, 1.0}) {
-          const double x = std::clamp(c0 - 2 + fx * (c1 - c0 + 4), -double(wx), double(opt.grid.width - wx));
-          const double y = std::clamp(r0 - 2 + fy * (r1 - r0 + 4), -double(wy), double(opt.grid.height - wy));
+          const double x = std::clamp(c0 - 2 + fx * (c1 - c0 + 4), -double(wx_), double(opt_.grid.width - wx_));
+          const double y = std::clamp(r0 - 2 + fy * (r1 - r0 + 4), -double(wy_), double(opt_.grid.height - wy_));
           radius = std::max(radius, angle_between(wc, grid_dir(x, y)));
         }
       radius += deg2rad(2.0);
-      for (size_t c = 0; c < sub.cameras.size(); ++c)
-        if (angle_between(wc, sub.cameras[c].frame.t) <= cam_half[c] + radius) {
-          tile_rig.cameras.push_back(sub.cameras[c]);
-          tile_to_full.push_back(to_full[c]);
+      for (size_t c = 0; c < sub_.cameras.size(); ++c)
+        if (angle_between(wc, sub_.cameras[c].frame.t) <= cam_half_[c] + radius) {
+          b.rig.cameras.push_back(sub_.cameras[c]);
+          b.to_full.push_back(to_full_[c]);
         }
     } else {
-      tile_rig = sub;
-      tile_to_full = to_full;
+      b.rig = sub_;
+      b.to_full = to_full_;
     }
+    // Contributors (eq. 2.3) of the block and a one-pixel border, found once and shared by the
+    // 4-neighbourhoods of mrf, mrf-spherical and sad.
+    b.bx0 = std::max(0, c0 - 1);
+    b.by0 = std::max(0, r0 - 1);
+    b.bx1 = std::min(W_, c1 + 1);
+    b.by1 = std::min(H_, r1 + 1);
+    b.found.resize(size_t(b.bx1 - b.bx0) * (b.by1 - b.by0));
+    b.done.assign(b.found.size(), 0);
+    return b;
+  }
+
+  void fill(const Block& b, Node& n, int col, int row) const {
+    n.cs = pano::find_contributors(b.rig, opt_.grid.pixel_direction(col + wx_, row + wy_), opt_.params.search);
+    if (needs_nb_) n.phi = pano::node_potentials(n.cs, spherical_);
+  }
+  const Node& node(const Block& b, int col, int row, int slot) const {
+    if (col >= b.bx0 && col < b.bx1 && row >= b.by0 && row < b.by1) {
+      const size_t i = size_t(row - b.by0) * (b.bx1 - b.bx0) + (col - b.bx0);
+      if (!b.done[i]) {
+        fill(b, b.found[i], col, row);
+        b.done[i] = 1;
+      }
+      return b.found[i];
+    }
+    fill(b, b.outside[slot], col, row);  // equirect wrap-around neighbours
+    return b.outside[slot];
+  }
+
+  // The weights of pixel (col, row) exactly as static_taps computes them (pano::method_weights):
+  // at most kMaxTaps (the strongest), the faint ones dropped (MapOptions::min_weight), sorted by
+  // camera so that tap t of neighbouring pixels usually comes from the same camera (the runs of the
+  // map, compiled_map.h). Cameras are the block's.
+  std::vector<pano::Tap> weighted_taps(const Block& b, int col, int row) const {
+    const Node& u = node(b, col, row, 0);
+    const std::vector<pano::Contributor>& cs = u.cs;
+    if (cs.empty()) return {};
+    std::vector<double> mw;
+    if (needs_nb_) {  // = pano::method_weights, with the cached potentials
+      std::array<pano::MrfNode, 4> nb;
+      const auto nbs = pano::grid_neighbours(opt_.grid, col + wx_, row + wy_);
+      for (int k = 0; k < 4; ++k)
+        if (nbs[k][0] >= 0) {
+          const Node& v = node(b, nbs[k][0] - wx_, nbs[k][1] - wy_, k);
+          nb[k] = {&v.cs, &v.phi};
+        }
+      mw = pano::mrf_posterior(cs, u.phi, nb);
+    } else {
+      mw = pano::method_weights(b.rig, opt_.method, cs, {nullptr, nullptr, nullptr, nullptr}, opt_.params);
+    }
+    std::vector<pano::Tap> taps;
+    for (size_t i = 0; i < cs.size(); ++i)
+      if (mw[i] > 0) taps.push_back({cs[i].camera, cs[i].px, mw[i]});
+    if (taps.size() > size_t(kMaxTaps)) {  // keep the strongest (never happens with real rigs)
+      std::partial_sort(taps.begin(), taps.begin() + kMaxTaps, taps.end(),
+                        [](auto& a, auto& b) { return a.weight > b.weight; });
+      taps.resize(kMaxTaps);
+    }
+    double total = 0;
+    for (const auto& t : taps) total += t.weight;
+    if (opt_.min_weight > 0 && !sad_ && total > 0) {  // drop the faint taps, never the strongest
+      const double strongest =
+          std::max_element(taps.begin(), taps.end(), [](auto& a, auto& b) { return a.weight < b.weight; })->weight;
+      std::erase_if(taps, [&](const pano::Tap& t) { return t.weight < opt_.min_weight * total && t.weight < strongest; });
+    }
+    std::sort(taps.begin(), taps.end(), [&](auto& a, auto& b) { return a.camera < b.camera; });
+    return taps;
+  }
+
+  // The fixed-point taps of one pixel: the tap weights in 1/128 (summing to 128), then per tap the
+  // 2x2 neighbourhood and its four bilinear weights times the tap's weight, rounded to integers that
+  // sum to it (each at most 127, the kernels' signed bytes: a lone tap exactly on a pixel centre
+  // gives 127 + 1 to its neighbour below). sad keeps the bilinear weights alone (128 per tap) and
+  // its prior, the tap weights, in 1/256.
+  void encode(const Block& b, const std::vector<pano::Tap>& taps, PixelTaps& out) const {
     double w[kMaxTaps], e[4 * kMaxTaps];
     int q[kMaxTaps], qe[4 * kMaxTaps];
-    // Contributors (eq. 2.3) of the tile and a one-pixel border, found once and shared by the
-    // 4-neighbourhoods of mrf, mrf-spherical and sad; then the weights exactly as static_taps
-    // computes them (pano::method_weights).
-    const bool needs_nb = pano::uses_neighbours(opt.method);
-    const bool prune = opt.min_weight > 0 && opt.method != pano::Method::kSad;
-    const int bx0 = std::max(0, c0 - 1), by0 = std::max(0, r0 - 1);
-    const int bx1 = std::min(W, c1 + 1), by1 = std::min(H, r1 + 1), bw = bx1 - bx0;
-    // Per node: its contributors and, for the mrf family, their potentials (eq. 4.8), each
-    // computed once although every node is visited as the centre and as 4 neighbours.
-    struct Node {
-      std::vector<pano::Contributor> cs;
-      std::vector<double> phi;
-    };
-    const bool spherical = opt.method == pano::Method::kMrfSpherical;
-    std::vector<Node> found(size_t(bw) * (by1 - by0));
-    std::vector<uint8_t> done(found.size(), 0);
-    std::array<Node, 4> outside;
-    auto fill = [&](Node& n, int col, int row) {
-      n.cs = pano::find_contributors(tile_rig, opt.grid.pixel_direction(col + wx, row + wy), opt.params.search);
-      if (needs_nb) n.phi = pano::node_potentials(n.cs, spherical);
-    };
-    auto node = [&](int col, int row, int slot) -> const Node& {
-      if (col >= bx0 && col < bx1 && row >= by0 && row < by1) {
-        const size_t i = size_t(row - by0) * bw + (col - bx0);
-        if (!done[i]) {
-          fill(found[i], col, row);
-          done[i] = 1;
-        }
-        return found[i];
-      }
-      fill(outside[slot], col, row);  // equirect wrap-around neighbours
-      return outside[slot];
-    };
-    for (int row = r0; row < r1; ++row)
-      for (int col = c0; col < c1; ++col) {
-        PixelTaps& out = px[size_t(row - pr) * kTileW + (col - pc)];
-        if (tile_rig.cameras.empty()) continue;
-        const Node& u = node(col, row, 0);
-        const std::vector<pano::Contributor>& cs = u.cs;
-        if (cs.empty()) continue;
-        std::vector<double> mw;
-        if (needs_nb) {  // = pano::method_weights, with the cached potentials
-          std::array<pano::MrfNode, 4> nb;
-          const auto nbs = pano::grid_neighbours(opt.grid, col + wx, row + wy);
-          for (int k = 0; k < 4; ++k)
-            if (nbs[k][0] >= 0) {
-              const Node& v = node(nbs[k][0] - wx, nbs[k][1] - wy, k);
-              nb[k] = {&v.cs, &v.phi};
-            }
-          mw = pano::mrf_posterior(cs, u.phi, nb);
-        } else {
-          mw = pano::method_weights(tile_rig, opt.method, cs, {nullptr, nullptr, nullptr, nullptr}, opt.params);
-        }
-        std::vector<pano::Tap> taps;
-        for (size_t i = 0; i < cs.size(); ++i)
-          if (mw[i] > 0) taps.push_back({cs[i].camera, cs[i].px, mw[i]});
-        if (taps.size() > size_t(kMaxTaps)) {  // keep the strongest (never happens with real rigs)
-          std::partial_sort(taps.begin(), taps.begin() + kMaxTaps, taps.end(),
-                            [](auto& a, auto& b) { return a.weight > b.weight; });
-          taps.resize(kMaxTaps);
-        }
-        double total = 0;
-        for (const auto& t : taps) total += t.weight;
-        if (prune && total > 0) {  // drop the faint taps (MapOptions::min_weight), never the strongest
-          const double strongest =
-              std::max_element(taps.begin(), taps.end(), [](auto& a, auto& b) { return a.weight < b.weight; })->weight;
-          std::erase_if(taps, [&](const pano::Tap& t) {
-            return t.weight < opt.min_weight * total && t.weight < strongest;
-          });
-        }
-        // Sorted by camera, so that tap t of neighbouring pixels usually comes from the same camera
-        // (the runs of the map, compiled_map.h).
-        std::sort(taps.begin(), taps.end(), [&](auto& a, auto& b) { return a.camera < b.camera; });
-        const int n = static_cast<int>(taps.size());
-        double sum = 0;
-        for (int k = 0; k < n; ++k) sum += (w[k] = taps[k].weight);
-        if (sum <= 0) continue;
-        for (int k = 0; k < n; ++k) w[k] /= sum;
-        // The tap weights in 1/128 (summing to 128), then per tap the 2x2 neighbourhood and its four
-        // bilinear weights times the tap's weight, rounded to integers that sum to it (each at most
-        // 127, the kernels' signed bytes: a lone tap exactly on a pixel centre gives 127 + 1 to its
-        // neighbour below). sad keeps the bilinear weights alone (128 per tap) and its prior, the
-        // tap weights, in 1/256.
-        double pw[kMaxTaps];
-        for (int k = 0; k < n; ++k) pw[k] = w[k] * (sad ? 256.0 : 128.0);
-        quantise(pw, n, sad ? 256 : 128, 256, q);
-        int cam[kMaxTaps];
-        uint32_t off2[kMaxTaps];
-        for (int k = 0; k < n; ++k) {
-          cam[k] = tile_to_full[taps[k].camera];
-          int x0, y0;
-          double fx, fy;
-          bilinear_axis(taps[k].px.x(), L.size[cam[k]].width, x0, fx);
-          bilinear_axis(taps[k].px.y(), L.size[cam[k]].height, y0, fy);
-          off2[k] = static_cast<uint32_t>(L.offset(cam[k], x0, y0) / 2);
-          const int total = sad ? 128 : q[k];
-          const double bw[4] = {(1 - fx) * (1 - fy), (1 - fx) * fy, fx * (1 - fy), fx * fy};
-          for (int j = 0; j < 4; ++j) e[4 * k + j] = bw[j] * total;
-          quantise(e + 4 * k, 4, total, 127, qe + 4 * k);
-        }
-        for (int k = 0; k < n; ++k) {
-          const int* qk = qe + 4 * k;
-          if (q[k] == 0) continue;
-          out.off2[out.n] = off2[k];
-          out.weight[out.n] = uint32_t(qk[0]) | uint32_t(qk[1]) << 8 | uint32_t(qk[2]) << 16 | uint32_t(qk[3]) << 24;
-          out.prior[out.n] = sad ? static_cast<uint8_t>(q[k] - 1) : 0;
-          ++out.n;
-        }
-      }
-  };
-  // The renderer's tiles (kTileW x kTileH), each computed in blocks of 16 x 16 pixels and encoded
-  // independently, then concatenated.
-  const int ntiles = map.tiles();
-  std::vector<TileData> td(ntiles);
-  tbb::parallel_for(0, ntiles, [&](int t) {
-    const int c0 = (t % map.tiles_x()) * kTileW, r0 = (t / map.tiles_x()) * kTileH;
-    const int c1 = std::min(W, c0 + kTileW), r1 = std::min(H, r0 + kTileH);
-    std::vector<PixelTaps> px(size_t(kTileW) * kTileH);
-    constexpr int kBlock = 16;
-    for (int br = r0; br < r1; br += kBlock)
-      for (int bc = c0; bc < c1; bc += kBlock)
-        compute_taps(bc, br, std::min(c1, bc + kBlock), std::min(r1, br + kBlock), px.data(), c0, r0);
-    TileData& d = td[t];
-    for (int row = r0; row < r1; ++row) encode_tile_row(&px[size_t(row - r0) * kTileW], c1 - c0, sad, d);
-    // The store's cache lines the tile reads (16 bytes per tap), for the renderer's prefetch.
-    for (int row = r0; row < r1; ++row)
-      for (int col = c0; col < c1; ++col) {
-        const PixelTaps& p = px[size_t(row - r0) * kTileW + (col - c0)];
-        for (int k = 0; k < p.n; ++k)
-          for (size_t b : {size_t(p.off2[k]) * 2, size_t(p.off2[k]) * 2 + 15}) d.lines.push_back(uint32_t(b / 64 * 64));
-      }
-    std::sort(d.lines.begin(), d.lines.end());
-    d.lines.erase(std::unique(d.lines.begin(), d.lines.end()), d.lines.end());
-  });
+    const int n = static_cast<int>(taps.size());
+    double sum = 0;
+    for (int k = 0; k < n; ++k) sum += (w[k] = taps[k].weight);
+    if (sum <= 0) return;
+    for (int k = 0; k < n; ++k) w[k] /= sum;
+    double pw[kMaxTaps];
+    for (int k = 0; k < n; ++k) pw[k] = w[k] * (sad_ ? 256.0 : 128.0);
+    quantise(pw, n, sad_ ? 256 : 128, 256, q);
+    uint32_t off2[kMaxTaps];
+    for (int k = 0; k < n; ++k) {
+      const int cam = b.to_full[taps[k].camera];
+      int x0, y0;
+      double fx, fy;
+      bilinear_axis(taps[k].px.x(), layout_.size[cam].width, x0, fx);
+      bilinear_axis(taps[k].px.y(), layout_.size[cam].height, y0, fy);
+      off2[k] = static_cast<uint32_t>(layout_.offset(cam, x0, y0) / 2);
+      const int total = sad_ ? 128 : q[k];
+      const double bw[4] = {(1 - fx) * (1 - fy), (1 - fx) * fy, fx * (1 - fy), fx * fy};
+      for (int j = 0; j < 4; ++j) e[4 * k + j] = bw[j] * total;
+      quantise(e + 4 * k, 4, total, 127, qe + 4 * k);
+    }
+    for (int k = 0; k < n; ++k) {
+      const int* qk = qe + 4 * k;
+      if (q[k] == 0) continue;
+      out.off2[out.n] = off2[k];
+      out.weight[out.n] = uint32_t(qk[0]) | uint32_t(qk[1]) << 8 | uint32_t(qk[2]) << 16 | uint32_t(qk[3]) << 24;
+      out.prior[out.n] = sad_ ? static_cast<uint8_t>(q[k] - 1) : 0;
+      ++out.n;
+    }
+  }
+
+  const MapOptions& opt_;
+  const int wx_, wy_, W_, H_;
+  const StoreLayout& layout_;
+  const bool sad_, needs_nb_, spherical_;
+  Rig sub_;                   // the rig of the active cameras
+  std::vector<int> to_full_;  // its camera index -> rig camera index
+  std::vector<double> cam_half_;
+};
+
+// Tile t of `map` (kTileW x kTileH): computed in blocks of 16 x 16 pixels and encoded, with the
+// store's cache lines it reads (16 bytes per tap) for the renderer's prefetch.
+TileData compile_tile(const CompiledMap& map, const TapCompiler& taps, int t) {
+  const int c0 = (t % map.tiles_x()) * kTileW, r0 = (t / map.tiles_x()) * kTileH;
+  const int c1 = std::min(map.width, c0 + kTileW), r1 = std::min(map.height, r0 + kTileH);
+  std::vector<PixelTaps> px(size_t(kTileW) * kTileH);
+  constexpr int kBlock = 16;
+  for (int br = r0; br < r1; br += kBlock)
+    for (int bc = c0; bc < c1; bc += kBlock)
+      taps.compute(bc, br, std::min(c1, bc + kBlock), std::min(r1, br + kBlock), px.data(), c0, r0);
+  const bool sad = map.method == pano::Method::kSad;
+  TileData d;
+  for (int row = r0; row < r1; ++row) encode_tile_row(&px[size_t(row - r0) * kTileW], c1 - c0, sad, d);
+  for (int row = r0; row < r1; ++row)
+    for (int col = c0; col < c1; ++col) {
+      const PixelTaps& p = px[size_t(row - r0) * kTileW + (col - c0)];
+      for (int k = 0; k < p.n; ++k)
+        for (size_t b : {size_t(p.off2[k]) * 2, size_t(p.off2[k]) * 2 + 15}) d.lines.push_back(uint32_t(b / 64 * 64));
+    }
+  std::sort(d.lines.begin(), d.lines.end());
+  d.lines.erase(std::unique(d.lines.begin(), d.lines.end()), d.lines.end());
+  return d;
+}
+
+// The tiles, encoded independently, concatenated into the map's arrays.
+void concatenate_tiles(const std::vector<TileData>& td, CompiledMap& map) {
+  const int ntiles = static_cast<int>(td.size());
+  const bool sad = map.method == pano::Method::kSad;
   map.tile_run.assign(ntiles + 1, 0);
   map.tile_tap.assign(ntiles + 1, 0);
   map.tile_base.assign(ntiles + 1, 0);
@@ -467,6 +500,27 @@ CompiledMap compile_map(const Rig& rig, const MapOptions& opt) {
     std::copy(d.base.begin(), d.base.end(), map.base.begin() + map.tile_base[t]);
     std::copy(d.lines.begin(), d.lines.end(), map.lines.begin() + map.tile_line[t]);
   });
+}
+
+}  // namespace
+
+CompiledMap compile_map(const Rig& rig, const MapOptions& opt) {
+  if (std::string why; !opt.IsValid(&why)) throw std::invalid_argument("compile_map: " + why);
+  if (!opt.active.empty() && opt.active.size() != rig.cameras.size())
+    throw std::invalid_argument("compile_map: active set has " + std::to_string(opt.active.size()) +
+                                " entries for " + std::to_string(rig.cameras.size()) + " cameras");
+  CompiledMap map;
+  // The window of the grid this map covers (map pixel (c, r) = grid pixel (wx + c, wy + r)).
+  const cv::Rect win = opt.window.empty() ? cv::Rect(0, 0, opt.grid.width, opt.grid.height) : opt.window;
+  map.width = win.width;
+  map.height = win.height;
+  map.method = opt.method;
+  map.sad_epsilon = static_cast<float>(opt.params.sad_epsilon);
+  map.layout = StoreLayout::for_rig(rig);
+  const TapCompiler taps(rig, opt, win, map.layout);
+  std::vector<TileData> td(map.tiles());
+  tbb::parallel_for(0, map.tiles(), [&](int t) { td[t] = compile_tile(map, taps, t); });
+  concatenate_tiles(td, map);
   return map;
 }
 
