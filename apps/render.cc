@@ -156,188 +156,200 @@ class RenderJob : public dist::Job {
   std::unique_ptr<render::PanoRenderer> renderer_;
 };
 
-void render(dist::Comm& comm, const RenderArgs& a) {
-  using clock = std::chrono::steady_clock;
-  const auto t_start = clock::now();
-  const bool root = comm.rank() == 0;
-  // Options: the same on every rank, so an error here is every rank's (given once).
+// What one run of `omma render` did, for its summary.
+struct RenderTotals {
+  double render_s = 0, develop_s = 0, read_s = 0, write_s = 0;
+  int64_t rendered = 0, reused = 0;
+  fs::path last_out;
+  nlohmann::json dist_json = nullptr;  // how the work was distributed (null: --repeat)
+};
+
+// The options, the same on every rank (so an error is every rank's, given once by the caller).
+struct RenderSetup {
   render::PanoRenderOptions o;
   isp::IspOptions iso;
   Size2 size{0, 0};
   dist::Rank0 rank0 = dist::Rank0::kWorks;
-  std::string error;
-  try {
-    if (a.out.empty()) throw std::invalid_argument("--out is required");
-    size = parse_size(a.size, /*banded=*/true);
-    if (a.band_rows < 1) throw std::invalid_argument("--band-rows must be >= 1");
-    if (a.repeat < 1 || a.repeat > 10000) throw std::invalid_argument("--repeat must be 1..10000");
-    if (a.repeat > 1 && comm.size() > 1)
-      throw std::invalid_argument("--repeat measures one process's speed: run it without mpirun");
-    if (a.split != "sets" && a.split != "tiles") throw std::invalid_argument("--split must be sets or tiles");
-    if (a.threads < 0) throw std::invalid_argument("--threads must be >= 0");
-    rank0 = dist::parse_rank0(a.rank0);
-    o.grid = PanoGrid{parse_projection(a.projection), size.width, size.height};
-    if (a.method == "hq") {
-      o.offline = true;
-      o.method = pano::Method::kLinear;
-    } else {
-      o.method = pano::parse_method(a.method);
+};
+RenderSetup parse_render_args(const dist::Comm& comm, const RenderArgs& a) {
+  RenderSetup s;
+  render::PanoRenderOptions& o = s.o;
+  isp::IspOptions& iso = s.iso;
+  Size2& size = s.size;
+  dist::Rank0& rank0 = s.rank0;
+  const bool root = comm.rank() == 0;
+  if (a.out.empty()) throw std::invalid_argument("--out is required");
+  size = parse_size(a.size, /*banded=*/true);
+  if (a.band_rows < 1) throw std::invalid_argument("--band-rows must be >= 1");
+  if (a.repeat < 1 || a.repeat > 10000) throw std::invalid_argument("--repeat must be 1..10000");
+  if (a.repeat > 1 && comm.size() > 1)
+    throw std::invalid_argument("--repeat measures one process's speed: run it without mpirun");
+  if (a.split != "sets" && a.split != "tiles") throw std::invalid_argument("--split must be sets or tiles");
+  if (a.threads < 0) throw std::invalid_argument("--threads must be >= 0");
+  rank0 = dist::parse_rank0(a.rank0);
+  o.grid = PanoGrid{parse_projection(a.projection), size.width, size.height};
+  if (a.method == "hq") {
+    o.offline = true;
+    o.method = pano::Method::kLinear;
+  } else {
+    o.method = pano::parse_method(a.method);
+  }
+  o.band_rows = a.band_rows;
+  o.resident_maps = !a.stream_maps;
+  if (a.no_cache) o.cache_dir.clear();
+  o.progress = !a.json && root;
+  iso.demosaic = isp::parse_demosaic(a.demosaic);
+  iso.awb = isp::parse_awb(a.awb);
+  iso.srgb = true;
+  iso.bits = a.bits;  // a recording's own bit depth replaces it (develop_frame_set)
+  return s;
+}
+
+// --repeat: the speed of one process, the frame sets rendered --repeat times each (no manifest).
+void render_repeat(RenderJob& job, const RenderArgs& a, RenderTotals& r) {
+  job.open();
+  job.setup();
+  Progress progress("render", size_t(job.items() * a.repeat), !a.json);
+  for (int64_t i = 0; i < job.items(); ++i) {
+    const dist::ItemTimes t = job.load(i);
+    r.read_s += t.read;
+    r.develop_s += t.develop;
+    for (int k = 0; k < a.repeat; ++k) {
+      r.last_out = job.output(i);
+      r.render_s += io::render_to_file(job.renderer(), r.last_out);
+      ++r.rendered;
+      progress.step();
     }
-    o.band_rows = a.band_rows;
-    o.resident_maps = !a.stream_maps;
-    if (a.no_cache) o.cache_dir.clear();
-    o.progress = !a.json && root;
-    iso.demosaic = isp::parse_demosaic(a.demosaic);
-    iso.awb = isp::parse_awb(a.awb);
-    iso.srgb = true;
-    iso.bits = a.bits;  // a recording's own bit depth replaces it (develop_frame_set)
+  }
+  progress.finish();
+}
+
+// --split sets: one frame set per work item of dist::run_job (resumable, with a manifest).
+// Returns false on the ranks other than 0 (nothing to report).
+bool render_sets(dist::Comm& comm, RenderJob& job, const RenderArgs& a, dist::Rank0 rank0, RenderTotals& r) {
+  const bool root = comm.rank() == 0;
+  dist::RunOptions ro;
+  ro.manifest = a.manifest.empty() ? fs::path(a.out).parent_path() / "render-manifest.json" : fs::path(a.manifest);
+  ro.resume = !a.no_resume;
+  ro.rank0 = rank0;
+  ro.progress = !a.json;
+  ro.label = "frame sets";
+  const dist::RunSummary sum = dist::run_job(comm, job, ro);
+  if (!root) return false;
+  r.rendered = sum.made;
+  r.reused = sum.reused;
+  r.render_s = sum.totals.render;
+  r.develop_s = sum.totals.develop;
+  r.read_s = sum.totals.read;
+  r.write_s = sum.totals.write + sum.checksum_seconds;
+  r.last_out = job.output(job.items() - 1);
+  const double work_s = sum.seconds - sum.setup_seconds;
+  r.dist_json = {{"split", "sets"},
+               {"ranks", sum.ranks},
+               {"mpi", sum.mpi},
+               {"rank0", dist::rank0_name(sum.rank0)},
+               {"manifest", ro.manifest.string()},
+               {"made", sum.made},
+               {"reused", sum.reused},
+               {"setup_seconds", sum.setup_seconds},
+               {"work_seconds", work_s},
+               {"frame_sets_per_s", work_s > 0 ? sum.made / work_s : 0},
+               {"seconds_per_stage",
+                {{"read", sum.totals.read},
+                 {"develop", sum.totals.develop},
+                 {"render", sum.totals.render},
+                 {"write", sum.totals.write},
+                 {"checksum", sum.checksum_seconds}}},
+               {"cpu_seconds", sum.cpu_seconds}};
+  return true;
+}
+
+// --split tiles: every rank opens and prepares, then each frame set is split by bands among the
+// ranks (dist::render_split). Returns false on the ranks other than 0.
+bool render_tiles(dist::Comm& comm, RenderJob& job, const RenderArgs& a, dist::Rank0 rank0, RenderTotals& r) {
+  using clock = std::chrono::steady_clock;
+  const bool root = comm.rank() == 0;
+  std::string error;
+  error.clear();
+  try {
+    job.open();
   } catch (const std::exception& e) {
     error = e.what();
   }
   dist::check_all_ranks(comm, error);
-  cv::Mat truth;
-  if (root && !a.truth.empty()) {
-    truth = read_image(a.truth, cv::IMREAD_COLOR);
-    if (truth.cols != size.width || truth.rows != size.height)
-      throw std::invalid_argument(fmt::format("--truth is {}x{}, the panorama {}x{}", truth.cols, truth.rows,
-                                              size.width, size.height));
-  }
-
-  RenderJob job(a, o, iso);
-  double render_s = 0, develop_s = 0, read_s = 0, write_s = 0;
-  int64_t rendered = 0, reused = 0;
-  fs::path last_out;
-  nlohmann::json dist_json = nullptr;
-  if (a.repeat > 1) {
-    // Speed of one process: the frame sets rendered --repeat times each (no manifest).
-    job.open();
-    job.setup();
-    Progress progress("render", size_t(job.items() * a.repeat), !a.json);
-    for (int64_t i = 0; i < job.items(); ++i) {
-      const dist::ItemTimes t = job.load(i);
-      read_s += t.read;
-      develop_s += t.develop;
-      for (int r = 0; r < a.repeat; ++r) {
-        last_out = job.output(i);
-        render_s += io::render_to_file(job.renderer(), last_out);
-        ++rendered;
-        progress.step();
-      }
-    }
-    progress.finish();
-  } else if (a.split == "sets") {
-    dist::RunOptions ro;
-    ro.manifest = a.manifest.empty() ? fs::path(a.out).parent_path() / "render-manifest.json" : fs::path(a.manifest);
-    ro.resume = !a.no_resume;
-    ro.rank0 = rank0;
-    ro.progress = !a.json;
-    ro.label = "frame sets";
-    const dist::RunSummary sum = dist::run_job(comm, job, ro);
-    if (!root) return;
-    rendered = sum.made;
-    reused = sum.reused;
-    render_s = sum.totals.render;
-    develop_s = sum.totals.develop;
-    read_s = sum.totals.read;
-    write_s = sum.totals.write + sum.checksum_seconds;
-    last_out = job.output(job.items() - 1);
-    const double work_s = sum.seconds - sum.setup_seconds;
-    dist_json = {{"split", "sets"},
-                 {"ranks", sum.ranks},
-                 {"mpi", sum.mpi},
-                 {"rank0", dist::rank0_name(sum.rank0)},
-                 {"manifest", ro.manifest.string()},
-                 {"made", sum.made},
-                 {"reused", sum.reused},
-                 {"setup_seconds", sum.setup_seconds},
-                 {"work_seconds", work_s},
-                 {"frame_sets_per_s", work_s > 0 ? sum.made / work_s : 0},
-                 {"seconds_per_stage",
-                  {{"read", sum.totals.read},
-                   {"develop", sum.totals.develop},
-                   {"render", sum.totals.render},
-                   {"write", sum.totals.write},
-                   {"checksum", sum.checksum_seconds}}},
-                 {"cpu_seconds", sum.cpu_seconds}};
-  } else {
-    // --split tiles: every rank opens and prepares, then each frame set is split by bands.
-    error.clear();
-    try {
-      job.open();
+  error.clear();
+  if (root) try {
+      job.setup();  // first: fills the map cache the others read
     } catch (const std::exception& e) {
       error = e.what();
     }
-    dist::check_all_ranks(comm, error);
-    error.clear();
-    if (root) try {
-        job.setup();  // first: fills the map cache the others read
-      } catch (const std::exception& e) {
-        error = e.what();
-      }
-    dist::check_all_ranks(comm, error);
-    error.clear();
-    if (!root) try {
-        job.setup();
-      } catch (const std::exception& e) {
-        error = e.what();
-      }
-    dist::check_all_ranks(comm, error);
-    dist::SplitOptions so;
-    so.window = a.window;
-    so.rank0 = rank0;
-    double wall = 0, load_wall = 0;
-    int max_held = 0;
-    std::vector<int> per_rank;
-    for (int64_t i = 0; i < job.items(); ++i) {
-      error.clear();
-      const auto tl = clock::now();
-      try {
-        const dist::ItemTimes t = job.load(i);
-        read_s += t.read;  // rank 0's; every rank reads and develops the whole set
-        develop_s += t.develop;
-      } catch (const std::exception& e) {
-        error = e.what();
-      }
-      dist::check_all_ranks(comm, error, job.item_name(i) + ": ");
-      load_wall += std::chrono::duration<double>(clock::now() - tl).count();
-      last_out = job.output(i);
-      const dist::SplitSummary s = dist::render_split(comm, job.renderer(), last_out, so);
-      render_s += s.render_seconds;
-      write_s += s.write_seconds;
-      wall += s.seconds;
-      max_held = std::max(max_held, s.max_held);
-      if (per_rank.empty()) per_rank.assign(s.bands_per_rank.size(), 0);
-      for (size_t r = 0; r < s.bands_per_rank.size(); ++r) per_rank[r] += s.bands_per_rank[r];
-      ++rendered;
+  dist::check_all_ranks(comm, error);
+  error.clear();
+  if (!root) try {
+      job.setup();
+    } catch (const std::exception& e) {
+      error = e.what();
     }
-    if (!root) return;
-    dist_json = {{"split", "tiles"},
-                 {"ranks", comm.size()},
-                 {"mpi", comm.is_mpi()},
-                 {"rank0", dist::rank0_name(comm.size() == 1 ? dist::Rank0::kWorks : rank0)},
-                 {"bands", job.renderer().bands()},
-                 {"bands_per_rank", per_rank},
-                 {"max_bands_held", max_held},
-                 {"load_seconds", load_wall},
-                 {"split_seconds", wall}};
+  dist::check_all_ranks(comm, error);
+  dist::SplitOptions so;
+  so.window = a.window;
+  so.rank0 = rank0;
+  double wall = 0, load_wall = 0;
+  int max_held = 0;
+  std::vector<int> per_rank;
+  for (int64_t i = 0; i < job.items(); ++i) {
+    error.clear();
+    const auto tl = clock::now();
+    try {
+      const dist::ItemTimes t = job.load(i);
+      r.read_s += t.read;  // rank 0's; every rank reads and develops the whole set
+      r.develop_s += t.develop;
+    } catch (const std::exception& e) {
+      error = e.what();
+    }
+    dist::check_all_ranks(comm, error, job.item_name(i) + ": ");
+    load_wall += std::chrono::duration<double>(clock::now() - tl).count();
+    r.last_out = job.output(i);
+    const dist::SplitSummary s = dist::render_split(comm, job.renderer(), r.last_out, so);
+    r.render_s += s.render_seconds;
+    r.write_s += s.write_seconds;
+    wall += s.seconds;
+    max_held = std::max(max_held, s.max_held);
+    if (per_rank.empty()) per_rank.assign(s.bands_per_rank.size(), 0);
+    for (size_t k = 0; k < s.bands_per_rank.size(); ++k) per_rank[k] += s.bands_per_rank[k];
+    ++r.rendered;
   }
+  if (!root) return false;
+  r.dist_json = {{"split", "tiles"},
+               {"ranks", comm.size()},
+               {"mpi", comm.is_mpi()},
+               {"rank0", dist::rank0_name(comm.size() == 1 ? dist::Rank0::kWorks : rank0)},
+               {"bands", job.renderer().bands()},
+               {"bands_per_rank", per_rank},
+               {"max_bands_held", max_held},
+               {"load_seconds", load_wall},
+               {"split_seconds", wall}};
+  return true;
+}
 
+// The summary: JSON (--json) or a line, with the quality against --truth.
+void report_render(const dist::Comm& comm, RenderJob& job, const RenderArgs& a, const Size2& size,
+                   const cv::Mat& truth, const RenderTotals& r, double total) {
   nlohmann::json q = nullptr;
   if (!truth.empty()) {
-    const std::string ext = last_out.extension().string();
-    const cv::Mat pano = (ext == ".tif" || ext == ".tiff") ? io::read_tiff_rows(last_out) : read_image(last_out, cv::IMREAD_COLOR);
+    const std::string ext = r.last_out.extension().string();
+    const cv::Mat pano = (ext == ".tif" || ext == ".tiff") ? io::read_tiff_rows(r.last_out) : read_image(r.last_out, cv::IMREAD_COLOR);
     q = {{"psnr_db", pano::psnr_db(pano, truth)}, {"ssim", pano::ssim(pano, truth)}};
   }
   render::PanoRenderer& renderer = job.renderer();
   const auto mem = renderer.memory();
-  const double total = std::chrono::duration<double>(clock::now() - t_start).count();
-  const double per = rendered > 0 ? render_s / rendered : 0;
+  const double per = r.rendered > 0 ? r.render_s / r.rendered : 0;
   if (a.json) {
     print_json({{"input", a.input},
                 {"recording", job.recording()},
-                {"out", last_out.string()},
-                {"panoramas", rendered},
-                {"reused", reused},
+                {"out", r.last_out.string()},
+                {"panoramas", r.rendered},
+                {"reused", r.reused},
                 {"width", size.width},
                 {"height", size.height},
                 {"megapixels", size.width * double(size.height) / 1e6},
@@ -347,32 +359,63 @@ void render(dist::Comm& comm, const RenderArgs& a) {
                 {"maps_from_cache", renderer.maps_from_cache()},
                 {"render_seconds_per_panorama", per},
                 {"panoramas_per_s", per > 0 ? 1 / per : 0},
-                {"develop_seconds", develop_s},
-                {"read_seconds", read_s},
-                {"write_seconds", write_s},
+                {"develop_seconds", r.develop_s},
+                {"read_seconds", r.read_s},
+                {"write_seconds", r.write_s},
                 {"memory",
                  {{"store_bytes", mem.store_bytes},
                   {"maps_bytes", mem.maps_bytes},
                   {"band_bytes", mem.band_bytes},
                   {"total_bytes", mem.total()}}},
-                {"distributed", dist_json},
+                {"distributed", r.dist_json},
                 {"quality", q},
                 {"seconds", total}});
   } else {
     std::cout << fmt::format(
         "{}: {} panorama(s) {}x{} ({:.1f} MP, {}) from {}{}; maps {:.2f} s ({} of {} bands from the cache); render "
         "{:.3f} s per panorama ({:.2f}/s); memory {:.0f} MB (store {:.0f}, maps {:.0f}, band {:.0f})\n",
-        last_out.string(), rendered, size.width, size.height, size.width * double(size.height) / 1e6, a.method,
-        a.input, reused > 0 ? fmt::format(" ({} more verified from an earlier run)", reused) : "",
+        r.last_out.string(), r.rendered, size.width, size.height, size.width * double(size.height) / 1e6, a.method,
+        a.input, r.reused > 0 ? fmt::format(" ({} more verified from an earlier run)", r.reused) : "",
         renderer.maps_seconds(), renderer.maps_from_cache(), renderer.bands(), per, per > 0 ? 1 / per : 0,
         mem.total() / 1e6, mem.store_bytes / 1e6, mem.maps_bytes / 1e6, mem.band_bytes / 1e6);
-    if (!dist_json.is_null() && comm.size() > 1)
+    if (!r.dist_json.is_null() && comm.size() > 1)
       std::cout << fmt::format("  {} ranks, split by {}{}\n", comm.size(), a.split,
-                               a.split == "sets" ? ", manifest " + dist_json["manifest"].get<std::string>() : "");
+                               a.split == "sets" ? ", manifest " + r.dist_json["manifest"].get<std::string>() : "");
     if (!q.is_null())
       std::cout << fmt::format("  against {}: PSNR {:.2f} dB, SSIM {:.4f}\n", a.truth, q["psnr_db"].get<double>(),
                                q["ssim"].get<double>());
   }
+}
+
+void render(dist::Comm& comm, const RenderArgs& a) {
+  using clock = std::chrono::steady_clock;
+  const auto t_start = clock::now();
+  const bool root = comm.rank() == 0;
+  RenderSetup s;
+  std::string error;
+  try {
+    s = parse_render_args(comm, a);
+  } catch (const std::exception& e) {
+    error = e.what();
+  }
+  dist::check_all_ranks(comm, error);
+  cv::Mat truth;
+  if (root && !a.truth.empty()) {
+    truth = read_image(a.truth, cv::IMREAD_COLOR);
+    if (truth.cols != s.size.width || truth.rows != s.size.height)
+      throw std::invalid_argument(fmt::format("--truth is {}x{}, the panorama {}x{}", truth.cols, truth.rows,
+                                              s.size.width, s.size.height));
+  }
+  RenderJob job(a, s.o, s.iso);
+  RenderTotals r;
+  if (a.repeat > 1) {
+    render_repeat(job, a, r);
+  } else if (a.split == "sets") {
+    if (!render_sets(comm, job, a, s.rank0, r)) return;
+  } else {
+    if (!render_tiles(comm, job, a, s.rank0, r)) return;
+  }
+  report_render(comm, job, a, s.size, truth, r, std::chrono::duration<double>(clock::now() - t_start).count());
 }
 
 void run_render(const RenderArgs& a) {

@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cstring>
 #include <deque>
+#include <functional>
 #include <map>
 #include <optional>
 #include <thread>
@@ -73,17 +74,154 @@ std::optional<BandResult> decode(const std::string& m) {
 
 }  // namespace
 
+namespace {
+
+// Rank 0 opens the output first (a failure there is everybody's error): the options, the ranks
+// against the bands, a BigTIFF path. Returns the error ("" if none).
+std::string open_output(const Comm& comm, const render::PanoRenderer& renderer, const fs::path& path,
+                        const SplitOptions& options, Rank0 mode, std::optional<io::BigTiffWriter>& writer) {
+  try {
+    if (std::string why; !options.IsValid(&why)) throw std::invalid_argument(why);
+    std::string ext = path.extension().string();
+    for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    if (ext != ".tif" && ext != ".tiff")
+      throw std::invalid_argument("--split tiles writes one BigTIFF: the output must end in .tif or .tiff, not '" +
+                                  path.filename().string() + "'");
+    const int nb = renderer.bands(), size = comm.size();
+    const int workers = size - (mode == Rank0::kServes ? 1 : 0);
+    if (workers > nb)
+      throw std::invalid_argument(fmt::format("{} ranks for {} bands: start at most {}, or use smaller bands", size, nb,
+                                              nb + (mode == Rank0::kServes ? 1 : 0)));
+    const auto& g = renderer.options().grid;
+    writer.emplace(path, g.width, g.height);
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  return "";
+}
+
+// A rank other than 0: renders the bands it is given until told to stop, reporting each with the
+// next request.
+void work(Comm& comm, const std::function<BandResult(int64_t)>& render_one) {
+  std::string report = encode(nullptr);
+  for (;;) {
+    comm.send(0, kTagBand, report);
+    const int b = std::stoi(comm.recv().data);
+    if (b < 0) break;
+    const BandResult r = render_one(b);
+    report = encode(&r);
+  }
+}
+
+// Rank 0's bookkeeping: which band to hand out next (at most `window` ahead of the writer), and the
+// bands that arrived, written in order as soon as the next one is there.
+class BandWriter {
+ public:
+  BandWriter(const render::PanoRenderer& renderer, io::BigTiffWriter& writer, int window, int ranks,
+             SplitSummary& sum)
+      : renderer_(renderer), writer_(writer), nb_(renderer.bands()), window_(window), ranks_(ranks), sum_(sum) {}
+  // The band to hand out: -1 stop; -2 wait for the writer.
+  int next_band() {
+    if (!failure_.empty() || next_hand_ >= nb_) return -1;
+    if (next_hand_ >= next_write_ + window_) return -2;
+    return next_hand_++;
+  }
+  void accept(BandResult&& r, int from) {
+    if (!r.error.empty()) {
+      if (failure_.empty())
+        failure_ = fmt::format("{}band {} (rows {}..): {}", ranks_ > 1 ? fmt::format("rank {}, ", from) : "", r.band,
+                               renderer_.band(r.band).y, r.error);
+      return;
+    }
+    ++sum_.bands_per_rank[from];
+    sum_.render_seconds += r.seconds;
+    held_[r.band] = std::move(r.pixels);
+    sum_.max_held = std::max(sum_.max_held, static_cast<int>(held_.size()));
+    const auto tw = Clock::now();
+    try {
+      for (auto it = held_.find(next_write_); it != held_.end() && failure_.empty(); it = held_.find(next_write_)) {
+        writer_.write_rows(it->second);
+        held_.erase(it);
+        ++next_write_;
+      }
+    } catch (const std::exception& e) {
+      if (failure_.empty()) failure_ = e.what();
+    }
+    sum_.write_seconds += std::chrono::duration<double>(Clock::now() - tw).count();
+  }
+  // After serving: the failure, if any ("" when every band was written and the file finished).
+  std::string finish() {
+    if (failure_.empty() && next_write_ != nb_)
+      failure_ = fmt::format("only {} of {} bands were written", next_write_, nb_);
+    if (failure_.empty()) {
+      try {
+        const auto tw = Clock::now();
+        writer_.finish();
+        sum_.write_seconds += std::chrono::duration<double>(Clock::now() - tw).count();
+      } catch (const std::exception& e) {
+        failure_ = e.what();
+      }
+    }
+    return failure_;
+  }
+
+ private:
+  const render::PanoRenderer& renderer_;
+  io::BigTiffWriter& writer_;
+  const int nb_, window_, ranks_;
+  SplitSummary& sum_;
+  std::map<int, cv::Mat> held_;
+  int next_write_ = 0, next_hand_ = 0;
+  std::string failure_;
+};
+
+// Rank 0 hands out bands to the other ranks (and renders some itself with kWorks) until every rank
+// is told to stop.
+void serve(Comm& comm, Rank0 mode, const std::function<BandResult(int64_t)>& render_one, BandWriter& out) {
+  std::optional<WorkerThread<BandResult>> local;
+  bool local_done = mode != Rank0::kWorks;
+  if (!local_done) local.emplace(render_one);
+  std::deque<int> waiting;     // ranks that asked for a band while the window was full
+  int remote = comm.size() - 1;  // ranks not yet told to stop
+  for (;;) {
+    if (local && !local_done && !local->busy()) {
+      const int b = out.next_band();
+      if (b >= 0) local->assign(b);
+      if (b == -1) local_done = true;
+    }
+    while (!waiting.empty()) {
+      const int b = out.next_band();
+      if (b == -2) break;
+      comm.send(waiting.front(), kTagAssign, std::to_string(b));
+      waiting.pop_front();
+      if (b == -1) --remote;
+    }
+    const bool local_busy = local && local->busy();
+    if (remote == 0 && !local_busy && local_done) break;
+    if (local_busy)
+      if (auto r = local->wait_result(remote > 0 ? std::chrono::microseconds(500) : std::chrono::hours(1)))
+        out.accept(std::move(*r), 0);
+    if (remote > 0) {
+      if (auto m = comm.try_recv()) {
+        if (auto r = decode(m->data)) out.accept(std::move(*r), m->source);
+        waiting.push_back(m->source);
+      } else if (!local_busy) {
+        std::this_thread::sleep_for(std::chrono::microseconds(500));
+      }
+    }
+  }
+}
+
+}  // namespace
+
 SplitSummary render_split(Comm& comm, render::PanoRenderer& renderer, const fs::path& path,
                           const SplitOptions& options) {
   const auto t0 = Clock::now();
   const int rank = comm.rank(), size = comm.size();
   const Rank0 mode = size == 1 ? Rank0::kWorks : options.rank0;
-  const int nb = renderer.bands();
-  const int window = options.window > 0 ? options.window : 2 * size;
   SplitSummary sum;
-  sum.bands = nb;
-
-  auto render_one = [&renderer](int64_t b) {
+  sum.bands = renderer.bands();
+  const std::function<BandResult(int64_t)> render_one = [&renderer](int64_t b) {
     BandResult r;
     r.band = static_cast<int>(b);
     const auto t = Clock::now();
@@ -96,119 +234,17 @@ SplitSummary render_split(Comm& comm, render::PanoRenderer& renderer, const fs::
     r.seconds = std::chrono::duration<double>(Clock::now() - t).count();
     return r;
   };
-
-  // Rank 0 opens the output first: a failure there is everybody's error.
-  std::string error;
   std::optional<io::BigTiffWriter> writer;
-  if (rank == 0) {
-    try {
-      if (std::string why; !options.IsValid(&why)) throw std::invalid_argument(why);
-      std::string ext = path.extension().string();
-      for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-      if (ext != ".tif" && ext != ".tiff")
-        throw std::invalid_argument("--split tiles writes one BigTIFF: the output must end in .tif or .tiff, not '" +
-                                    path.filename().string() + "'");
-      const int workers = size - (mode == Rank0::kServes ? 1 : 0);
-      if (workers > nb)
-        throw std::invalid_argument(fmt::format("{} ranks for {} bands: start at most {}, or use smaller bands", size, nb,
-                                                nb + (mode == Rank0::kServes ? 1 : 0)));
-      const auto& g = renderer.options().grid;
-      writer.emplace(path, g.width, g.height);
-    } catch (const std::exception& e) {
-      error = e.what();
-    }
-  }
-  broadcast_verdict(comm, error);
-
+  broadcast_verdict(comm, rank == 0 ? open_output(comm, renderer, path, options, mode, writer) : "");
   if (rank != 0) {
-    std::string report = encode(nullptr);
-    for (;;) {
-      comm.send(0, kTagBand, report);
-      const int b = std::stoi(comm.recv().data);
-      if (b < 0) break;
-      const BandResult r = render_one(b);
-      report = encode(&r);
-    }
+    work(comm, render_one);
     broadcast_verdict(comm, "");
     return sum;
   }
-
   sum.bands_per_rank.assign(size, 0);
-  std::map<int, cv::Mat> held;
-  int next_write = 0, next_hand = 0;
-  std::string failure;
-  auto next_band = [&]() -> int {  // -1: stop; -2: wait for the writer
-    if (!failure.empty() || next_hand >= nb) return -1;
-    if (next_hand >= next_write + window) return -2;
-    return next_hand++;
-  };
-  auto accept = [&](BandResult&& r, int from) {
-    if (!r.error.empty()) {
-      if (failure.empty())
-        failure = fmt::format("{}band {} (rows {}..): {}", size > 1 ? fmt::format("rank {}, ", from) : "", r.band,
-                              renderer.band(r.band).y, r.error);
-      return;
-    }
-    ++sum.bands_per_rank[from];
-    sum.render_seconds += r.seconds;
-    held[r.band] = std::move(r.pixels);
-    sum.max_held = std::max(sum.max_held, static_cast<int>(held.size()));
-    const auto tw = Clock::now();
-    try {
-      for (auto it = held.find(next_write); it != held.end() && failure.empty(); it = held.find(next_write)) {
-        writer->write_rows(it->second);
-        held.erase(it);
-        ++next_write;
-      }
-    } catch (const std::exception& e) {
-      if (failure.empty()) failure = e.what();
-    }
-    sum.write_seconds += std::chrono::duration<double>(Clock::now() - tw).count();
-  };
-  {
-    std::optional<WorkerThread<BandResult>> local;
-    bool local_done = mode != Rank0::kWorks;
-    if (!local_done) local.emplace(render_one);
-    std::deque<int> waiting;  // ranks that asked for a band while the window was full
-    int remote = size - 1;     // ranks not yet told to stop
-    for (;;) {
-      if (local && !local_done && !local->busy()) {
-        const int b = next_band();
-        if (b >= 0) local->assign(b);
-        if (b == -1) local_done = true;
-      }
-      while (!waiting.empty()) {
-        const int b = next_band();
-        if (b == -2) break;
-        comm.send(waiting.front(), kTagAssign, std::to_string(b));
-        waiting.pop_front();
-        if (b == -1) --remote;
-      }
-      const bool local_busy = local && local->busy();
-      if (remote == 0 && !local_busy && local_done) break;
-      if (local_busy)
-        if (auto r = local->wait_result(remote > 0 ? std::chrono::microseconds(500) : std::chrono::hours(1)))
-          accept(std::move(*r), 0);
-      if (remote > 0) {
-        if (auto m = comm.try_recv()) {
-          if (auto r = decode(m->data)) accept(std::move(*r), m->source);
-          waiting.push_back(m->source);
-        } else if (!local_busy) {
-          std::this_thread::sleep_for(std::chrono::microseconds(500));
-        }
-      }
-    }
-  }
-  if (failure.empty() && next_write != nb) failure = fmt::format("only {} of {} bands were written", next_write, nb);
-  if (failure.empty()) {
-    try {
-      const auto tw = Clock::now();
-      writer->finish();
-      sum.write_seconds += std::chrono::duration<double>(Clock::now() - tw).count();
-    } catch (const std::exception& e) {
-      failure = e.what();
-    }
-  }
+  BandWriter out(renderer, *writer, options.window > 0 ? options.window : 2 * size, size, sum);
+  serve(comm, mode, render_one, out);
+  const std::string failure = out.finish();
   writer.reset();  // without finish(): removes the temporary file
   sum.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
   broadcast_verdict(comm, failure);
