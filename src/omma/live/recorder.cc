@@ -53,6 +53,54 @@ struct Shared {
 
 }  // namespace
 
+namespace {
+
+// Camera c's thread: reads its source (free-running at the source's own rate), converts each frame
+// to the raw mosaic and queues it for the writer; a full queue drops the frame (the sequence numbers
+// show the gap). The first error of any camera is kept in sh.error.
+void capture(int c, CameraSource& src, const io::RecordingManifest& manifest, const RecordOptions& opt, Shared& sh,
+             std::chrono::steady_clock::time_point t0) {
+  uint64_t seq = 0;
+  const double fps = src.fps();
+  auto next_due = std::chrono::steady_clock::now();
+  try {
+    cv::Mat frame;
+    while (!sh.stop && (opt.frames == 0 || int64_t(seq) < opt.frames) && src.read(frame)) {
+      // Capture time: when the source delivered the frame.
+      const int64_t t = std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count();
+      cv::Mat raw = io::to_raw_mosaic(frame, manifest.bits);
+      if (raw.cols != manifest.rig.cameras[c].in.width || raw.rows != manifest.rig.cameras[c].in.height)
+        throw std::runtime_error(fmt::format("frames are {}x{}, the rig says {}x{}", raw.cols, raw.rows,
+                                             manifest.rig.cameras[c].in.width, manifest.rig.cameras[c].in.height));
+      {
+        CameraQueue& cq = sh.queues[c];
+        std::lock_guard lock(cq.m);
+        if (static_cast<int>(cq.q.size()) >= opt.queue_frames)
+          ++cq.dropped;  // the writer is behind: drop, the sequence number shows the gap
+        else
+          cq.q.push_back({std::move(raw), seq, t});
+      }
+      sh.cv.notify_one();
+      ++seq;
+      if (fps > 0) {  // free-running at the source's own rate (as the live engine does)
+        next_due += std::chrono::microseconds(long(1e6 / fps));
+        const auto now = std::chrono::steady_clock::now();
+        if (next_due < now) next_due = now;
+        while (!sh.stop && std::chrono::steady_clock::now() < next_due)
+          std::this_thread::sleep_for(std::min<std::chrono::steady_clock::duration>(
+              next_due - std::chrono::steady_clock::now(), std::chrono::milliseconds(20)));
+      }
+    }
+  } catch (const std::exception& e) {
+    std::lock_guard lock(sh.m);
+    if (sh.error.empty()) sh.error = fmt::format("camera {}: {}", manifest.rig.cameras[c].id, e.what());
+  }
+  --sh.running;
+  sh.cv.notify_one();
+}
+
+}  // namespace
+
 RecordSummary record(std::vector<std::unique_ptr<CameraSource>> sources, const std::filesystem::path& dir,
                      io::RecordingManifest manifest, const RecordOptions& opt) {
   if (std::string why; !opt.IsValid(&why)) throw std::invalid_argument("record: " + why);
@@ -68,49 +116,9 @@ RecordSummary record(std::vector<std::unique_ptr<CameraSource>> sources, const s
   sh.queues.swap(queues);
   sh.running = n;
   const auto t0 = std::chrono::steady_clock::now();
-  auto now_ns = [&] {
-    return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count();
-  };
   std::vector<std::thread> threads;
   for (int c = 0; c < n; ++c)
-    threads.emplace_back([&, c] {
-      uint64_t seq = 0;
-      const double fps = sources[c]->fps();
-      auto next_due = std::chrono::steady_clock::now();
-      try {
-        cv::Mat frame;
-        while (!sh.stop && (opt.frames == 0 || int64_t(seq) < opt.frames) && sources[c]->read(frame)) {
-          const int64_t t = now_ns();  // capture time: when the source delivered the frame
-          cv::Mat raw = io::to_raw_mosaic(frame, manifest.bits);
-          if (raw.cols != manifest.rig.cameras[c].in.width || raw.rows != manifest.rig.cameras[c].in.height)
-            throw std::runtime_error(fmt::format("frames are {}x{}, the rig says {}x{}", raw.cols, raw.rows,
-                                                 manifest.rig.cameras[c].in.width, manifest.rig.cameras[c].in.height));
-          {
-            CameraQueue& cq = sh.queues[c];
-            std::lock_guard lock(cq.m);
-            if (static_cast<int>(cq.q.size()) >= opt.queue_frames)
-              ++cq.dropped;  // the writer is behind: drop, the sequence number shows the gap
-            else
-              cq.q.push_back({std::move(raw), seq, t});
-          }
-          sh.cv.notify_one();
-          ++seq;
-          if (fps > 0) {  // free-running at the source's own rate (as the live engine does)
-            next_due += std::chrono::microseconds(long(1e6 / fps));
-            const auto now = std::chrono::steady_clock::now();
-            if (next_due < now) next_due = now;
-            while (!sh.stop && std::chrono::steady_clock::now() < next_due)
-              std::this_thread::sleep_for(std::min<std::chrono::steady_clock::duration>(
-                  next_due - std::chrono::steady_clock::now(), std::chrono::milliseconds(20)));
-          }
-        }
-      } catch (const std::exception& e) {
-        std::lock_guard lock(sh.m);
-        if (sh.error.empty()) sh.error = fmt::format("camera {}: {}", manifest.rig.cameras[c].id, e.what());
-      }
-      --sh.running;
-      sh.cv.notify_one();
-    });
+    threads.emplace_back([&, c] { capture(c, *sources[c], manifest, opt, sh, t0); });
   // The writer: this thread, round robin over the queues.
   RecordSummary sum;
   sum.frames.assign(n, 0);

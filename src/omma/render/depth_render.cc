@@ -214,43 +214,42 @@ struct DepthRenderer::Impl {
   double compile_s = 0;
 };
 
-DepthRenderer::DepthRenderer(const Rig& rig, const DepthRenderOptions& opt) : impl_(std::make_unique<Impl>()) {
-  std::string why;
-  if (!opt.IsValid(&why)) throw std::invalid_argument("depth renderer: " + why);
-  const auto t0 = std::chrono::steady_clock::now();
-  Impl& m = *impl_;
-  m.rig = rig;
-  m.opt = opt;
-  m.layout = StoreLayout::for_rig(rig);
-  m.arena = opt.threads > 0 ? std::make_unique<tbb::task_arena>(opt.threads) : std::make_unique<tbb::task_arena>();
-  const Vec3 q = opt.map.params.search.q;
-  for (const auto& c : rig.cameras) {
-    const Vec3 b = q - c.position_mm;
-    DCam d;
-    d.bt = float(b.dot(c.frame.t));
-    d.bb = float(b.squaredNorm());
-    const double ca = std::cos(c.in.aov / 2);
-    d.cos2 = float(ca * ca);
-    d.fu = float(c.in.fu);
-    d.fv = float(c.in.fv);
-    d.cu = float(c.in.cu);
-    d.cv = float(c.in.cv);
-    d.width = c.in.width;
-    d.height = c.in.height;
-    d.pu = float(c.in.cu * b.dot(c.frame.t) + c.in.fu * b.dot(c.frame.u));
-    d.pv = float(c.in.cv * b.dot(c.frame.t) + c.in.fv * b.dot(c.frame.v));
-    d.xmax = float(c.in.width - 1);
-    d.ymax = float(c.in.height - 1);
-    d.base = m.layout.offset(int(m.cams.size()), 0, 0);
-    d.distort = c.in.has_distortion();
-    d.k = c.in.k;
-    m.cams.push_back(d);
-  }
+namespace {
+
+// Camera c's constants for the per-frame re-projection of a tap (DCam), relative to the rig's search
+// centre q; `base`: the camera's first byte in the frame store.
+DCam depth_camera(const RigCamera& c, const Vec3& q, size_t base) {
+  const Vec3 b = q - c.position_mm;
+  DCam d;
+  d.bt = float(b.dot(c.frame.t));
+  d.bb = float(b.squaredNorm());
+  const double ca = std::cos(c.in.aov / 2);
+  d.cos2 = float(ca * ca);
+  d.fu = float(c.in.fu);
+  d.fv = float(c.in.fv);
+  d.cu = float(c.in.cu);
+  d.cv = float(c.in.cv);
+  d.width = c.in.width;
+  d.height = c.in.height;
+  d.pu = float(c.in.cu * b.dot(c.frame.t) + c.in.fu * b.dot(c.frame.u));
+  d.pv = float(c.in.cv * b.dot(c.frame.t) + c.in.fv * b.dot(c.frame.v));
+  d.xmax = float(c.in.width - 1);
+  d.ymax = float(c.in.height - 1);
+  d.base = base;
+  d.distort = c.in.has_distortion();
+  d.k = c.in.k;
+  return d;
+}
+
+// The taps of every pixel (row, column): first the method's taps on the reference sphere (the
+// strongest always, the others if at least min_weight; renormalised), `main[row][col]` of them; then
+// fallback taps with a tiny weight from the cameras that see the direction at infinity only.
+struct PixelTapLists {
+  std::vector<std::vector<std::vector<DTap>>> taps;
+  std::vector<std::vector<std::vector<int>>> cams;  // the cameras of the main taps
+};
+PixelTapLists pixel_taps(const Rig& rig, const DepthRenderOptions& opt, const Vec3& q) {
   const PanoGrid& g = opt.map.grid;
-  const size_t npx = size_t(g.width) * g.height;
-  // Per row: the taps of its pixels (one thread writes a row).
-  std::vector<std::vector<DTap>> row_taps(g.height);
-  std::vector<std::vector<uint8_t>> row_count(g.height, std::vector<uint8_t>(g.width, 0));
   auto make_tap = [&](int cam, const Vec3& w, double weight) {
     const RigCamera& c = rig.cameras[cam];
     const Vec3 b = q - c.position_mm;
@@ -258,19 +257,19 @@ DepthRenderer::DepthRenderer(const Rig& rig, const DepthRenderOptions& opt) : im
     return DTap{float(c.in.cu * wt + c.in.fu * wu), float(c.in.cv * wt + c.in.fv * wv), float(wt), float(w.dot(b)),
                 float(weight), uint16_t(cam), 0};
   };
-  std::vector<std::vector<std::vector<int>>> cams_of(g.height);  // per row, per pixel: cameras with taps
-  for (auto& r : cams_of) r.resize(g.width);
+  PixelTapLists p;
+  p.cams.resize(g.height);
+  for (auto& r : p.cams) r.resize(g.width);
+  p.taps.resize(g.height);
+  for (auto& r : p.taps) r.resize(g.width);
   pano::StitchOptions so;
   so.method = opt.map.method;
   so.grid = g;
   so.blend = opt.map.params;
   so.progress = false;
   so.depth = pano::sphere_depth(rig, g, opt.reference_mm, q);
-  std::vector<std::vector<std::vector<DTap>>> pix(g.height);
-  for (auto& r : pix) r.resize(g.width);
   pano::for_each_pixel_weights(rig, so, [&](int col, int row, const std::vector<pano::Contributor>& cs,
                                             const std::vector<double>& w) {
-    // The strongest tap always stays; the others if at least min_weight; renormalised.
     size_t best = 0;
     for (size_t i = 1; i < cs.size(); ++i)
       if (w[i] > w[best]) best = i;
@@ -282,22 +281,63 @@ DepthRenderer::DepthRenderer(const Rig& rig, const DepthRenderOptions& opt) : im
         sum += w[i];
       }
     const Vec3 dir = g.pixel_direction(col, row);
-    auto& out = pix[row][col];
+    auto& out = p.taps[row][col];
     for (size_t i : keep) {
       out.push_back(make_tap(cs[i].camera, dir, w[i] / sum));
-      cams_of[row][col].push_back(cs[i].camera);
+      p.cams[row][col].push_back(cs[i].camera);
     }
   });
   so.depth = cv::Mat();  // the cameras that see the direction at infinity only
   pano::for_each_pixel_weights(rig, so, [&](int col, int row, const std::vector<pano::Contributor>& cs,
                                             const std::vector<double>& w) {
     const Vec3 dir = g.pixel_direction(col, row);
-    auto& out = pix[row][col];
-    const auto& have = cams_of[row][col];
+    auto& out = p.taps[row][col];
+    const auto& have = p.cams[row][col];
     for (size_t i = 0; i < cs.size(); ++i)
       if (w[i] > 0 && std::find(have.begin(), have.end(), cs[i].camera) == have.end() && out.size() < 255)
         out.push_back(make_tap(cs[i].camera, dir, 1e-3 * std::max(w[i], 1e-3)));
   });
+  return p;
+}
+
+// The taps in render order (tile by tile, row by row inside a tile), main and fallback apart, with
+// per pixel its first tap and first fallback tap and per tile its first pixel (DepthRenderer::Impl).
+struct PackedTaps {
+  std::vector<uint32_t> first, ffirst, tile_first;
+  std::vector<DTap> taps, fallbacks;
+};
+PackedTaps pack_taps(const PanoGrid& g, const PixelTapLists& p);
+
+}  // namespace
+
+DepthRenderer::DepthRenderer(const Rig& rig, const DepthRenderOptions& opt) : impl_(std::make_unique<Impl>()) {
+  std::string why;
+  if (!opt.IsValid(&why)) throw std::invalid_argument("depth renderer: " + why);
+  const auto t0 = std::chrono::steady_clock::now();
+  Impl& m = *impl_;
+  m.rig = rig;
+  m.opt = opt;
+  m.layout = StoreLayout::for_rig(rig);
+  m.arena = opt.threads > 0 ? std::make_unique<tbb::task_arena>(opt.threads) : std::make_unique<tbb::task_arena>();
+  const Vec3 q = opt.map.params.search.q;
+  for (const auto& c : rig.cameras) m.cams.push_back(depth_camera(c, q, m.layout.offset(int(m.cams.size()), 0, 0)));
+  PackedTaps packed = pack_taps(opt.map.grid, pixel_taps(rig, opt, q));
+  m.first = std::move(packed.first);
+  m.ffirst = std::move(packed.ffirst);
+  m.tile_first = std::move(packed.tile_first);
+  m.taps = std::move(packed.taps);
+  m.fallbacks = std::move(packed.fallbacks);
+  m.sweep = std::make_unique<pano::DepthSweep>(rig, opt.map.grid, opt.sweep);
+  m.compile_s = ms_since(t0) / 1000;
+}
+
+namespace {
+
+PackedTaps pack_taps(const PanoGrid& g, const PixelTapLists& p) {
+  PackedTaps m;
+  const auto& pix = p.taps;
+  const auto& cams_of = p.cams;
+  const size_t npx = size_t(g.width) * g.height;
   m.first.assign(npx + 1, 0);
   m.ffirst.assign(npx + 1, 0);
   const int tiles_x = (g.width + kTileW - 1) / kTileW, tiles_y = (g.height + kTileH - 1) / kTileH;
@@ -329,9 +369,10 @@ DepthRenderer::DepthRenderer(const Rig& rig, const DepthRenderOptions& opt) : im
           (i < nm ? m.taps[k++] : m.fallbacks[f++]) = pix[r][c][i];
       }
   });
-  m.sweep = std::make_unique<pano::DepthSweep>(rig, g, opt.sweep);
-  m.compile_s = ms_since(t0) / 1000;
+  return m;
 }
+
+}  // namespace
 
 DepthRenderer::~DepthRenderer() = default;
 
