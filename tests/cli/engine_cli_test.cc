@@ -20,32 +20,16 @@
 #include <opencv2/videoio.hpp>
 
 #include "omma/core/rig.h"
+#include "omma/testing/synthetic.h"
 #include "tests/cli/cli_util.h"
 
 namespace omma::test {
 namespace {
 namespace fs = std::filesystem;
 
-// The engine's 24-camera test rig (3 + 9 + 12 cameras at polar 12, 38, 70 deg), small cameras.
+// The shared 24-camera test rig (testing/synthetic.h), small cameras.
 fs::path write_rig(const fs::path& dir, int size = 120) {
-  Rig rig;
-  rig.name = "ring-24";
-  const struct { int n; double polar, phase; } rings[] = {{3, 12, 0}, {9, 38, 20}, {12, 70, 0}};
-  int id = 0;
-  for (const auto& r : rings)
-    for (int k = 0; k < r.n; ++k) {
-      const double phi = deg2rad(r.phase + 360.0 * k / r.n);
-      const Vec3 t = direction_from_spherical(deg2rad(r.polar), phi);
-      RigCamera cam;
-      cam.id = id++;
-      cam.frame = frame_looking_at(t, direction_from_spherical(deg2rad(r.polar + 90), phi));
-      cam.position_mm = 5.0 * t;
-      cam.in.width = cam.in.height = size;
-      cam.in.aov = deg2rad(64);
-      cam.in.fu = cam.in.fv = Intrinsics::focal_for_aov(size, cam.in.aov);
-      cam.in.cu = cam.in.cv = size / 2.0;
-      rig.cameras.push_back(cam);
-    }
+  const Rig rig = testing::test_rig_24(size, size);
   const fs::path p = dir / "rig.json";
   save_rig(rig, p);
   return p;

@@ -60,7 +60,7 @@ std::vector<cv::Mat> scene_frames(const Rig& rig) {
 }
 
 TEST(EngineRun, KilledCameraIsDroppedAndItsRegionFilledFromNeighbours) {
-  const Rig rig = testing::ring_rig_24();
+  const Rig rig = testing::test_rig_24();
   const auto frames = scene_frames(rig);
   const int victim = 7;
   std::vector<std::unique_ptr<CameraSource>> sources;
@@ -109,7 +109,7 @@ TEST(EngineRun, KilledCameraIsDroppedAndItsRegionFilledFromNeighbours) {
 // equals the reference render of the corrected frames, and with photometric = false that of the
 // frames as they are.
 TEST(EngineRun, PhotometricModelIsAppliedAsFramesArrive) {
-  Rig rig = testing::ring_rig_24();
+  Rig rig = testing::test_rig_24();
   for (RigCamera& c : rig.cameras) c.photometric = sim::true_photometric(c, sim::CameraEffects{});
   const auto frames = scene_frames(rig);
   for (bool photometric : {true, false}) {
@@ -136,7 +136,7 @@ TEST(EngineRun, PhotometricModelIsAppliedAsFramesArrive) {
 }
 
 TEST(EngineRun, WrongFrameSizeStopsWithAClearError) {
-  const Rig rig = testing::ring_rig_24();
+  const Rig rig = testing::test_rig_24();
   const auto frames = testing::random_frames(rig);
   std::vector<std::unique_ptr<CameraSource>> sources;
   for (size_t c = 0; c < frames.size(); ++c)
@@ -156,7 +156,7 @@ TEST(EngineRun, WrongFrameSizeStopsWithAClearError) {
 }
 
 TEST(EngineRun, LiveViewServesPageAndMjpegStreamAndRefusesABusyPort) {
-  const Rig rig = testing::ring_rig_24();
+  const Rig rig = testing::test_rig_24();
   const auto frames = testing::random_frames(rig);
   const int port = 18000 + (::getpid() % 1000);
   std::vector<std::unique_ptr<Sink>> sinks;
@@ -222,7 +222,7 @@ TEST(EngineRun, LiveViewServesPageAndMjpegStreamAndRefusesABusyPort) {
 
 // Raw sensor-link files -> link decoder -> ISP -> panorama.
 TEST(EngineRun, RawSensorLinkFilesGoThroughTheIspIntoThePanorama) {
-  const Rig rig = testing::ring_rig_24(64, 64);
+  const Rig rig = testing::test_rig_24(64, 64);
   const auto frames = testing::random_frames(rig, 3);
   const fs::path dir = fs::temp_directory_path() / ("omma_engine_link_" + std::to_string(::getpid()));
   fs::create_directories(dir);
@@ -281,7 +281,7 @@ TEST(EngineRun, RawSensorLinkFilesGoThroughTheIspIntoThePanorama) {
 // workers of their own: with more viewers than the limit, /, /stats.json and /frame.jpg still
 // answer within a second.
 TEST(EngineSinks, StreamViewersNeverStarveThePageAndTheStats) {
-  const Rig rig = testing::ring_rig_24(64, 64);
+  const Rig rig = testing::test_rig_24(64, 64);
   const auto frames = testing::random_frames(rig);
   const int port = 17000 + (::getpid() % 1000);
   const int limit = SinkOptions{}.max_streams, viewers = limit + 3;
@@ -355,7 +355,7 @@ TEST(EngineSinks, StreamViewersNeverStarveThePageAndTheStats) {
 // The simulated cameras free-run on their own clocks (44-56 fps, own phase, jitter) and
 // each frame of the loop is the simulator's view at its capture instant.
 TEST(EngineSim, CamerasFreeRunOnTheirOwnClocksInAContinuousLoop) {
-  const Rig rig = testing::ring_rig_24(48, 48);
+  const Rig rig = testing::test_rig_24(48, 48);
   SimCameraOptions so;
   so.loop_s = 0.5;
   so.progress = false;
@@ -439,7 +439,7 @@ TEST(EngineSim, CamerasFreeRunOnTheirOwnClocksInAContinuousLoop) {
 // 33.95-36.72 dB (the stitch of synchronous frames: 36.6-36.9 dB), at +-2 deg 21.67-21.82 dB; live vs
 // synchronous 36.3-49.1 dB. Bounds: 32 dB, 10 dB better than +-2 deg, 34 dB.
 TEST(EngineSim, MovingSceneMatchesTheSimulatorsTruthAtTheSameInstant) {
-  const Rig rig = testing::ring_rig_24(120, 120);
+  const Rig rig = testing::test_rig_24(120, 120);
   SimCameraOptions so;
   so.loop_s = 0.5;
   so.progress = false;
@@ -510,7 +510,7 @@ TEST(EngineSim, MovingSceneMatchesTheSimulatorsTruthAtTheSameInstant) {
 }
 
 TEST(EngineSinks, UnwritableSinksAndBadSourcesGiveClearErrors) {
-  const Rig rig = testing::ring_rig_24();
+  const Rig rig = testing::test_rig_24();
   EXPECT_THROW(open_sink("/proc/omma_no/out.mp4", rig, cv::Size(64, 64)), SinkError);
   EXPECT_THROW(open_sink("png:/proc/omma_no_dir", rig, cv::Size(64, 64)), SinkError);
   EXPECT_THROW(open_sink("out.xyz", rig, cv::Size(64, 64)), SinkError);
@@ -522,7 +522,7 @@ TEST(EngineSinks, UnwritableSinksAndBadSourcesGiveClearErrors) {
 }
 
 TEST(EngineRun, BadSourceAndSinkOptionsAreRefused) {
-  const Rig rig = testing::ring_rig_24(32, 32);
+  const Rig rig = testing::test_rig_24(32, 32);
   SourceOptions so;
   so.fps = -1;
   std::string why;

@@ -17,7 +17,7 @@ namespace omma::render {
 namespace {
 
 struct Fixture {
-  Rig rig = testing::ring_rig_24();
+  Rig rig = testing::test_rig_24();
   MapOptions opt;
   CompiledMap map;
   std::vector<uint8_t> file;

@@ -46,7 +46,7 @@ bool implemented(const Rig& rig, pano::Method m) {
 }
 
 TEST(EngineRender, MatchesReferenceForEveryStaticMethodAtLeast50dB) {
-  const Rig rig = testing::ring_rig_24();
+  const Rig rig = testing::test_rig_24();
   const auto frames = louvre_frames(rig);
   int tested = 0;
   for (pano::Method m : pano::all_methods()) {
@@ -102,7 +102,7 @@ TEST(EngineRender, MatchesPanoStitchOnThePrototypeRigAtLeast50dB) {
 }
 
 TEST(EngineRender, SimdKernelsAreBitIdenticalToScalarKernelAndThreadCountDoesNotMatter) {
-  const Rig rig = testing::ring_rig_24();
+  const Rig rig = testing::test_rig_24();
   std::printf("  kernels here: best %s\n", to_string(best_kernel()).c_str());
   // 200 x 200: tiles cut at the right and bottom edges (64 x 32 tiles).
   for (pano::Method m : {pano::Method::kNearest, pano::Method::kLinear, pano::Method::kMrf}) {
@@ -127,7 +127,7 @@ TEST(EngineRender, SimdKernelsAreBitIdenticalToScalarKernelAndThreadCountDoesNot
 // The scalar kernel is the definition of the map's arithmetic: (sum of w * v + 64) >> 7 over the
 // four neighbours of every tap, checked here against that formula written out from visit().
 TEST(EngineRender, ScalarKernelComputesTheMapsFormula) {
-  const Rig rig = testing::ring_rig_24();
+  const Rig rig = testing::test_rig_24();
   MapOptions opt;
   opt.grid = PanoGrid{Projection::kEquirect, 150, 40};
   opt.method = pano::Method::kGaussian;
@@ -158,7 +158,7 @@ TEST(EngineRender, ScalarKernelComputesTheMapsFormula) {
 }
 
 TEST(EngineMap, WeightsSumTo128AndBytesPerPixelIsCompact) {
-  const Rig rig = testing::ring_rig_24();
+  const Rig rig = testing::test_rig_24();
   for (pano::Method m : {pano::Method::kNearest, pano::Method::kLinear}) {
     MapOptions opt;
     opt.grid = PanoGrid{Projection::kVr180, 216, 216};
@@ -245,7 +245,7 @@ TEST(EngineMap, MinWeightDropsFaintTapsWithinTheReferencePsnr) {
 }
 
 TEST(EngineMap, CacheRoundTripIsExactAndKeyedByOptions) {
-  const Rig rig = testing::ring_rig_24();
+  const Rig rig = testing::test_rig_24();
   MapOptions opt;
   opt.grid = PanoGrid{Projection::kEquirect, 240, 60};
   const auto dir = std::filesystem::temp_directory_path() / "omma_engine_map_cache_test";
@@ -274,7 +274,7 @@ TEST(EngineMap, CacheRoundTripIsExactAndKeyedByOptions) {
 }
 
 TEST(EngineMap, DroppedCameraIsFilledFromNeighbours) {
-  const Rig rig = testing::ring_rig_24();
+  const Rig rig = testing::test_rig_24();
   const auto frames = louvre_frames(rig);
   MapOptions opt;
   opt.grid = PanoGrid{Projection::kVr180, 240, 240};
@@ -294,7 +294,7 @@ TEST(EngineMap, DroppedCameraIsFilledFromNeighbours) {
 }
 
 TEST(EngineRender, BadOptionsAreRefused) {
-  const Rig rig = testing::ring_rig_24(32, 32);
+  const Rig rig = testing::test_rig_24(32, 32);
   MapOptions mo;
   mo.grid = PanoGrid{Projection::kVr180, 64, 64};
   const CompiledMap map = compile_map(rig, mo);
