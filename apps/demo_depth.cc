@@ -18,7 +18,7 @@
 #include "omma/pano/quality.h"
 #include "omma/pano/stitch.h"
 #include "omma/pano/surface.h"
-#include "omma/pano/sweep.h"
+#include "omma/pano/plane_sweep.h"
 
 namespace omma::app {
 
@@ -96,7 +96,7 @@ DepthDemo run_depth_demo(const Rig& rig, const PanoGrid& grid, const std::vector
       "(green above). The engine's depth-adaptive renderer (`omma run --depth`: depth every panorama on a "
       "coarse grid, taps moved) renders {:.1f} panoramas/s here, {:.2f} dB against the truth ({:.1f} dB from "
       "the reference stitch on the estimate).",
-      pano::SweepOptions{}.steps, est_s, closed, 100 * derr.median_rel, 100 * derr.within_10, b_inf.precision,
+      pano::PlaneSweepOptions{}.steps, est_s, closed, 100 * derr.median_rel, 100 * derr.within_10, b_inf.precision,
       b_inf.recall, b_inf.f1, b_with.precision, b_with.recall, b_with.f1, b_jump.precision, b_jump.recall,
       b_jump.f1, fps, engine_psnr, engine_vs_ref);
   d.markdown = "## Depth from the overlaps\n\n"

@@ -21,7 +21,7 @@
 #include "omma/isp/photometric.h"
 #include "omma/hw/memory.h"
 #include "omma/hw/pipeline.h"
-#include "omma/hw/sweep.h"
+#include "omma/hw/width_sweep.h"
 #include "omma/hw/throughput.h"
 #include "omma/pano/maps.h"
 #include "omma/pano/quality.h"
@@ -224,7 +224,7 @@ struct SweepArgs {
 
 void run_sweep_cmd(const SweepArgs& a) {
   set_json_mode(a.json);
-  hw::SweepOptions o;
+  hw::WidthSweepOptions o;
   o.base = load_config(a.config, a.sets);
   o.method = hw_method(a.method);
   o.grid = make_grid(a.projection, a.size);
@@ -251,7 +251,7 @@ void run_sweep_cmd(const SweepArgs& a) {
     spdlog::debug("hw sweep: {}", what);
     if (what.rfind("minimal set", 0) != 0) progress.step();  // the search for the smallest set is not counted
   };
-  const hw::SweepResult r = hw::run_sweep(rig, frames, o);
+  const hw::WidthSweepSummary r = hw::run_sweep(rig, frames, o);
   progress.finish();
   fs::create_directories(a.out);
   write_text_atomically(fs::path(a.out) / "hw_sweep.csv", hw::sweep_csv(r, a.target));

@@ -18,7 +18,7 @@
 #include "omma/pano/quality.h"
 #include "omma/pano/stitch.h"
 #include "omma/pano/surface.h"
-#include "omma/pano/sweep.h"
+#include "omma/pano/plane_sweep.h"
 #include "omma/sim/test_scenes.h"
 #include "omma/sim/simulate.h"
 
@@ -76,7 +76,7 @@ TEST(PanoSurface, SphereGeometry) {
   bad.at<float>(3, 4) = std::numeric_limits<float>::quiet_NaN();
   EXPECT_THROW(check_depth(bad, grid), std::invalid_argument);
   EXPECT_THROW(check_depth(cv::Mat(10, 10, CV_32FC1, cv::Scalar(5)), grid), std::invalid_argument);
-  SweepOptions so;
+  PlaneSweepOptions so;
   so.near_mm = 4;  // inside the dome
   EXPECT_THROW(DepthSweep(rig, grid, so), std::invalid_argument);
   so.near_mm = 50;
@@ -183,7 +183,7 @@ TEST(PanoDepth, ColonTruthAndEstimate) {
       // Measured on seeds 1, 2, 3 (vr180 270x270): truth - inf = 6.3 / 6.7 / 5.8 dB, truth - sphere:22 =
       // 2.0 / 2.5 / 1.7 dB; the estimate closes 88 / 77 / 82 % of the gap between the best sphere and the
       // truth (seam band the same; equirect 480x128: 93 / 83 / 88 %). Before the band-pass of the matched
-      // gray levels (sweep.h "Cost") seed 2 closed 28 %: the vignetting ramp at the image edges matched.
+      // gray levels (plane_sweep.h "Cost") seed 2 closed 28 %: the vignetting ramp at the image edges matched.
       // Median relative depth error 2.1 / 1.8 / 1.7 %. Boundaries (best F1 over th_ob): the depth's own
       // jumps F1 0.16 / 0.29 / 0.25 against 0.13 / 0.21 / 0.11 for the thesis's L_ob at infinity
       // (equirect 0.30 / 0.44 / 0.52 against 0.21 / 0.22 / 0.23, where L_ob is best marking everything:

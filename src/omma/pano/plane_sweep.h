@@ -75,9 +75,9 @@
 
 namespace omma::pano {
 
-inline constexpr int kMaxSteps = 256;  // candidates per sweep at most (SweepOptions::steps)
+inline constexpr int kMaxSteps = 256;  // candidates per sweep at most (PlaneSweepOptions::steps)
 
-struct SweepOptions {
+struct PlaneSweepOptions {
   double near_mm = 8;      // nearest candidate distance from q, mm (must lie outside the dome)
   // Farthest candidate, mm; +infinity (the default) makes the last candidate the scene at infinity.
   // A 5 mm dome still sees 2 pixels of parallax at 300 mm: far-field scenes need infinity.
@@ -124,7 +124,7 @@ class DepthSweep {
  public:
   // Throws std::invalid_argument if the options are invalid (IsValid) or near_mm does not lie
   // outside every camera centre.
-  DepthSweep(const Rig& rig, const PanoGrid& grid, const SweepOptions& opt);
+  DepthSweep(const Rig& rig, const PanoGrid& grid, const PlaneSweepOptions& opt);
   ~DepthSweep();
   DepthSweep(DepthSweep&&) noexcept;
   DepthSweep& operator=(DepthSweep&&) noexcept;
@@ -137,7 +137,7 @@ class DepthSweep {
 
   const PanoGrid& coarse_grid() const;
   const PanoGrid& grid() const;
-  const SweepOptions& options() const;
+  const PlaneSweepOptions& options() const;
   // Candidate k's inverse depth (1/mm).
   double inverse_depth(int k) const;
 
@@ -148,6 +148,6 @@ class DepthSweep {
 
 // One-shot: DepthSweep(rig, grid, opt).estimate(frames).
 DepthEstimate estimate_depth(const Rig& rig, const std::vector<cv::Mat>& frames, const PanoGrid& grid,
-                             const SweepOptions& opt = {});
+                             const PlaneSweepOptions& opt = {});
 
 }  // namespace omma::pano

@@ -1,4 +1,4 @@
-#include "omma/design/sweep.h"
+#include "omma/design/count_sweep.h"
 
 #include <cmath>
 #include <stdexcept>
@@ -42,7 +42,7 @@ std::string method_label(Method m) {
 
 }  // namespace
 
-std::vector<SweepRow> run_sweep(const SweepParams& p) {
+std::vector<SweepRow> run_sweep(const CountSweepOptions& p) {
   if (!(p.r_phys_mm > 0)) throw std::invalid_argument("sweep: r_phys must be positive");
   std::vector<SweepRow> rows;
   for (double rv : p.r_virtual_mm)
@@ -79,7 +79,7 @@ std::string sweep_csv(const std::vector<SweepRow>& rows) {
   return s;
 }
 
-std::string sweep_aov_svg(const std::vector<SweepRow>& rows, const SweepParams& p) {
+std::string sweep_aov_svg(const std::vector<SweepRow>& rows, const CountSweepOptions& p) {
   std::vector<Plot> plots;
   const char* letters = "abcdefghijklmnopqrstuvwxyz";
   for (size_t k = 0; k < p.r_virtual_mm.size(); ++k) {
@@ -103,7 +103,7 @@ std::string sweep_aov_svg(const std::vector<SweepRow>& rows, const SweepParams& 
   return svg_plot_grid(plots, 3, "Cameras needed vs angle of view (thesis Fig. 3.3 / 3.9)");
 }
 
-std::string sweep_ratio_svg(const std::vector<SweepRow>& rows, const SweepParams& p) {
+std::string sweep_ratio_svg(const std::vector<SweepRow>& rows, const CountSweepOptions& p) {
   Plot plot;
   plot.title = fmt::format("Cameras vs R_vir / R_phy at AOV = {:g} deg (thesis Fig. 3.7)",
                            p.fixed_aov_deg);

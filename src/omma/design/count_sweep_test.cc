@@ -1,5 +1,5 @@
 // Sweeps (Fig. 3.3, 3.7, 3.9) and the SVG writer.
-#include "omma/design/sweep.h"
+#include "omma/design/count_sweep.h"
 
 #include <cmath>
 #include <sstream>
@@ -18,7 +18,7 @@ size_t count(const std::string& s, const std::string& what) {
 }
 
 TEST(Sweep, SmallSweepTablesAndPlots) {
-  SweepParams p;
+  CountSweepOptions p;
   p.r_virtual_mm = {12, 30};
   p.aov_min_deg = 56;
   p.aov_max_deg = 72;
@@ -58,7 +58,7 @@ TEST(Sweep, SmallSweepTablesAndPlots) {
 }
 
 TEST(Sweep, UnreachableDistancesAreEmptyCells) {
-  SweepParams p;
+  CountSweepOptions p;
   p.r_virtual_mm = {6};
   p.aov_min_deg = p.aov_max_deg = 20;  // cones of 20 deg from 5 mm never meet at 6 mm
   p.aov_methods = {Method::kLayered};

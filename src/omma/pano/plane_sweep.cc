@@ -1,4 +1,4 @@
-#include "omma/pano/sweep.h"
+#include "omma/pano/plane_sweep.h"
 
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
@@ -17,7 +17,7 @@
 
 namespace omma::pano {
 
-bool SweepOptions::IsValid(std::string* why) const {
+bool PlaneSweepOptions::IsValid(std::string* why) const {
   auto fail = [&](const std::string& m) {
     if (why) *why = m;
     return false;
@@ -80,7 +80,7 @@ void box_sum(const float* in, int w, int h, int r, float* tmp, float* out) {
 struct DepthSweep::Impl {
   Rig rig;
   PanoGrid grid, coarse;
-  SweepOptions opt;
+  PlaneSweepOptions opt;
   std::vector<Vec3> dirs;       // per coarse pixel
   std::vector<double> inv;      // per candidate, 1/mm
   std::vector<double> sigma;    // per camera: blur to the coarse pitch, camera pixels
@@ -177,7 +177,7 @@ Layer DepthSweep::Impl::make_layer(int k, int i) const {
   return L;
 }
 
-DepthSweep::DepthSweep(const Rig& rig, const PanoGrid& grid, const SweepOptions& opt)
+DepthSweep::DepthSweep(const Rig& rig, const PanoGrid& grid, const PlaneSweepOptions& opt)
     : impl_(std::make_unique<Impl>()) {
   std::string why;
   if (!opt.IsValid(&why)) throw std::invalid_argument("depth sweep: " + why);
@@ -235,14 +235,14 @@ DepthSweep::DepthSweep(DepthSweep&&) noexcept = default;
 DepthSweep& DepthSweep::operator=(DepthSweep&&) noexcept = default;
 const PanoGrid& DepthSweep::coarse_grid() const { return impl_->coarse; }
 const PanoGrid& DepthSweep::grid() const { return impl_->grid; }
-const SweepOptions& DepthSweep::options() const { return impl_->opt; }
+const PlaneSweepOptions& DepthSweep::options() const { return impl_->opt; }
 double DepthSweep::inverse_depth(int k) const { return impl_->inv.at(k); }
 
 DepthEstimate DepthSweep::estimate(const std::vector<cv::Mat>& frames_in, const cv::Mat& previous,
                                    bool upsample) const {
   const Impl& m = *impl_;
   check_frames(m.rig, frames_in);
-  const SweepOptions& o = m.opt;
+  const PlaneSweepOptions& o = m.opt;
   const int W = m.coarse.width, H = m.coarse.height, K = o.steps, N = W * H, nc = m.cams();
   if (!previous.empty() && (previous.type() != CV_32FC1 || previous.cols != W || previous.rows != H))
     throw std::invalid_argument("depth sweep: the previous estimate is not on this sweep's coarse grid");
@@ -555,7 +555,7 @@ DepthEstimate DepthSweep::estimate(const std::vector<cv::Mat>& frames_in, const 
 }
 
 DepthEstimate estimate_depth(const Rig& rig, const std::vector<cv::Mat>& frames, const PanoGrid& grid,
-                             const SweepOptions& opt) {
+                             const PlaneSweepOptions& opt) {
   return DepthSweep(rig, grid, opt).estimate(frames);
 }
 

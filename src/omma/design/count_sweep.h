@@ -9,7 +9,7 @@
 
 namespace omma::design {
 
-struct SweepParams {
+struct CountSweepOptions {
   double r_phys_mm = 5.0;
   std::vector<double> r_virtual_mm = {8, 10, 12, 25, 30, 40};  // Fig. 3.3 / 3.9 panels
   double aov_min_deg = 40, aov_max_deg = 120, aov_step_deg = 4;
@@ -28,12 +28,12 @@ struct SweepRow {
 };
 
 // Runs every design (in parallel, oneTBB), with a progress bar on stderr.
-std::vector<SweepRow> run_sweep(const SweepParams& p);
+std::vector<SweepRow> run_sweep(const CountSweepOptions& p);
 
 std::string sweep_csv(const std::vector<SweepRow>& rows);
 // Fig. 3.3/3.9: one panel per R_vir, cameras vs AOV, one line per method.
-std::string sweep_aov_svg(const std::vector<SweepRow>& rows, const SweepParams& p);
+std::string sweep_aov_svg(const std::vector<SweepRow>& rows, const CountSweepOptions& p);
 // Fig. 3.7: cameras vs R_vir / R_phy at the fixed AOV.
-std::string sweep_ratio_svg(const std::vector<SweepRow>& rows, const SweepParams& p);
+std::string sweep_ratio_svg(const std::vector<SweepRow>& rows, const CountSweepOptions& p);
 
 }  // namespace omma::design

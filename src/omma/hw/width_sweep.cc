@@ -1,4 +1,4 @@
-#include "omma/hw/sweep.h"
+#include "omma/hw/width_sweep.h"
 
 #include <fmt/format.h>
 
@@ -74,14 +74,14 @@ double psnr_against(const HwConfig& cfg, const Rig& rig, const std::vector<cv::M
   return pano::psnr_db(p.render(method, false).pano, reference);
 }
 
-SweepResult run_sweep(const Rig& rig, const std::vector<cv::Mat>& frames, const SweepOptions& o) {
+WidthSweepSummary run_sweep(const Rig& rig, const std::vector<cv::Mat>& frames, const WidthSweepOptions& o) {
   o.base.Check();
   pano::StitchOptions so;
   so.method = o.method;
   so.grid = o.grid;
   so.progress = false;
   const cv::Mat ref = to_u8(pano::stitch(rig, rgb565_frames(frames), so));
-  SweepResult r;
+  WidthSweepSummary r;
   auto eval = [&](const HwConfig& c, const std::string& what) {
     if (o.progress) o.progress(what);
     return psnr_against(c, rig, frames, o.grid, o.method, ref);
@@ -169,7 +169,7 @@ SweepResult run_sweep(const Rig& rig, const std::vector<cv::Mat>& frames, const 
   return r;
 }
 
-std::string sweep_csv(const SweepResult& r, double target_db) {
+std::string sweep_csv(const WidthSweepSummary& r, double target_db) {
   std::string s = "param,value,psnr_db,meets_target\n";
   for (const auto& p : r.points)
     s += fmt::format("{},{},{},{}\n", p.param, p.value, p.valid ? fmt::format("{:.3f}", p.psnr_db) : "invalid",
@@ -177,7 +177,7 @@ std::string sweep_csv(const SweepResult& r, double target_db) {
   return s;
 }
 
-std::string sweep_svg(const SweepResult& r, double target_db) {
+std::string sweep_svg(const WidthSweepSummary& r, double target_db) {
   std::vector<design::Plot> plots;
   std::vector<std::string> names;
   for (const auto& p : r.points)
