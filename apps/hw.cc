@@ -136,7 +136,7 @@ void run_simulate(const SimArgs& a) {
   hw::Pipeline pipe(cfg, rig, grid, &vig);
   pipe.load_frames(frames);
   auto t0 = Clock::now();
-  const hw::PipelineResult r = pipe.render(method, a.boundary, true);
+  const hw::PipelineSummary r = pipe.render(method, a.boundary, true);
   const double hw_ms = ms_since(t0);
   nlohmann::json j;
   const double pixels = double(grid.width) * grid.height;
@@ -308,7 +308,7 @@ void run_throughput(ThArgs a) {
     std::vector<cv::Mat> blank;
     for (const auto& c : rig.cameras) blank.emplace_back(c.in.height, c.in.width, CV_8UC3, cv::Scalar::all(0));
     p.load_frames(blank);
-    const hw::PipelineResult r = p.render(pano::Method::kNearest, false, !a.json);
+    const hw::PipelineSummary r = p.render(pano::Method::kNearest, false, !a.json);
     const double pixels = double(s.width) * s.height;
     j["counted"] = {{"rig", rig.name}, {"projection", to_string(g.projection)}, {"cycles", r.stats.cycles},
                     {"cycles_per_pixel", r.stats.cycles / pixels},
@@ -428,7 +428,7 @@ struct ImArgs {
 
 void run_import(const ImArgs& a) {
   set_json_mode(a.json);
-  const hw::ImportResult r = hw::import_chip(a.dir);
+  const hw::ImportSummary r = hw::import_chip(a.dir);
   save_rig(r.rig, a.rig_out);
   const hw::RigDifference b = hw::quantisation_bound(r.config);
   auto diff_json = [](const hw::RigDifference& d) {

@@ -141,8 +141,8 @@ bool triangulate(const std::vector<Vec3>& c, const std::vector<Vec3>& d, Vec3* p
 
 }  // namespace
 
-CalibrationResult solve_tracks(const Rig& nominal, const Rig& start, std::vector<std::vector<TrackObservation>> tracks,
-                               SceneModel scene, const CalibrationOptions& opt, CalibrationResult res,
+CalibrationSummary solve_tracks(const Rig& nominal, const Rig& start, std::vector<std::vector<TrackObservation>> tracks,
+                               SceneModel scene, const CalibrationOptions& opt, CalibrationSummary res,
                                SolveState* state) {
   const int n = static_cast<int>(nominal.cameras.size());
   res.uncalibrated_ids.clear();
@@ -455,14 +455,14 @@ CalibrationResult solve_tracks(const Rig& nominal, const Rig& start, std::vector
   return res;
 }
 
-CalibrationResult calibrate_from_tracks(const Rig& nominal, std::vector<std::vector<TrackObservation>> tracks,
+CalibrationSummary calibrate_from_tracks(const Rig& nominal, std::vector<std::vector<TrackObservation>> tracks,
                                         SceneModel scene, const CalibrationOptions& opt) {
   if (scene == SceneModel::kAuto) throw std::invalid_argument("calibrate_from_tracks: scene must be far or near");
   const int n = static_cast<int>(nominal.cameras.size());
   for (const auto& t : tracks)
     for (const auto& o : t)
       if (o.cam < 0 || o.cam >= n) throw std::invalid_argument(fmt::format("calibrate_from_tracks: camera index {} out of range", o.cam));
-  CalibrationResult res;
+  CalibrationSummary res;
   res.rig = nominal;
   res.scene = scene;
   return solve_tracks(nominal, nominal, std::move(tracks), scene, opt, std::move(res));

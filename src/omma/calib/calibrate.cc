@@ -20,7 +20,7 @@
 
 namespace omma::calib {
 
-CalibrationResult calibrate_rig(const Rig& nominal, const std::vector<cv::Mat>& frames,
+CalibrationSummary calibrate_rig(const Rig& nominal, const std::vector<cv::Mat>& frames,
                                 const CalibrationOptions& opt) {
   const int n = static_cast<int>(nominal.cameras.size());
   if (static_cast<int>(frames.size()) != n)
@@ -31,7 +31,7 @@ CalibrationResult calibrate_rig(const Rig& nominal, const std::vector<cv::Mat>& 
       throw std::invalid_argument(fmt::format("calibrate: frame of camera {} is {}x{}, the rig says {}x{}",
                                               nominal.cameras[i].id, frames[i].cols, frames[i].rows,
                                               nominal.cameras[i].in.width, nominal.cameras[i].in.height));
-  CalibrationResult res;
+  CalibrationSummary res;
   res.rig = nominal;
 
   // 1. Features.

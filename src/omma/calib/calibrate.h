@@ -148,7 +148,7 @@ struct CameraReport {
   bool calibrated = true;
 };
 
-struct CalibrationResult {
+struct CalibrationSummary {
   Rig rig;                       // the calibrated rig (uncalibrated cameras keep nominal values)
   SceneModel scene = SceneModel::kFar;  // the model used
   int matches = 0;               // pairwise matches after the ratio test, all pairs
@@ -166,7 +166,7 @@ struct CalibrationResult {
 
 // Throws std::runtime_error if nothing can be calibrated (e.g. textureless frames: no camera has
 // enough matches). `frames` are in rig order (see omma/core/frames.h load_frames).
-CalibrationResult calibrate_rig(const Rig& nominal, const std::vector<cv::Mat>& frames,
+CalibrationSummary calibrate_rig(const Rig& nominal, const std::vector<cv::Mat>& frames,
                                 const CalibrationOptions& opt = {});
 
 // Several shots of a static scene: the frame sets averaged in linear light (sRGB decoded,
@@ -181,7 +181,7 @@ std::vector<cv::Mat> average_frame_sets(const std::vector<std::vector<cv::Mat>>&
 // Used to check the model: tracks made by projecting known points through a rig must give that
 // rig back. Throws std::invalid_argument on a bad camera index or kAuto, std::runtime_error if
 // fewer than 2 cameras have min_observations.
-CalibrationResult calibrate_from_tracks(const Rig& nominal, std::vector<std::vector<TrackObservation>> tracks,
+CalibrationSummary calibrate_from_tracks(const Rig& nominal, std::vector<std::vector<TrackObservation>> tracks,
                                         SceneModel scene, const CalibrationOptions& opt = {});
 
 }  // namespace omma::calib

@@ -227,9 +227,9 @@ RigCamera camera_from_pto(const PtoCamera& p, int radial_terms, LensFit* fit) {
   return cam;
 }
 
-PtoExportResult export_pto(const Rig& rig, const PtoExportOptions& opt) {
+PtoExportSummary export_pto(const Rig& rig, const PtoExportOptions& opt) {
   rig.validate();
-  PtoExportResult res;
+  PtoExportSummary res;
   std::ostringstream os;
   const int pw = opt.pano_width, ph = opt.pano_width / 2;
   os << "# hugin project file written by omma (pto.h documents the convention mapping)\n";
@@ -300,8 +300,8 @@ std::map<std::string, std::string> parse_tokens(const std::string& line) {
 
 }  // namespace
 
-PtoImportResult import_pto(const std::string& text, const fs::path& base_dir) {
-  PtoImportResult res;
+PtoImportSummary import_pto(const std::string& text, const fs::path& base_dir) {
+  PtoImportSummary res;
   res.rig.name = "pto-import";
   std::istringstream is(text);
   std::string line;

@@ -96,16 +96,16 @@ struct PtoExportOptions {
   bool linear_response = false;  // i-lines Rt1: the frames are linear light (see Photometry above)
 };
 
-struct PtoExportResult {
+struct PtoExportSummary {
   std::string text;
   double max_fit_px = 0;   // largest distortion-conversion residual over all cameras
   double rms_fit_px = 0;
   std::vector<std::string> warnings;
 };
 
-PtoExportResult export_pto(const Rig& rig, const PtoExportOptions& opt = {});
+PtoExportSummary export_pto(const Rig& rig, const PtoExportOptions& opt = {});
 
-struct PtoImportResult {
+struct PtoImportSummary {
   Rig rig;
   double max_fit_px = 0;
   std::vector<std::string> warnings;
@@ -114,6 +114,6 @@ struct PtoImportResult {
 // Parses PTO text. `base_dir` resolves image names (for images whose size the i-line lacks, and
 // to warn about missing images). Throws PtoError on unsupported lens types (anything but f0
 // rectilinear), missing sizes with missing images, or no images at all.
-PtoImportResult import_pto(const std::string& text, const std::filesystem::path& base_dir = {});
+PtoImportSummary import_pto(const std::string& text, const std::filesystem::path& base_dir = {});
 
 }  // namespace omma::calib

@@ -233,8 +233,8 @@ ExportSummary export_chip(const Rig& rig, const ExportOptions& opt, const std::f
   return s;
 }
 
-ImportResult import_chip(const std::filesystem::path& dir) {
-  ImportResult r;
+ImportSummary import_chip(const std::filesystem::path& dir) {
+  ImportSummary r;
   nlohmann::json cj;
   try {
     cj = nlohmann::json::parse(read_text_file(dir / "config.json"));

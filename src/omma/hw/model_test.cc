@@ -205,7 +205,7 @@ TEST(Export, RoundTripWithinQuantisation) {
   for (const char* f : {"config.json", "regs.hex", "pix_pos.hex", "cam_search.hex", "pix_val.hex", "sin_rom.hex",
                         "cos_rom.coe", "vig_mem.hex", "omma_hw_config.h", "config_stream.txt"})
     EXPECT_TRUE(std::filesystem::exists(dir / f)) << f;
-  const ImportResult im = import_chip(dir);
+  const ImportSummary im = import_chip(dir);
   EXPECT_EQ(im.chip.method, pano::Method::kMrf);
   EXPECT_EQ(im.grid.width, 1920);
   EXPECT_EQ(im.chip.angles.k_phi, s.chip.angles.k_phi);

@@ -110,7 +110,7 @@ Colon simulate_colon(const PanoGrid& grid, uint64_t seed) {
 }
 
 struct ColonFigures {
-  EvalResult inf, sphere, truth, estimate;
+  EvalSummary inf, sphere, truth, estimate;
   DepthError depth;
   BoundaryScore thesis, with_depth, from_depth;
   DepthEstimate est;

@@ -32,9 +32,9 @@ Scene far_field(const cv::Mat& tex, const PanoGrid& grid, int cam_px) {
   return s;
 }
 
-std::map<Method, EvalResult> run_all(const Scene& s, const char* label) {
+std::map<Method, EvalSummary> run_all(const Scene& s, const char* label) {
   const cv::Mat seam = seam_mask(coverage_map(s.rig, s.grid), false);
-  std::map<Method, EvalResult> out;
+  std::map<Method, EvalSummary> out;
   for (Method m : all_methods()) {
     StitchOptions opt;
     opt.method = m;

@@ -307,7 +307,7 @@ TEST(SimSimulate, FramesFolderIsComplete) {
   o.truth_grid = PanoGrid{Projection::kVr180, 128, 128};
   o.raw = true;
   o.progress = false;
-  const SimulateResult r = simulate(rig, *scene, o);
+  const SimulateSummary r = simulate(rig, *scene, o);
   ASSERT_EQ(r.frames.size(), rig.cameras.size());
   const auto dir = std::filesystem::temp_directory_path() / "omma_sim_folder_test";
   std::filesystem::remove_all(dir);
