@@ -458,6 +458,8 @@ CalibrationSummary solve_tracks(const Rig& nominal, const Rig& start, std::vecto
 CalibrationSummary calibrate_from_tracks(const Rig& nominal, std::vector<std::vector<TrackObservation>> tracks,
                                         SceneModel scene, const CalibrationOptions& opt) {
   if (scene == SceneModel::kAuto) throw std::invalid_argument("calibrate_from_tracks: scene must be far or near");
+  std::string why;
+  if (!opt.IsValid(&why)) throw std::invalid_argument("calibrate_from_tracks: " + why);
   const int n = static_cast<int>(nominal.cameras.size());
   for (const auto& t : tracks)
     for (const auto& o : t)

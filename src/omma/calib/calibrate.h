@@ -139,6 +139,9 @@ struct CalibrationOptions {
   int min_observations = 30;      // a camera with fewer keeps its nominal values (warning)
   int threads = 2;                // Ceres threads; near-field results vary with the summation order
                                   // of a multi-threaded solve, 1 = reproducible
+
+  // False (with the reason in *why) when a value lies outside the range the code relies on.
+  bool IsValid(std::string* why = nullptr) const;
 };
 
 struct CameraReport {

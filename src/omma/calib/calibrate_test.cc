@@ -272,5 +272,54 @@ TEST(RigDiff, IdenticalRigsAndKnownRotation) {
   EXPECT_LT(diff_rigs(g, a, true).orientation_error_deg.max, 1e-6);
 }
 
+// The message of the std::invalid_argument f throws, or "" if it throws none.
+template <typename F>
+std::string refusal(F f) {
+  try {
+    f();
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Options, FeatureOptionsRefuseBadValues) {
+  FeatureOptions o;
+  EXPECT_TRUE(o.IsValid());
+  o.upsample = 0;
+  std::string why;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("upsample"), std::string::npos);
+  EXPECT_NE(refusal([&] { detect_features(cv::Mat(64, 64, CV_8UC1, cv::Scalar(128)), o); }).find("upsample"),
+            std::string::npos);
+}
+
+TEST(Options, MatchOptionsRefuseBadValues) {
+  MatchOptions o;
+  EXPECT_TRUE(o.IsValid());
+  o.ratio = 1.5;
+  EXPECT_FALSE(o.IsValid());
+  const Rig rig = design::thesis_prototype_rig();
+  EXPECT_NE(refusal([&] { match_pair(rig, 0, 1, {}, {}, SceneModel::kFar, o); }).find("ratio"), std::string::npos);
+}
+
+TEST(Options, CalibrationOptionsRefuseBadValues) {
+  EXPECT_TRUE(CalibrationOptions{}.IsValid());
+  const Rig rig = design::thesis_prototype_rig();
+  CalibrationOptions o;
+  o.radial_terms = 4;
+  EXPECT_NE(refusal([&] { calibrate_rig(rig, {}, o); }).find("radial_terms"), std::string::npos);
+  o = {};
+  o.loss = "l2";
+  EXPECT_FALSE(o.IsValid());
+  o = {};
+  o.dense_subpixel.max_iterations = 0;  // nested options are checked too
+  std::string why;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("dense_subpixel"), std::string::npos);
+  EXPECT_NE(refusal([&] { calibrate_from_tracks(rig, {}, SceneModel::kFar, o); }).find("dense_subpixel"),
+            std::string::npos);
+}
+
 }  // namespace
 }  // namespace omma::calib

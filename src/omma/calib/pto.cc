@@ -16,6 +16,17 @@
 namespace omma::calib {
 namespace fs = std::filesystem;
 
+bool PtoExportOptions::IsValid(std::string* why) const {
+  auto fail = [&](const std::string& m) {
+    if (why) *why = m;
+    return false;
+  };
+  // The p-line's height is pano_width / 2.
+  if (pano_width < 2) return fail(fmt::format("pano_width must be at least 2, got {}", pano_width));
+  if (interpolator < 0) return fail(fmt::format("interpolator must be >= 0, got {}", interpolator));
+  return true;
+}
+
 namespace {
 
 // PT world axes in the dome frame (see pto.h).
@@ -228,6 +239,8 @@ RigCamera camera_from_pto(const PtoCamera& p, int radial_terms, LensFit* fit) {
 }
 
 PtoExportSummary export_pto(const Rig& rig, const PtoExportOptions& opt) {
+  std::string why;
+  if (!opt.IsValid(&why)) throw std::invalid_argument("export_pto: " + why);
   rig.validate();
   PtoExportSummary res;
   std::ostringstream os;

@@ -94,6 +94,9 @@ struct PtoExportOptions {
   bool crop_to_dome = true;  // hemisphere rigs: crop the p-line to the top half (omma's 360 x 90)
   int interpolator = 0;    // m-line i: 0 poly3 (Hugin's default), 5 bilinear, 6 nearest
   bool linear_response = false;  // i-lines Rt1: the frames are linear light (see Photometry above)
+
+  // False (with the reason in *why) when a value lies outside the range the code relies on.
+  bool IsValid(std::string* why = nullptr) const;
 };
 
 struct PtoExportSummary {

@@ -15,6 +15,7 @@
 #include "omma/calib/rig_diff.h"
 #include "omma/sim/test_scenes.h"
 #include "omma/core/frames.h"
+#include "omma/design/prototype.h"
 #include "omma/calib/photometric.h"
 #include "omma/core/srgb.h"
 #include "omma/isp/photometric.h"
@@ -356,6 +357,25 @@ TEST(Pto, NonaAppliesOurPhotometricModelLikeWeDo) {
   EXPECT_GE(db, 30.0);
   EXPECT_GT(db, db_uncorrected + 3);  // the correction is what agrees, not the geometry alone
   fs::remove_all(dir);
+}
+
+// The message of the std::invalid_argument f throws, or "" if it throws none.
+template <typename F>
+std::string refusal(F f) {
+  try {
+    f();
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Options, PtoExportOptionsRefuseBadValues) {
+  PtoExportOptions o;
+  EXPECT_TRUE(o.IsValid());
+  o.pano_width = 1;
+  EXPECT_FALSE(o.IsValid());
+  EXPECT_NE(refusal([&] { export_pto(design::thesis_prototype_rig(), o); }).find("pano_width"), std::string::npos);
 }
 
 }  // namespace

@@ -10,6 +10,25 @@
 #include "omma/design/svg_plot.h"
 
 namespace omma::design {
+
+bool CountSweepOptions::IsValid(std::string* why) const {
+  auto fail = [&](const std::string& m) {
+    if (why) *why = m;
+    return false;
+  };
+  if (!(r_phys_mm > 0)) return fail("r_phys must be positive");
+  for (double rv : r_virtual_mm)
+    if (!(rv > 0) || !std::isfinite(rv)) return fail(fmt::format("R_vir {} mm must be a positive number", rv));
+  // The ranges are walked from min to max in steps: a step <= 0 would never end.
+  if (!(aov_min_deg > 0 && aov_max_deg >= aov_min_deg && aov_max_deg < 360 && aov_step_deg > 0))
+    return fail("angle of view range: need 0 < aov_min_deg <= aov_max_deg < 360 and aov_step_deg > 0");
+  if (!(fixed_aov_deg > 0 && fixed_aov_deg < 360)) return fail("fixed_aov_deg must be in (0, 360)");
+  if (!(ratio_min > 0 && ratio_max >= ratio_min && ratio_step > 0))
+    return fail("ratio range: need 0 < ratio_min <= ratio_max and ratio_step > 0");
+  if (!(check_step_deg > 0)) return fail("check_step_deg must be positive");
+  return true;
+}
+
 namespace {
 
 std::vector<double> range(double lo, double hi, double step) {
@@ -43,7 +62,8 @@ std::string method_label(Method m) {
 }  // namespace
 
 std::vector<SweepRow> run_sweep(const CountSweepOptions& p) {
-  if (!(p.r_phys_mm > 0)) throw std::invalid_argument("sweep: r_phys must be positive");
+  std::string why;
+  if (!p.IsValid(&why)) throw std::invalid_argument("sweep: " + why);
   std::vector<SweepRow> rows;
   for (double rv : p.r_virtual_mm)
     for (Method m : p.aov_methods)

@@ -18,6 +18,9 @@ struct CountSweepOptions {
   double ratio_min = 1.6, ratio_max = 10.0, ratio_step = 0.2;  // R_vir / R_phy: 8/5 .. 50/5
   std::vector<Method> ratio_methods = {Method::kLayered, Method::kMinCameras};
   double check_step_deg = 0.5;
+
+  // False (with the reason in *why) when a value lies outside the range the code relies on.
+  bool IsValid(std::string* why = nullptr) const;
 };
 
 struct SweepRow {

@@ -81,5 +81,29 @@ TEST(SvgPlot, NiceTicksAndEscaping) {
   EXPECT_EQ(count(svg, " M"), 2u);       // and breaks the line
 }
 
+// The message of the std::invalid_argument f throws, or "" if it throws none.
+template <typename F>
+std::string refusal(F f) {
+  try {
+    f();
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(CountSweep, OptionsRefuseBadValues) {
+  CountSweepOptions p;
+  EXPECT_TRUE(p.IsValid());
+  p.aov_step_deg = 0;  // the range would never end
+  std::string why;
+  EXPECT_FALSE(p.IsValid(&why));
+  EXPECT_NE(why.find("aov_step_deg"), std::string::npos);
+  EXPECT_NE(refusal([&] { run_sweep(p); }).find("aov_step_deg"), std::string::npos);
+  p = {};
+  p.r_phys_mm = -1;
+  EXPECT_EQ(refusal([&] { run_sweep(p); }), "sweep: r_phys must be positive");
+}
+
 }  // namespace
 }  // namespace omma::design

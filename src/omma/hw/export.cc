@@ -11,6 +11,20 @@
 #include "omma/core/io.h"
 
 namespace omma::hw {
+
+bool ExportOptions::IsValid(std::string* why) const {
+  std::string sub;
+  if (!config.IsValid(&sub)) {
+    if (why) *why = "hardware configuration: " + sub;
+    return false;
+  }
+  if (grid.width <= 0 || grid.height <= 0) {
+    if (why) *why = "panorama size must be positive";
+    return false;
+  }
+  return true;
+}
+
 namespace {
 
 struct IntField {
@@ -129,6 +143,8 @@ std::vector<uint32_t> parse_words(const std::string& text, const std::string& na
 }
 
 ExportSummary export_chip(const Rig& rig, const ExportOptions& opt, const std::filesystem::path& dir) {
+  std::string why;
+  if (!opt.IsValid(&why)) throw std::invalid_argument(why);
   const HwConfig& cfg = opt.config;
   check_rig(cfg, rig);
   check_grid(cfg, opt.grid);

@@ -37,6 +37,9 @@ struct ExportOptions {
   pano::Method method = pano::Method::kLinear;
   bool boundary = false;
   VignettingModel vignetting;  // empty: unit tables (no correction)
+
+  // False (with the reason in *why) when a value lies outside the range the code relies on.
+  bool IsValid(std::string* why = nullptr) const;
 };
 
 struct ExportSummary {

@@ -13,6 +13,24 @@
 #include "omma/pano/stitch.h"
 
 namespace omma::hw {
+
+bool WidthSweepOptions::IsValid(std::string* why) const {
+  auto fail = [&](const std::string& m) {
+    if (why) *why = m;
+    return false;
+  };
+  std::string sub;
+  if (!base.IsValid(&sub)) return fail("hardware configuration: " + sub);
+  if (grid.width <= 0 || grid.height <= 0) return fail("panorama size must be positive");
+  if (!std::isfinite(target_db)) return fail("target PSNR must be finite");
+  for (const auto& p : params) {
+    if (p.values.empty()) return fail("parameter " + p.name + " has no values");
+    if (!std::is_sorted(p.values.begin(), p.values.end()))
+      return fail("the values of parameter " + p.name + " must be ascending");
+  }
+  return true;
+}
+
 namespace {
 
 int* field(HwConfig& c, const std::string& n) {
@@ -76,6 +94,8 @@ double psnr_against(const HwConfig& cfg, const Rig& rig, const std::vector<cv::M
 
 WidthSweepSummary run_sweep(const Rig& rig, const std::vector<cv::Mat>& frames, const WidthSweepOptions& o) {
   o.base.Check();
+  std::string why;
+  if (!o.IsValid(&why)) throw std::invalid_argument("width sweep: " + why);
   pano::StitchOptions so;
   so.method = o.method;
   so.grid = o.grid;

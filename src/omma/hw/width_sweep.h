@@ -31,6 +31,9 @@ struct WidthSweepOptions {
   double target_db = 45;
   std::vector<SweepParam> params = default_sweep_params();
   std::function<void(const std::string&)> progress;  // called once per configuration rendered
+
+  // False (with the reason in *why) when a value lies outside the range the code relies on.
+  bool IsValid(std::string* why = nullptr) const;
 };
 
 struct SweepPoint {

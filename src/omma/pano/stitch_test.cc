@@ -206,5 +206,41 @@ TEST(PanoQuality, PsnrAndSsimOnKnownImages) {
   EXPECT_THROW(psnr_db(a, cv::Mat(10, 10, CV_32FC3)), std::invalid_argument);
 }
 
+// The message of the std::invalid_argument f throws, or "" if it throws none.
+template <typename F>
+std::string refusal(F f) {
+  try {
+    f();
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Options, SearchOptionsRefuseBadValues) {
+  SearchOptions o;
+  EXPECT_TRUE(o.IsValid());
+  o.min_r_mm = 0;  // |r| divides the weights
+  EXPECT_FALSE(o.IsValid());
+  const Rig rig = testing::small_rig();
+  EXPECT_NE(refusal([&] { find_contributors(rig, Vec3(0, 0, 1), o); }).find("min_r_mm"), std::string::npos);
+}
+
+TEST(Options, StitchOptionsRefuseBadValues) {
+  StitchOptions o;
+  EXPECT_TRUE(o.IsValid());
+  o.blend.gaussian_sigma_rel = 0;
+  std::string why;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("gaussian_sigma_rel"), std::string::npos);
+  const Rig rig = testing::small_rig();
+  std::vector<cv::Mat> frames;
+  for (const auto& c : rig.cameras) frames.emplace_back(c.in.height, c.in.width, CV_8UC3, cv::Scalar::all(100));
+  EXPECT_NE(refusal([&] { stitch(rig, frames, o); }).find("gaussian_sigma_rel"), std::string::npos);
+  o = {};
+  o.grid.width = 0;
+  EXPECT_EQ(refusal([&] { stitch(rig, frames, o); }), "panorama size must be positive");
+}
+
 }  // namespace
 }  // namespace omma::pano

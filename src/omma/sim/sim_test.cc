@@ -417,5 +417,29 @@ TEST(SimPrototype, EveryCameraOfTheThesisDomeSeesThePhotoWhereItShould) {
   EXPECT_GT(worst, 35.0);
 }
 
+// The message of the std::invalid_argument f throws, or "" if it throws none.
+template <typename F>
+std::string refusal(F f) {
+  try {
+    f();
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(SimOptions, RefuseBadValues) {
+  SimulateOptions o;
+  EXPECT_TRUE(o.IsValid());
+  o.shots = 0;
+  EXPECT_FALSE(o.IsValid());
+  const Rig rig = design::thesis_prototype_rig();
+  const auto scene = make_colon_scene();
+  EXPECT_EQ(refusal([&] { simulate(rig, *scene, o); }), "shots must be 1..1000, got 0");
+  o = {};
+  o.truth_supersample = -1;
+  EXPECT_FALSE(o.IsValid());
+}
+
 }  // namespace
 }  // namespace omma::sim

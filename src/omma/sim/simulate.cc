@@ -14,6 +14,18 @@
 namespace omma::sim {
 namespace fs = std::filesystem;
 
+bool SimulateOptions::IsValid(std::string* why) const {
+  auto fail = [&](const std::string& m) {
+    if (why) *why = m;
+    return false;
+  };
+  if (truth && (truth_grid.width <= 0 || truth_grid.height <= 0)) return fail("truth size must be positive");
+  if (shots < 1 || shots > 1000) return fail(fmt::format("shots must be 1..1000, got {}", shots));
+  if (truth_supersample < 0 || truth_supersample > 16)
+    return fail(fmt::format("truth supersample must be 0 (auto) or 1..16, got {}", truth_supersample));
+  return true;
+}
+
 namespace {
 double ms_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
@@ -23,12 +35,11 @@ double ms_since(std::chrono::steady_clock::time_point t0) {
 SimulateSummary simulate(const Rig& nominal, const Scene& scene, const SimulateOptions& o) {
   if (nominal.cameras.empty()) throw RigError("the rig has no cameras");
   nominal.validate();
-  if (o.truth && (o.truth_grid.width <= 0 || o.truth_grid.height <= 0))
-    throw std::invalid_argument("truth size must be positive");
+  std::string why;
+  if (!o.IsValid(&why)) throw std::invalid_argument(why);
   SimulateSummary res;
   res.nominal = nominal;
   res.true_rig = perturb_rig(nominal, o.perturb, o.effects.seed);
-  if (o.shots < 1 || o.shots > 1000) throw std::invalid_argument(fmt::format("shots must be 1..1000, got {}", o.shots));
   res.frames.resize(nominal.cameras.size());
   res.more_shots.assign(size_t(o.shots - 1), std::vector<CameraFrame>(nominal.cameras.size()));
   {

@@ -16,6 +16,7 @@
 #pragma once
 
 #include <filesystem>
+#include <string>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -35,6 +36,9 @@ struct SimulateOptions {
   DomePose pose;                                         // where the dome is in the scene
   bool progress = true;                                  // progress bar on stderr
   int shots = 1;                                         // exposures of the static scene (>= 1)
+
+  // False (with the reason in *why) when a value lies outside the range the code relies on.
+  bool IsValid(std::string* why = nullptr) const;
 };
 
 struct SimulateSummary {
