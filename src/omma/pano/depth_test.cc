@@ -3,6 +3,7 @@
 // error and the estimated depth closes most of the gap to it.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -226,6 +227,39 @@ TEST(PanoDepth, FarFieldNotWorseThanInfinity) {
   std::printf("louvre vr180 270x270 mrf: inf %.2f dB, estimate %.2f dB (median depth %.0f mm)\n", inf, with,
               1 / cv::mean(inv)[0]);
   EXPECT_GT(with, inf - 0.2);  // measured 25.93 and 25.93 dB (540x540 louvre and lake: README "Depth")
+}
+
+// The aggregation alone (plane_sweep.h "Aggregation"), on hand-made cost volumes.
+TEST(PanoDepthSgm, WithoutPenaltiesEveryPathIsTheCostItself) {
+  const int W = 6, H = 4, K = 5;
+  std::vector<float> C(size_t(W) * H * K);
+  for (size_t t = 0; t < C.size(); ++t) C[t] = float((t * 7919) % 13) / 13;
+  const cv::Mat guide(H, W, CV_32FC1, cv::Scalar(0.5));
+  for (int paths : {4, 8}) {
+    const std::vector<float> S = detail::aggregate_sgm(C, W, H, K, guide, 0, 0, 0.03, paths);
+    ASSERT_EQ(S.size(), C.size());
+    for (size_t t = 0; t < C.size(); ++t) ASSERT_NEAR(S[t], paths * C[t], 1e-5) << t;
+  }
+}
+
+TEST(PanoDepthSgm, SmoothnessOverrulesAnIsolatedMinimum) {
+  // Every pixel prefers candidate 1; the centre alone prefers 3 (cost 0 there, 0.5 at 1).
+  const int W = 5, H = 5, K = 4;
+  std::vector<float> C(size_t(W) * H * K, 1.f);
+  for (int u = 0; u < W * H; ++u) C[size_t(u) * K + 1] = 0;
+  const int centre = 2 * W + 2;
+  C[size_t(centre) * K + 1] = 0.5f;
+  C[size_t(centre) * K + 3] = 0;
+  const cv::Mat guide(H, W, CV_32FC1, cv::Scalar(0.5));
+  const std::vector<float> S = detail::aggregate_sgm(C, W, H, K, guide, 0.2, 2.0, 0.03, 8);
+  const float* s = &S[size_t(centre) * K];
+  EXPECT_EQ(std::min_element(s, s + K) - s, 1);
+  // A corner pixel keeps its own minimum.
+  const float* s0 = &S[0];
+  EXPECT_EQ(std::min_element(s0, s0 + K) - s0, 1);
+  // Sizes are checked.
+  EXPECT_THROW(detail::aggregate_sgm(C, W, H + 1, K, guide, 0.2, 2.0, 0.03, 8), std::invalid_argument);
+  EXPECT_THROW(detail::aggregate_sgm(C, W, H, K, guide, 0.2, 2.0, 0.03, 6), std::invalid_argument);
 }
 
 }  // namespace

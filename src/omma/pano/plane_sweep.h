@@ -146,6 +146,15 @@ class DepthSweep {
   std::unique_ptr<Impl> impl_;
 };
 
+namespace detail {
+// The semi-global aggregation of DepthSweep::estimate ("Aggregation" above): C is the cost volume,
+// pixel-major (C[(y W + x) K + k], W x H coarse pixels, K candidates), guide the CV_32FC1 W x H gray
+// levels G of the edge-aware P2; returns S(u, k) = sum over `paths` (4 or 8) directions of L_r(u, k),
+// in the same layout. Throws std::invalid_argument on mismatched sizes.
+std::vector<float> aggregate_sgm(const std::vector<float>& C, int W, int H, int K, const cv::Mat& guide, double p1,
+                                 double p2, double edge_gray, int paths);
+}  // namespace detail
+
 // One-shot: DepthSweep(rig, grid, opt).estimate(frames).
 DepthEstimate estimate_depth(const Rig& rig, const std::vector<cv::Mat>& frames, const PanoGrid& grid,
                              const PlaneSweepOptions& opt = {});
