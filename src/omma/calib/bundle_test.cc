@@ -37,6 +37,7 @@ TEST(BundleProblem, OneResidualBlockPerObservation) {
   const auto tracks = pair_tracks(rig, 5);
   CalibrationOptions opt;
   opt.prior_rotation_deg = 0;  // no prior blocks: only the observations
+  opt.prior_mean_focal = 0;
   for (SceneModel scene : {SceneModel::kFar, SceneModel::kNear}) {
     BundleBlocks b = init_bundle_blocks(rig, rig, tracks, scene, opt, std::nullopt);
     ASSERT_EQ(b.points.size(), tracks.size());
