@@ -138,7 +138,7 @@ void add_calibrate_command(CLI::App& root) {
     opt.min_observations = a.min_matches;
     opt.features.upsample = a.upsample;
     const auto t0 = std::chrono::steady_clock::now();
-    calib::CalibrationResult r;
+    calib::CalibrationSummary r;
     r.rig = nominal;
     if (!a.no_geometric) {
       // With a flat field the frames are flat-fielded first: the patch alignment is then free of

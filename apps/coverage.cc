@@ -38,7 +38,7 @@ std::string distance_label(double d) { return std::isinf(d) ? "inf" : fmt::forma
 nlohmann::json number_or_null(double x) { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(nullptr); }
 
 // Fewest and most cameras over the sample rows with polar angle in [lo, hi] (radians).
-std::pair<int, int> counts_between(const design::CoverageStats& st, double lo, double hi) {
+std::pair<int, int> counts_between(const design::CoverageSummary& st, double lo, double hi) {
   int mn = 1 << 30, mx = 0;
   for (size_t j = 0; j < st.row_theta_rad.size(); ++j)
     if (st.row_theta_rad[j] >= lo - 1e-12 && st.row_theta_rad[j] <= hi + 1e-12) {
@@ -103,7 +103,7 @@ void add_coverage_command(CLI::App& root) {
     nlohmann::json all = nlohmann::json::array();
     nlohmann::json first;
     for (double distance : distances) {
-      const design::CoverageStats st = design::analyze_coverage(rig, distance, step, deg2rad(o->polar_max));
+      const design::CoverageSummary st = design::analyze_coverage(rig, distance, step, deg2rad(o->polar_max));
       const design::PolarBand band = st.polar_band(o->min_count);
       // Fig. 7.5's "2..7 cameras where theta < 60 deg", read as a polar angle and as an elevation.
       const auto [pmin, pmax] = counts_between(st, 0, deg2rad(60));

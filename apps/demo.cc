@@ -97,7 +97,7 @@ EngineRow run_engine(const Rig& rig, const PanoGrid& grid, const std::vector<cv:
 
 struct MethodRow {
   std::string method;
-  pano::EvalResult eval;
+  pano::EvalSummary eval;
   double ms = 0;
 };
 
@@ -113,7 +113,7 @@ struct PhotometricDemo {
 };
 
 PhotometricDemo photometric_demo(const fs::path& dir, const Rig& rig, const std::vector<cv::Mat>& frames,
-                                 const sim::SimulateResult& simr, const sim::CameraEffects& effects,
+                                 const sim::SimulateSummary& simr, const sim::CameraEffects& effects,
                                  const PanoGrid& grid, const cv::Mat& seam, bool progress) {
   PhotometricDemo d;
   const auto t0 = std::chrono::steady_clock::now();
@@ -287,7 +287,7 @@ void run_demo(const DemoOptions& o) {
   so.effects.seed = o.seed;
   so.truth_grid = grid;
   so.progress = !o.json;
-  const sim::SimulateResult simr = sim::simulate(rig, *scene, so);
+  const sim::SimulateSummary simr = sim::simulate(rig, *scene, so);
   sim::write_frames_folder(dir / "frames", simr, so, *scene);
   std::vector<cv::Mat> frames;
   for (const auto& f : simr.frames) frames.push_back(f.image);

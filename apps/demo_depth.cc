@@ -18,7 +18,7 @@
 #include "omma/pano/quality.h"
 #include "omma/pano/stitch.h"
 #include "omma/pano/surface.h"
-#include "omma/pano/sweep.h"
+#include "omma/pano/plane_sweep.h"
 
 namespace omma::app {
 
@@ -38,15 +38,15 @@ DepthDemo run_depth_demo(const Rig& rig, const PanoGrid& grid, const std::vector
   opt.grid = grid;
   opt.progress = progress;
   const cv::Mat seam = pano::seam_mask(pano::coverage_map(rig, grid), false);
-  const pano::EvalResult at_inf = pano::evaluate(pano_inf, truth, seam);
+  const pano::EvalSummary at_inf = pano::evaluate(pano_inf, truth, seam);
   opt.depth = pano::sphere_depth(rig, grid, 22);
-  const pano::EvalResult sphere = pano::evaluate(to_u8(pano::stitch(rig, frames, opt)), truth, seam);
+  const pano::EvalSummary sphere = pano::evaluate(to_u8(pano::stitch(rig, frames, opt)), truth, seam);
   opt.depth = est.depth;
   const cv::Mat with_depth = to_u8(pano::stitch(rig, frames, opt));
   write_image(dir / "pano_mrf_depth.png", with_depth);
-  const pano::EvalResult estimate = pano::evaluate(with_depth, truth, seam);
+  const pano::EvalSummary estimate = pano::evaluate(with_depth, truth, seam);
   opt.depth = truth_depth;
-  const pano::EvalResult with_truth = pano::evaluate(to_u8(pano::stitch(rig, frames, opt)), truth, seam);
+  const pano::EvalSummary with_truth = pano::evaluate(to_u8(pano::stitch(rig, frames, opt)), truth, seam);
   const pano::DepthError derr = pano::depth_error(est.depth, truth_depth, 300);
 
   // Boundaries against the true occlusion boundaries, each map at its best threshold.
@@ -96,7 +96,7 @@ DepthDemo run_depth_demo(const Rig& rig, const PanoGrid& grid, const std::vector
       "(green above). The engine's depth-adaptive renderer (`omma run --depth`: depth every panorama on a "
       "coarse grid, taps moved) renders {:.1f} panoramas/s here, {:.2f} dB against the truth ({:.1f} dB from "
       "the reference stitch on the estimate).",
-      pano::SweepOptions{}.steps, est_s, closed, 100 * derr.median_rel, 100 * derr.within_10, b_inf.precision,
+      pano::PlaneSweepOptions{}.steps, est_s, closed, 100 * derr.median_rel, 100 * derr.within_10, b_inf.precision,
       b_inf.recall, b_inf.f1, b_with.precision, b_with.recall, b_with.f1, b_jump.precision, b_jump.recall,
       b_jump.f1, fps, engine_psnr, engine_vs_ref);
   d.markdown = "## Depth from the overlaps\n\n"
@@ -112,7 +112,7 @@ DepthDemo run_depth_demo(const Rig& rig, const PanoGrid& grid, const std::vector
            "<div class=\"row\"><div><h3>Boundaries from depth</h3><img src=\"boundary_depth.png\"></div>"
            "<div><h3>Engine, depth every panorama</h3><img src=\"pano_mrf_engine_depth.png\"></div></div>";
   d.html += "<table><tr><th>projection surface (mrf)</th><th>PSNR (dB)</th><th>seam PSNR (dB)</th><th>SSIM</th></tr>";
-  auto row = [](const char* name, const pano::EvalResult& e) {
+  auto row = [](const char* name, const pano::EvalSummary& e) {
     return fmt::format("<tr><td>{}</td><td>{:.2f}</td><td>{:.2f}</td><td>{:.4f}</td></tr>", name, e.psnr_db,
                        e.seam_psnr_db, e.ssim);
   };

@@ -51,7 +51,7 @@ void run_eval(const EvalArgs& a) {
     const PanoGrid grid{parse_projection(a.projection), pano_img.cols, pano_img.rows};
     seam = pano::seam_mask(pano::coverage_map(rig, grid), false);
   }
-  const pano::EvalResult r = pano::evaluate(pano_img, truth, seam);
+  const pano::EvalSummary r = pano::evaluate(pano_img, truth, seam);
   // Depth (pano/depth_eval.h): the depth used against the true depth, and a boundary map (eq. 4.15, gray)
   // thresholded (eq. 4.16) against the true occlusion boundaries.
   nlohmann::json depth_json = nullptr, boundary_json = nullptr;

@@ -93,7 +93,7 @@ void run_giga_demo(const GigaDemoOptions& opts) {
   sopt.effects.bits = 12;
   sopt.effects.seed = o.seed;
   sopt.progress = !o.json;
-  const sim::SimulateResult sr = sim::simulate(truth_rig, *scene, sopt);
+  const sim::SimulateSummary sr = sim::simulate(truth_rig, *scene, sopt);
   std::vector<std::unique_ptr<live::CameraSource>> sources;
   for (const auto& f : sr.frames) sources.push_back(live::still_source(f.raw, 2, o.frame_sets));
   live::RecordOptions ro;
@@ -131,7 +131,7 @@ void run_giga_demo(const GigaDemoOptions& opts) {
   const std::vector<cv::Mat> developed = isp::develop_all(raws, iso);
   calib::CalibrationOptions co;
   co.scene = calib::SceneModel::kFar;
-  const calib::CalibrationResult cal = calib::calibrate_rig(nominal, developed, co);
+  const calib::CalibrationSummary cal = calib::calibrate_rig(nominal, developed, co);
   const calib::RigDiff before = calib::diff_rigs(nominal, truth_rig, true);
   const calib::RigDiff after = calib::diff_rigs(cal.rig, truth_rig, true);
   save_rig(cal.rig, dir / "rig_calibrated.json");

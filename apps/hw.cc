@@ -21,7 +21,7 @@
 #include "omma/isp/photometric.h"
 #include "omma/hw/memory.h"
 #include "omma/hw/pipeline.h"
-#include "omma/hw/sweep.h"
+#include "omma/hw/width_sweep.h"
 #include "omma/hw/throughput.h"
 #include "omma/pano/maps.h"
 #include "omma/pano/quality.h"
@@ -136,7 +136,7 @@ void run_simulate(const SimArgs& a) {
   hw::Pipeline pipe(cfg, rig, grid, &vig);
   pipe.load_frames(frames);
   auto t0 = Clock::now();
-  const hw::PipelineResult r = pipe.render(method, a.boundary, true);
+  const hw::PipelineSummary r = pipe.render(method, a.boundary, true);
   const double hw_ms = ms_since(t0);
   nlohmann::json j;
   const double pixels = double(grid.width) * grid.height;
@@ -224,7 +224,7 @@ struct SweepArgs {
 
 void run_sweep_cmd(const SweepArgs& a) {
   set_json_mode(a.json);
-  hw::SweepOptions o;
+  hw::WidthSweepOptions o;
   o.base = load_config(a.config, a.sets);
   o.method = hw_method(a.method);
   o.grid = make_grid(a.projection, a.size);
@@ -251,7 +251,7 @@ void run_sweep_cmd(const SweepArgs& a) {
     spdlog::debug("hw sweep: {}", what);
     if (what.rfind("minimal set", 0) != 0) progress.step();  // the search for the smallest set is not counted
   };
-  const hw::SweepResult r = hw::run_sweep(rig, frames, o);
+  const hw::WidthSweepSummary r = hw::run_sweep(rig, frames, o);
   progress.finish();
   fs::create_directories(a.out);
   write_text_atomically(fs::path(a.out) / "hw_sweep.csv", hw::sweep_csv(r, a.target));
@@ -308,7 +308,7 @@ void run_throughput(ThArgs a) {
     std::vector<cv::Mat> blank;
     for (const auto& c : rig.cameras) blank.emplace_back(c.in.height, c.in.width, CV_8UC3, cv::Scalar::all(0));
     p.load_frames(blank);
-    const hw::PipelineResult r = p.render(pano::Method::kNearest, false, !a.json);
+    const hw::PipelineSummary r = p.render(pano::Method::kNearest, false, !a.json);
     const double pixels = double(s.width) * s.height;
     j["counted"] = {{"rig", rig.name}, {"projection", to_string(g.projection)}, {"cycles", r.stats.cycles},
                     {"cycles_per_pixel", r.stats.cycles / pixels},
@@ -428,7 +428,7 @@ struct ImArgs {
 
 void run_import(const ImArgs& a) {
   set_json_mode(a.json);
-  const hw::ImportResult r = hw::import_chip(a.dir);
+  const hw::ImportSummary r = hw::import_chip(a.dir);
   save_rig(r.rig, a.rig_out);
   const hw::RigDifference b = hw::quantisation_bound(r.config);
   auto diff_json = [](const hw::RigDifference& d) {

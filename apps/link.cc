@@ -81,7 +81,7 @@ void run_decode(const LinkArgs& a) {
   if (prefix.has_parent_path() && !fs::is_directory(prefix.parent_path()))
     throw IoError("output folder '" + prefix.parent_path().string() + "' does not exist");
   int index = 0;
-  const isp::LinkStats st = isp::decode_link(bytes, a.cfg, [&](const isp::LinkFrame& frame) {
+  const isp::LinkSummary st = isp::decode_link(bytes, a.cfg, [&](const isp::LinkFrame& frame) {
     isp::LinkFrame f = frame;
     if (!a.no_conceal) isp::conceal_damaged_rows(f);
     char name[32];

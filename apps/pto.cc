@@ -45,7 +45,7 @@ void add_pto_command(CLI::App& root) {
     opt.interpolator = interpolator;
     opt.linear_response = linear_response;
     if (pano_width < 8) throw std::invalid_argument("--pano-width must be at least 8");
-    const calib::PtoExportResult r = calib::export_pto(rig, opt);
+    const calib::PtoExportSummary r = calib::export_pto(rig, opt);
     for (const auto& w : r.warnings) spdlog::warn("pto export: {}", w);
     write_text_atomically(pto_path, r.text);
     if (json_ex)
@@ -62,7 +62,7 @@ void add_pto_command(CLI::App& root) {
   im->callback([] {
     set_json_mode(json_im);
     const std::string text = read_text_file(in_path, kMaxTextFileBytes, "PTO file");
-    const calib::PtoImportResult r = calib::import_pto(text, std::filesystem::path(in_path).parent_path());
+    const calib::PtoImportSummary r = calib::import_pto(text, std::filesystem::path(in_path).parent_path());
     for (const auto& w : r.warnings) spdlog::warn("pto import: {}", w);
     save_rig(r.rig, out_rig);
     if (json_im)

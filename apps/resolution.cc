@@ -54,7 +54,7 @@ void run_resolution(const ResolutionArgs& a) {
   o.effects.seed = a.seed;
   o.truth_grid = PanoGrid{Projection::kVr180, size.width, size.height};
   o.progress = !a.json;
-  const sim::SimulateResult sim = sim::simulate(rig, *scene, o);
+  const sim::SimulateSummary sim = sim::simulate(rig, *scene, o);
   std::vector<cv::Mat> frames;
   for (const auto& f : sim.frames) frames.push_back(f.image);
   pano::StitchOptions so;

@@ -61,7 +61,7 @@ void run_simulate(const SimulateArgs& a) {
   const Rig rig = a.rig.empty() ? design::thesis_prototype_rig() : design::load_rig_or_builtin(a.rig);
   if (rig.cameras.empty()) throw RigError(fmt::format("rig '{}' has no cameras", a.rig));
   const std::unique_ptr<sim::Scene> scene = sim::make_scene(a.scene);
-  const sim::SimulateResult res = sim::simulate(rig, *scene, o);
+  const sim::SimulateSummary res = sim::simulate(rig, *scene, o);
   if (a.shots > 1) sim::write_shots_folder(a.out, res, o, *scene);
   else sim::write_frames_folder(a.out, res, o, *scene);
   const double total_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();

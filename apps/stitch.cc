@@ -25,7 +25,7 @@
 #include "omma/isp/photometric.h"
 #include "omma/pano/maps.h"
 #include "omma/pano/surface.h"
-#include "omma/pano/sweep.h"
+#include "omma/pano/plane_sweep.h"
 
 namespace omma::app {
 namespace {
@@ -55,8 +55,8 @@ struct DepthChoice {
 };
 
 // Parses "NEAR,FAR,STEPS" (any suffix may be left out).
-pano::SweepOptions parse_sweep(const std::string& text) {
-  pano::SweepOptions so;
+pano::PlaneSweepOptions parse_sweep(const std::string& text) {
+  pano::PlaneSweepOptions so;
   if (text.empty()) return so;
   std::vector<double> v;
   size_t start = 0;
@@ -106,7 +106,7 @@ DepthChoice choose_depth(const std::string& spec, const Rig& rig, const std::vec
     d.depth = pano::read_depth(after("truth:"), grid);
     d.info = {{"mode", "truth"}, {"file", after("truth:")}};
   } else if (spec == "estimate" || spec.rfind("estimate:", 0) == 0) {
-    const pano::SweepOptions so = parse_sweep(spec == "estimate" ? "" : after("estimate:"));
+    const pano::PlaneSweepOptions so = parse_sweep(spec == "estimate" ? "" : after("estimate:"));
     const pano::DepthSweep sweep(rig, grid, so);
     const pano::DepthEstimate e = sweep.estimate(frames);
     // A range that excludes the scene piles the confident estimates up at one of its ends.

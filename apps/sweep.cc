@@ -9,14 +9,14 @@
 #include "apps/command.h"
 #include "omma/core/io.h"
 #include "omma/core/log.h"
-#include "omma/design/sweep.h"
+#include "omma/design/count_sweep.h"
 
 namespace omma::app {
 
 void add_sweep_command(CLI::App& root) {
   struct Opts {
     std::string out_dir = "sweep";
-    design::SweepParams p;
+    design::CountSweepOptions p;
     bool json = false;
   };
   auto o = std::make_shared<Opts>();

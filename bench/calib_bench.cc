@@ -28,7 +28,7 @@ struct Fixture {
     so.progress = false;
     so.shots = 8;
     const auto tube = sim::make_tube_scene();
-    const sim::SimulateResult r = sim::simulate(nominal, *tube, so);
+    const sim::SimulateSummary r = sim::simulate(nominal, *tube, so);
     true_rig = r.true_rig;
     auto images = [](const std::vector<sim::CameraFrame>& fs) {
       std::vector<cv::Mat> out;
@@ -38,7 +38,7 @@ struct Fixture {
     shots.push_back(images(r.frames));
     for (const auto& s : r.more_shots) shots.push_back(images(s));
     const auto flat = sim::make_flat_scene();
-    const sim::SimulateResult fr = sim::simulate(nominal, *flat, so);
+    const sim::SimulateSummary fr = sim::simulate(nominal, *flat, so);
     flats.push_back(images(fr.frames));
     for (const auto& s : fr.more_shots) flats.push_back(images(s));
   }
@@ -90,7 +90,7 @@ BENCHMARK(BM_PhotometricFlatField8Shots)->Iterations(3)->Unit(benchmark::kMillis
 void BM_GeometricPlusPhotometric8Shots(benchmark::State& state) {
   const Fixture& f = fixture();
   for (auto _ : state) {
-    const calib::CalibrationResult g =
+    const calib::CalibrationSummary g =
         calib::calibrate_rig(f.nominal, calib::average_frame_sets(f.shots), tube_options());
     benchmark::DoNotOptimize(calib::calibrate_flat_field(g.rig, f.flats));
   }

@@ -7,7 +7,7 @@
 #include "omma/design/coverage.h"
 #include "omma/design/placement.h"
 #include "omma/design/prototype.h"
-#include "omma/design/sweep.h"
+#include "omma/design/count_sweep.h"
 
 namespace omma::design {
 namespace {
@@ -58,7 +58,7 @@ BENCHMARK(BM_DesignMinCameras15)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // The whole default `omma sweep` (Fig. 3.3/3.9 and Fig. 3.7), without writing files.
 void BM_WholeSweep(benchmark::State& state) {
-  const SweepParams p;
+  const CountSweepOptions p;
   for (auto _ : state) benchmark::DoNotOptimize(run_sweep(p));
 }
 BENCHMARK(BM_WholeSweep)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);

@@ -26,7 +26,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       if (p >= (1u << c.bits)) abort();
     rows += f.height;
   };
-  const omma::isp::LinkStats st = omma::isp::decode_link(data + 1, size - 1, c, check);
+  const omma::isp::LinkSummary st = omma::isp::decode_link(data + 1, size - 1, c, check);
   if (st.rows_ok + st.rows_damaged != rows || st.bytes != size - 1) abort();
   if (sel % 4 == 0) {
     const omma::isp::LinkConfig def;

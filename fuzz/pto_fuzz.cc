@@ -13,7 +13,7 @@
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string text(reinterpret_cast<const char*>(data), size);
   try {
-    const omma::calib::PtoImportResult r = omma::calib::import_pto(text, "/nonexistent-omma-fuzz");
+    const omma::calib::PtoImportSummary r = omma::calib::import_pto(text, "/nonexistent-omma-fuzz");
     r.rig.validate();  // what was imported is a valid rig
     if (r.rig.cameras.empty() || !std::isfinite(r.max_fit_px)) abort();
   } catch (const omma::calib::PtoError&) {

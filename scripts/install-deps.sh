@@ -4,7 +4,8 @@
 # Verilator, Yosys and Icarus Verilog for the RTL co-simulation and lint (hw/rtl, CMake OMMA_RTL);
 # pytest for the Python bindings; exiftool and ffprobe (ffmpeg), which read the 360-degree metadata;
 # xxhash (xxhsum: the MPI tests check the manifests' checksums with the standard tool); Tesseract OCR,
-# the outside judge that panoramas and camera frames show text the right way round.
+# the outside judge that panoramas and camera frames show text the right way round; clang-format,
+# which the tests run first (scripts/format.sh --check).
 # Then the live view's npm packages (web/package-lock.json: the Pannellum viewer, embedded in the
 # binary at build time, and playwright-core, which drives Chromium in the viewer's test) with npm ci.
 set -euo pipefail
@@ -13,7 +14,7 @@ pkgs=(cmake g++ ninja-build ccache pkg-config libopencv-dev libeigen3-dev libcer
       libbenchmark-dev hugin-tools libcpp-httplib-dev zlib1g-dev libtiff-dev libhdf5-dev python3-dev pybind11-dev
       python3-numpy libxxhash-dev libopenmpi-dev openmpi-bin)
 [ "${1:-}" = "--test" ] && pkgs+=(chromium verilator yosys iverilog python3-pytest libimage-exiftool-perl ffmpeg xxhash
-                    tesseract-ocr tesseract-ocr-eng)
+                    tesseract-ocr tesseract-ocr-eng clang-format)
 command -v npm >/dev/null || pkgs+=(nodejs npm)
 missing=()
 for p in "${pkgs[@]}"; do

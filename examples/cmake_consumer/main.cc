@@ -18,7 +18,7 @@ int main() {
   sim.effects = omma::sim::CameraEffects::ideal(3);
   sim.truth_grid = {omma::Projection::kVr180, 270, 270};
   sim.progress = false;
-  const omma::sim::SimulateResult frames = omma::sim::simulate(rig, *scene, sim);
+  const omma::sim::SimulateSummary frames = omma::sim::simulate(rig, *scene, sim);
 
   std::vector<cv::Mat> images;
   for (const auto& f : frames.frames) images.push_back(f.image);

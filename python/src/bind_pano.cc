@@ -90,7 +90,7 @@ void add_pano(py::module_& m) {
       "evaluate",
       [](const py::object& pano, const py::object& truth, const py::object& seam) {
         const cv::Mat p = image_arg(pano, "pano"), t = image_arg(truth, "truth");
-        const pano::EvalResult r = pano::evaluate(p, t, mask_arg(seam, p.size()));
+        const pano::EvalSummary r = pano::evaluate(p, t, mask_arg(seam, p.size()));
         py::dict d;
         d["psnr_db"] = number_or_none(r.psnr_db);
         d["ssim"] = r.ssim;
@@ -187,7 +187,7 @@ void add_pano(py::module_& m) {
         set_fields(py::cast(&o, py::return_value_policy::reference), kwargs, "calibrate");
         std::vector<py::object> keep;
         const std::vector<cv::Mat> f = frames_from_python(frames, rig, {}, &keep);
-        calib::CalibrationResult r;
+        calib::CalibrationSummary r;
         {
           py::gil_scoped_release release;
           r = calib::calibrate_rig(rig, f, o);

@@ -17,7 +17,7 @@ namespace {
 struct Simulation {
   std::shared_ptr<sim::Scene> scene;
   sim::SimulateOptions options;
-  sim::SimulateResult result;
+  sim::SimulateSummary result;
 };
 
 py::list frame_list(const Simulation& s, cv::Mat sim::CameraFrame::*field) {

@@ -11,7 +11,7 @@
 // demosaic's protocol), while the next frame is assembled in the other bank. A frame that ends
 // while the reader is still busy is dropped and counted in `overruns`.
 //
-// Statistics as isp::LinkStats: frames emitted, intact and damaged rows of emitted frames.
+// Statistics as isp::LinkSummary: frames emitted, intact and damaged rows of emitted frames.
 module bayer_store #(
     parameter int WIDTH = 250,
     parameter int HEIGHT = 250,

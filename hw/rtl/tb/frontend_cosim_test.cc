@@ -128,7 +128,7 @@ RtlRun run_rtl(const ChipStream& s, const LinkConfig& c) {
 
 struct IspRun {
   std::vector<LinkFrame> frames;
-  omma::isp::LinkStats stats;
+  omma::isp::LinkSummary stats;
 };
 
 IspRun run_isp(const ChipStream& s, const LinkConfig& c) {

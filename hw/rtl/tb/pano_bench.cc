@@ -52,7 +52,7 @@ int main(int argc, char** argv) {
     Pipeline model(cfg, rig24(), grid);
     model.load_frames(frames);
     auto t = clk::now();
-    const PipelineResult ref = model.render(m, boundary);
+    const PipelineSummary ref = model.render(m, boundary);
     const double model_s = secs(t);
     std::cerr << "RTL: load, configure, run " << grid.width << "x" << grid.height << "...\n";
     Chip chip;

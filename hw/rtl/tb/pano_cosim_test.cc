@@ -32,7 +32,7 @@ void cosim(const std::vector<cv::Mat>& frames, const PanoGrid& grid, const char*
     SCOPED_TRACE(std::string(scene) + " " + pano::to_string(m) + (boundary ? " +boundary" : ""));
     chip.configure(exported_streams(rig24(), ExportOptions{cfg, grid, m, boundary, vm}));
     ASSERT_FALSE(chip.top().cfg_err) << "code " << int(chip.top().cfg_err_code);
-    const PipelineResult ref = model.render(m, boundary);
+    const PipelineSummary ref = model.render(m, boundary);
     const Chip::Run run = chip.run(grid.width, grid.height);
     EXPECT_EQ(run.pixels, uint64_t(grid.width) * grid.height);
     EXPECT_EQ(run.out_of_order, 0u);

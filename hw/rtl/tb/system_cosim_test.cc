@@ -52,7 +52,7 @@ TEST(RtlSystem, SerialLinksToPanoramaMatchIspAndModelBitForBit) {
     if (streams.size() % 6 == 5) s = isp::impair_link(s, 3e-4, 0, rng());  // four damaged links
     // the model's frame: the decoder's output (damaged rows 0), demosaiced, 8 MSBs
     isp::LinkFrame dec;
-    const isp::LinkStats st = isp::decode_link(s.bytes, link, [&](const isp::LinkFrame& d) { dec = d; });
+    const isp::LinkSummary st = isp::decode_link(s.bytes, link, [&](const isp::LinkFrame& d) { dec = d; });
     ASSERT_EQ(st.frames, 1);
     damaged += st.rows_damaged;
     const cv::Mat rgb10 = isp::demosaic(cv::Mat(40, 40, CV_16UC1, dec.pixels.data()), isp::Demosaic::kBilinear, 10);
@@ -74,7 +74,7 @@ TEST(RtlSystem, SerialLinksToPanoramaMatchIspAndModelBitForBit) {
   const PanoGrid grid{Projection::kVr180, 64, 64};
   Pipeline model(cfg, rig, grid);
   model.load_frames(frames);
-  const PipelineResult ref = model.render(pano::Method::kLinear, false);
+  const PipelineSummary ref = model.render(pano::Method::kLinear, false);
 
   Chip chip;
   chip.feed_links(streams);

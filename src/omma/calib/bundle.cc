@@ -10,6 +10,7 @@
 #include <ceres/rotation.h>
 #include <fmt/format.h>
 
+#include "omma/calib/bundle_problem.h"
 #include "omma/core/log.h"
 
 namespace omma::calib {
@@ -141,14 +142,189 @@ bool triangulate(const std::vector<Vec3>& c, const std::vector<Vec3>& d, Vec3* p
 
 }  // namespace
 
-CalibrationResult solve_tracks(const Rig& nominal, const Rig& start, std::vector<std::vector<TrackObservation>> tracks,
-                               SceneModel scene, const CalibrationOptions& opt, CalibrationResult res,
-                               SolveState* state) {
+namespace detail {
+
+double* BundleBlocks::fcc_block(int i) { return fcc[share_intrinsics ? 0 : i].data(); }
+double* BundleBlocks::k_block(int i) { return kk[share_distortion ? 0 : i].data(); }
+
+BundleBlocks init_bundle_blocks(const Rig& nominal, const Rig& start,
+                                const std::vector<std::vector<TrackObservation>>& tracks, SceneModel scene,
+                                const CalibrationOptions& opt, const std::optional<std::array<double, 4>>& tube_axis) {
   const int n = static_cast<int>(nominal.cameras.size());
-  res.uncalibrated_ids.clear();
-  res.per_camera.clear();
-  res.tracks = res.observations = res.rejected = 0;
-  // 4. Cameras with too few observations keep their nominal values.
+  BundleBlocks b;
+  b.r_nom.resize(n);
+  b.delta.assign(n, {0, 0, 0});
+  b.fcc.resize(n);
+  b.kk.resize(n);
+  for (int i = 0; i < n; ++i) {
+    const auto& c = start.cameras[i];
+    b.r_nom[i] = c.frame.dome_to_camera();
+    b.fcc[i] = {c.in.fu, c.in.fv, c.in.cu, c.in.cv};
+    b.kk[i] = c.in.k;
+  }
+  // Sharing focal and centre is handled with one block for both when either is shared (documented
+  // simplification: sharing one of them shares both).
+  b.share_intrinsics = opt.share_focal || opt.share_center;
+  b.share_distortion = opt.share_distortion;
+
+  b.near = scene == SceneModel::kNear;
+  b.points.resize(tracks.size());
+  for (size_t ti = 0; ti < tracks.size(); ++ti) {
+    std::vector<Vec3> cs, ds;
+    Vec3 mean = Vec3::Zero();
+    for (const auto& o : tracks[ti]) {
+      const Vec3 d = start.cameras[o.cam].model().unproject(o.px);
+      cs.push_back(nominal.cameras[o.cam].position_mm);
+      ds.push_back(d);
+      mean += d;
+    }
+    mean.normalize();
+    Vec3 p;
+    if (b.near && triangulate(cs, ds, &p)) {
+      Eigen::Vector4d x(p.x(), p.y(), p.z(), 1.0);
+      x.normalize();
+      b.points[ti] = {x[0], x[1], x[2], x[3]};
+    } else {
+      b.points[ti] = {mean.x(), mean.y(), mean.z(), 0.0};
+    }
+  }
+
+  // The calibration tube: tracks whose point lies near its wall are constrained to it (surface
+  // coordinates (phi, z) in `uv`), the others (its closed ends) stay free.
+  b.tube = b.near && opt.tube_diameter_mm > 0;
+  b.tube_r = opt.tube_diameter_mm / 2;
+  b.on_tube.assign(tracks.size(), 0);
+  b.uv.assign(tracks.size(), {0, 0});
+  b.axis = tube_axis ? *tube_axis : std::array<double, 4>{0, 0, 0, 0};
+  if (b.tube)
+    for (size_t ti = 0; ti < tracks.size(); ++ti) {
+      const auto& x = b.points[ti];
+      if (std::abs(x[3]) < 1e-9) continue;
+      const Vec3 p = Vec3(x[0], x[1], x[2]) / x[3];
+      const Vec2 c(p.x() - b.axis[0] - b.axis[2] * p.z(), p.y() - b.axis[1] - b.axis[3] * p.z());
+      // The first solve starts from the nominal rig (points off by millimetres): a wide band; later
+      // solves start from a solution (points within ~0.1 mm): a narrow one, which keeps the points
+      // of the closed ends near the rim off the wall.
+      const double tol = tube_axis ? opt.tube_tolerance_refined : opt.tube_tolerance;
+      if (std::abs(c.norm() - b.tube_r) > tol * b.tube_r) continue;
+      b.on_tube[ti] = 1;
+      b.uv[ti] = {std::atan2(c.y(), c.x()), p.z()};
+    }
+  if (b.tube)
+    spdlog::info("calibrate: {} of {} tracks on the {} mm tube's wall",
+                 std::count(b.on_tube.begin(), b.on_tube.end(), 1), tracks.size(), opt.tube_diameter_mm);
+
+  for (int j = opt.radial_terms; j < 3; ++j) b.k_const.push_back(j == 0 ? 0 : j == 1 ? 1 : 4);
+  if (!opt.estimate_tangential) b.k_const.insert(b.k_const.end(), {2, 3});
+  if (!opt.estimate_focal) b.fcc_const.insert(b.fcc_const.end(), {0, 1});
+  if (!opt.estimate_center) b.fcc_const.insert(b.fcc_const.end(), {2, 3});
+  return b;
+}
+
+BundleManifolds::BundleManifolds(const BundleBlocks& b) : tube_offset_only(4, {2, 3}) {
+  if (!b.k_const.empty() && b.k_const.size() < 5) k = std::make_unique<ceres::SubsetManifold>(5, b.k_const);
+  if (!b.fcc_const.empty() && b.fcc_const.size() < 4) fcc = std::make_unique<ceres::SubsetManifold>(4, b.fcc_const);
+}
+
+int build_bundle_problem(ceres::Problem& problem, BundleManifolds& m, BundleBlocks& b,
+                         const std::vector<std::vector<TrackObservation>>& tracks,
+                         const std::vector<std::vector<char>>& keep, const Rig& nominal,
+                         const CalibrationOptions& opt, bool intrinsics_free) {
+  const int n = static_cast<int>(b.delta.size());
+  const std::string loss = opt.loss != "auto" ? opt.loss : b.near ? "cauchy" : "huber";
+  auto make_loss = [&]() -> ceres::LossFunction* {
+    if (loss == "huber") return new ceres::HuberLoss(opt.loss_scale_px);
+    if (loss == "cauchy") return new ceres::CauchyLoss(opt.loss_scale_px);
+    return nullptr;
+  };
+  // Observations: one reprojection residual each, in tracks with >= 2 kept observations.
+  int added = 0;
+  for (size_t ti = 0; ti < tracks.size(); ++ti) {
+    int kept = 0;
+    for (size_t oi = 0; oi < tracks[ti].size(); ++oi) kept += keep[ti][oi];
+    if (kept < 2) continue;
+    for (size_t oi = 0; oi < tracks[ti].size(); ++oi) {
+      if (!keep[ti][oi]) continue;
+      const auto& o = tracks[ti][oi];
+      const int i = o.cam;
+      if (b.on_tube[ti]) {
+        auto* cost = new ceres::AutoDiffCostFunction<TubeCost, 2, 3, 4, 5, 2, 4>(
+            new TubeCost{{o.px, o.weight, b.r_nom[i], nominal.cameras[i].position_mm}, b.tube_r});
+        problem.AddResidualBlock(cost, make_loss(), b.delta[i].data(), b.fcc_block(i), b.k_block(i), b.uv[ti].data(),
+                                 b.axis.data());
+      } else if (b.near) {
+        auto* cost = new ceres::AutoDiffCostFunction<NearCost, 2, 3, 4, 5, 4>(
+            new NearCost{o.px, o.weight, b.r_nom[i], nominal.cameras[i].position_mm});
+        problem.AddResidualBlock(cost, make_loss(), b.delta[i].data(), b.fcc_block(i), b.k_block(i),
+                                 b.points[ti].data());
+      } else {
+        auto* cost =
+            new ceres::AutoDiffCostFunction<FarCost, 2, 3, 4, 5, 3>(new FarCost{o.px, o.weight, b.r_nom[i]});
+        problem.AddResidualBlock(cost, make_loss(), b.delta[i].data(), b.fcc_block(i), b.k_block(i),
+                                 b.points[ti].data());
+      }
+      ++added;
+    }
+    if (problem.HasParameterBlock(b.points[ti].data()))
+      problem.SetManifold(b.points[ti].data(), b.near ? static_cast<ceres::Manifold*>(&m.sphere4) : &m.sphere3);
+  }
+  if (b.tube && !opt.tube_tilt && problem.HasParameterBlock(b.axis.data()))
+    problem.SetManifold(b.axis.data(), &m.tube_offset_only);
+  // Priors: the rotations (gauge), the mean focal length (near field without the tube).
+  for (int i = 0; i < n; ++i) {
+    if (!problem.HasParameterBlock(b.delta[i].data())) continue;
+    if (!opt.estimate_rotation) {
+      problem.SetParameterBlockConstant(b.delta[i].data());
+    } else if (opt.prior_rotation_deg > 0) {
+      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<RotationPrior, 3, 3>(
+                                   new RotationPrior{1.0 / deg2rad(opt.prior_rotation_deg)}),
+                               nullptr, b.delta[i].data());
+    }
+  }
+  if (b.near && !b.tube && intrinsics_free && opt.prior_mean_focal > 0 && opt.estimate_focal &&
+      !b.share_intrinsics) {
+    auto* prior = new MeanFocalPrior{{}, {}, 1.0 / opt.prior_mean_focal};
+    auto* cost = new ceres::DynamicAutoDiffCostFunction<MeanFocalPrior>(prior);
+    std::vector<double*> blocks;
+    for (int i = 0; i < n; ++i) {
+      if (!problem.HasParameterBlock(b.fcc_block(i))) continue;
+      prior->fu_nom.push_back(nominal.cameras[i].in.fu);
+      prior->fv_nom.push_back(nominal.cameras[i].in.fv);
+      cost->AddParameterBlock(4);
+      blocks.push_back(b.fcc_block(i));
+    }
+    cost->SetNumResiduals(2);
+    if (blocks.empty()) delete cost;
+    else problem.AddResidualBlock(cost, nullptr, blocks);
+  }
+  // Intrinsics: constant in pass 0, else the parts not estimated held by a subset manifold.
+  for (int i = 0; i < n; ++i) {
+    for (double* blk : {b.fcc_block(i), b.k_block(i)}) {
+      if (!problem.HasParameterBlock(blk)) continue;
+      if (!intrinsics_free) {
+        problem.SetParameterBlockConstant(blk);
+        continue;
+      }
+      const bool is_k = blk == b.k_block(i);
+      const auto& cst = is_k ? b.k_const : b.fcc_const;
+      if (cst.size() == (is_k ? 5u : 4u)) problem.SetParameterBlockConstant(blk);
+      else if (!cst.empty()) problem.SetManifold(blk, is_k ? m.k.get() : m.fcc.get());
+    }
+  }
+  return added;
+}
+
+}  // namespace detail
+
+namespace {
+
+using detail::BundleBlocks;
+
+// Step 4: cameras with too few observations keep their nominal values (a warning names them); their
+// observations and the tracks left with fewer than two are removed. Returns the active flags.
+std::vector<char> drop_inactive_cameras(const Rig& nominal, std::vector<std::vector<TrackObservation>>& tracks,
+                                        const CalibrationOptions& opt, CalibrationSummary& res) {
+  const int n = static_cast<int>(nominal.cameras.size());
   std::vector<int> obs_count(n, 0);
   for (const auto& t : tracks)
     for (const auto& o : t) ++obs_count[o.cam];
@@ -176,192 +352,48 @@ CalibrationResult solve_tracks(const Rig& nominal, const Rig& start, std::vector
     t.erase(std::remove_if(t.begin(), t.end(), [&](const TrackObservation& o) { return !active[o.cam]; }), t.end());
   tracks.erase(std::remove_if(tracks.begin(), tracks.end(), [](const auto& t) { return t.size() < 2; }),
                tracks.end());
+  return active;
+}
 
-  // 5. Parameters.
-  std::vector<Mat3> r_nom(n);
-  std::vector<std::array<double, 3>> delta(n, {0, 0, 0});
-  std::vector<std::array<double, 4>> fcc(n);
-  std::vector<std::array<double, 5>> kk(n);
-  for (int i = 0; i < n; ++i) {
-    const auto& c = start.cameras[i];
-    r_nom[i] = c.frame.dome_to_camera();
-    fcc[i] = {c.in.fu, c.in.fv, c.in.cu, c.in.cv};
-    kk[i] = c.in.k;
-  }
-  auto fcc_block = [&](int i) { return fcc[opt.share_focal || opt.share_center ? 0 : i].data(); };
-  auto k_block = [&](int i) { return kk[opt.share_distortion ? 0 : i].data(); };
-  // Sharing focal and centre is handled with one block for both when either is shared (documented
-  // simplification: sharing one of them shares both).
-
-  const bool near = scene == SceneModel::kNear;
-  std::vector<std::array<double, 4>> points(tracks.size());
-  for (size_t ti = 0; ti < tracks.size(); ++ti) {
-    std::vector<Vec3> cs, ds;
-    Vec3 mean = Vec3::Zero();
+// Squared reprojection errors of every observation, in pixels (weighted = false) or whitened (the
+// solver's units), in track order.
+std::vector<double> squared_errors(BundleBlocks& b, const std::vector<std::vector<TrackObservation>>& tracks,
+                                   const Rig& nominal, bool weighted = false) {
+  std::vector<double> err2;
+  const Eigen::Matrix2d id = Eigen::Matrix2d::Identity();
+  for (size_t ti = 0; ti < tracks.size(); ++ti)
     for (const auto& o : tracks[ti]) {
-      const Vec3 d = start.cameras[o.cam].model().unproject(o.px);
-      cs.push_back(nominal.cameras[o.cam].position_mm);
-      ds.push_back(d);
-      mean += d;
+      double r[2] = {1e3, 1e3};
+      const int i = o.cam;
+      const Vec2 obs = o.px;
+      const Eigen::Matrix2d& w = weighted ? o.weight : id;
+      bool ok;
+      if (b.on_tube[ti])
+        ok = TubeCost{{obs, w, b.r_nom[i], nominal.cameras[i].position_mm}, b.tube_r}(
+            b.delta[i].data(), b.fcc_block(i), b.k_block(i), b.uv[ti].data(), b.axis.data(), r);
+      else if (b.near)
+        ok = NearCost{obs, w, b.r_nom[i], nominal.cameras[i].position_mm}(b.delta[i].data(), b.fcc_block(i),
+                                                                          b.k_block(i), b.points[ti].data(), r);
+      else
+        ok = FarCost{obs, w, b.r_nom[i]}(b.delta[i].data(), b.fcc_block(i), b.k_block(i), b.points[ti].data(), r);
+      err2.push_back(ok ? r[0] * r[0] + r[1] * r[1] : 1e6);
     }
-    mean.normalize();
-    Vec3 p;
-    if (near && triangulate(cs, ds, &p)) {
-      Eigen::Vector4d x(p.x(), p.y(), p.z(), 1.0);
-      x.normalize();
-      points[ti] = {x[0], x[1], x[2], x[3]};
-    } else {
-      points[ti] = {mean.x(), mean.y(), mean.z(), 0.0};
-    }
-  }
+  return err2;
+}
 
-  // The calibration tube: tracks whose point lies near its wall are constrained to it (surface
-  // coordinates (phi, z) in `uv`), the others (its closed ends) stay free.
-  const bool tube = near && opt.tube_diameter_mm > 0;
-  const double tube_r = opt.tube_diameter_mm / 2;
-  std::vector<char> on_tube(tracks.size(), 0);
-  std::vector<std::array<double, 2>> uv(tracks.size(), {0, 0});
-  std::array<double, 4> axis = state && state->tube_axis ? *state->tube_axis : std::array<double, 4>{0, 0, 0, 0};
-  if (tube)
-    for (size_t ti = 0; ti < tracks.size(); ++ti) {
-      const auto& x = points[ti];
-      if (std::abs(x[3]) < 1e-9) continue;
-      const Vec3 p = Vec3(x[0], x[1], x[2]) / x[3];
-      const Vec2 c(p.x() - axis[0] - axis[2] * p.z(), p.y() - axis[1] - axis[3] * p.z());
-      // The first solve starts from the nominal rig (points off by millimetres): a wide band; later
-      // solves start from a solution (points within ~0.1 mm): a narrow one, which keeps the points
-      // of the closed ends near the rim off the wall.
-      const double tol = state && state->tube_axis ? opt.tube_tolerance_refined : opt.tube_tolerance;
-      if (std::abs(c.norm() - tube_r) > tol * tube_r) continue;
-      on_tube[ti] = 1;
-      uv[ti] = {std::atan2(c.y(), c.x()), p.z()};
-    }
-  if (tube)
-    spdlog::info("calibrate: {} of {} tracks on the {} mm tube's wall", std::count(on_tube.begin(), on_tube.end(), 1),
-                 tracks.size(), opt.tube_diameter_mm);
-
-  // Squared reprojection errors, in pixels (weighted = false) or whitened (the solver's units).
-  auto evaluate = [&](std::vector<double>* err2, bool weighted = false) {
-    err2->clear();
-    const Eigen::Matrix2d id = Eigen::Matrix2d::Identity();
-    for (size_t ti = 0; ti < tracks.size(); ++ti)
-      for (const auto& o : tracks[ti]) {
-        double r[2] = {1e3, 1e3};
-        const int i = o.cam;
-        const Vec2 obs = o.px;
-        const Eigen::Matrix2d& w = weighted ? o.weight : id;
-        bool ok;
-        if (on_tube[ti])
-          ok = TubeCost{{obs, w, r_nom[i], nominal.cameras[i].position_mm}, tube_r}(
-              delta[i].data(), fcc_block(i), k_block(i), uv[ti].data(), axis.data(), r);
-        else if (near) ok = NearCost{obs, w, r_nom[i], nominal.cameras[i].position_mm}(delta[i].data(), fcc_block(i), k_block(i), points[ti].data(), r);
-        else ok = FarCost{obs, w, r_nom[i]}(delta[i].data(), fcc_block(i), k_block(i), points[ti].data(), r);
-        err2->push_back(ok ? r[0] * r[0] + r[1] * r[1] : 1e6);
-      }
-  };
-  // Per-observation keep mask (outlier removal between the solves).
-  std::vector<std::vector<char>> keep(tracks.size());
-  for (size_t ti = 0; ti < tracks.size(); ++ti) keep[ti].assign(tracks[ti].size(), 1);
-  {
-    std::vector<double> e2;
-    evaluate(&e2);
-    double s = 0;
-    for (double v : e2) s += std::min(v, 1e4);
-    res.initial_rms_px = e2.empty() ? 0 : std::sqrt(s / e2.size());
-  }
-
-  std::vector<int> k_const;
-  for (int j = opt.radial_terms; j < 3; ++j) k_const.push_back(j == 0 ? 0 : j == 1 ? 1 : 4);
-  if (!opt.estimate_tangential) k_const.insert(k_const.end(), {2, 3});
-  std::vector<int> fcc_const;
-  if (!opt.estimate_focal) fcc_const.insert(fcc_const.end(), {0, 1});
-  if (!opt.estimate_center) fcc_const.insert(fcc_const.end(), {2, 3});
-
-  // Pass 0: intrinsics held at nominal, rotations and scene points only (a good start: with all
-  // parameters free from the nominal start the near-field problem slides into a wrong valley
-  // where focal length trades against depth). Pass 1: everything free; then outliers are dropped;
-  // pass 2: final solve.
+// Step 5: the three passes. Pass 0: intrinsics held at nominal, rotations and scene points only (a
+// good start: with all parameters free from the nominal start the near-field problem slides into a
+// wrong valley where focal length trades against depth). Pass 1: everything free; then outliers are
+// dropped (keep); pass 2: final solve.
+void run_passes(BundleBlocks& b, const std::vector<std::vector<TrackObservation>>& tracks,
+                std::vector<std::vector<char>>& keep, const Rig& nominal, const CalibrationOptions& opt,
+                CalibrationSummary& res) {
   for (int pass = 0; pass < 3; ++pass) {
-    const bool intrinsics_free = pass > 0;
     ceres::Problem::Options popt;
     popt.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
     ceres::Problem problem(popt);
-    ceres::SphereManifold<3> sphere3;
-    ceres::SphereManifold<4> sphere4;
-    std::unique_ptr<ceres::Manifold> k_manifold, fcc_manifold;
-    ceres::SubsetManifold tube_offset_only(4, {2, 3});  // the tube's tilt held (CalibrationOptions::tube_tilt)
-    if (!k_const.empty() && k_const.size() < 5) k_manifold = std::make_unique<ceres::SubsetManifold>(5, k_const);
-    if (!fcc_const.empty() && fcc_const.size() < 4) fcc_manifold = std::make_unique<ceres::SubsetManifold>(4, fcc_const);
-    const std::string loss = opt.loss != "auto" ? opt.loss : near ? "cauchy" : "huber";
-    auto make_loss = [&]() -> ceres::LossFunction* {
-      if (loss == "huber") return new ceres::HuberLoss(opt.loss_scale_px);
-      if (loss == "cauchy") return new ceres::CauchyLoss(opt.loss_scale_px);
-      return nullptr;
-    };
-    for (size_t ti = 0; ti < tracks.size(); ++ti) {
-      int kept = 0;
-      for (size_t oi = 0; oi < tracks[ti].size(); ++oi) kept += keep[ti][oi];
-      if (kept < 2) continue;
-      for (size_t oi = 0; oi < tracks[ti].size(); ++oi) {
-        if (!keep[ti][oi]) continue;
-        const auto& o = tracks[ti][oi];
-        const int i = o.cam;
-        if (on_tube[ti]) {
-          auto* cost = new ceres::AutoDiffCostFunction<TubeCost, 2, 3, 4, 5, 2, 4>(
-              new TubeCost{{o.px, o.weight, r_nom[i], nominal.cameras[i].position_mm}, tube_r});
-          problem.AddResidualBlock(cost, make_loss(), delta[i].data(), fcc_block(i), k_block(i), uv[ti].data(),
-                                   axis.data());
-        } else if (near) {
-          auto* cost = new ceres::AutoDiffCostFunction<NearCost, 2, 3, 4, 5, 4>(
-              new NearCost{o.px, o.weight, r_nom[i], nominal.cameras[i].position_mm});
-          problem.AddResidualBlock(cost, make_loss(), delta[i].data(), fcc_block(i), k_block(i), points[ti].data());
-        } else {
-          auto* cost = new ceres::AutoDiffCostFunction<FarCost, 2, 3, 4, 5, 3>(new FarCost{o.px, o.weight, r_nom[i]});
-          problem.AddResidualBlock(cost, make_loss(), delta[i].data(), fcc_block(i), k_block(i), points[ti].data());
-        }
-      }
-      if (problem.HasParameterBlock(points[ti].data()))
-        problem.SetManifold(points[ti].data(), near ? static_cast<ceres::Manifold*>(&sphere4) : &sphere3);
-    }
-    if (tube && !opt.tube_tilt && problem.HasParameterBlock(axis.data())) problem.SetManifold(axis.data(), &tube_offset_only);
-    for (int i = 0; i < n; ++i) {
-      if (!problem.HasParameterBlock(delta[i].data())) continue;
-      if (!opt.estimate_rotation) {
-        problem.SetParameterBlockConstant(delta[i].data());
-      } else if (opt.prior_rotation_deg > 0) {
-        problem.AddResidualBlock(new ceres::AutoDiffCostFunction<RotationPrior, 3, 3>(
-                                     new RotationPrior{1.0 / deg2rad(opt.prior_rotation_deg)}),
-                                 nullptr, delta[i].data());
-      }
-    }
-    if (near && !tube && intrinsics_free && opt.prior_mean_focal > 0 && opt.estimate_focal && !(opt.share_focal || opt.share_center)) {
-      auto* prior = new MeanFocalPrior{{}, {}, 1.0 / opt.prior_mean_focal};
-      auto* cost = new ceres::DynamicAutoDiffCostFunction<MeanFocalPrior>(prior);
-      std::vector<double*> blocks;
-      for (int i = 0; i < n; ++i) {
-        if (!problem.HasParameterBlock(fcc_block(i))) continue;
-        prior->fu_nom.push_back(nominal.cameras[i].in.fu);
-        prior->fv_nom.push_back(nominal.cameras[i].in.fv);
-        cost->AddParameterBlock(4);
-        blocks.push_back(fcc_block(i));
-      }
-      cost->SetNumResiduals(2);
-      if (blocks.empty()) delete cost;
-      else problem.AddResidualBlock(cost, nullptr, blocks);
-    }
-    for (int i = 0; i < n; ++i) {
-      for (double* blk : {fcc_block(i), k_block(i)}) {
-        if (!problem.HasParameterBlock(blk)) continue;
-        if (!intrinsics_free) {
-          problem.SetParameterBlockConstant(blk);
-          continue;
-        }
-        const bool is_k = blk == k_block(i);
-        const auto& cst = is_k ? k_const : fcc_const;
-        if (cst.size() == (is_k ? 5u : 4u)) problem.SetParameterBlockConstant(blk);
-        else if (!cst.empty()) problem.SetManifold(blk, is_k ? k_manifold.get() : fcc_manifold.get());
-      }
-    }
+    detail::BundleManifolds manifolds(b);
+    detail::build_bundle_problem(problem, manifolds, b, tracks, keep, nominal, opt, /*intrinsics_free=*/pass > 0);
     ceres::Solver::Options so;
     so.linear_solver_type = ceres::SPARSE_SCHUR;
     if (!ceres::IsSparseLinearAlgebraLibraryTypeAvailable(ceres::SUITE_SPARSE) &&
@@ -385,8 +417,7 @@ CalibrationResult solve_tracks(const Rig& nominal, const Rig& start, std::vector
       // intrinsics. Dropping them there left ~11 % of perfect near-field observations out and
       // doubled the errors (model check: 0.21 instead of 0.07 deg at 0.05 px noise; colon: focal
       // error 0.92 % instead of 0.50 %); the robust loss keeps real outliers in check until here.
-      std::vector<double> e2;
-      evaluate(&e2, true);
+      const std::vector<double> e2 = squared_errors(b, tracks, nominal, true);
       const double thr2 = opt.outlier_px * opt.outlier_px;
       size_t idx = 0;
       for (size_t ti = 0; ti < tracks.size(); ++ti)
@@ -394,10 +425,15 @@ CalibrationResult solve_tracks(const Rig& nominal, const Rig& start, std::vector
           if (keep[ti][oi] && e2[idx] > thr2) keep[ti][oi] = 0, ++res.rejected;
     }
   }
+}
 
-  // 6. Statistics over the kept observations of tracks with >= 2 kept observations.
-  std::vector<double> e2;
-  evaluate(&e2);
+// Step 6: statistics over the kept observations of tracks with >= 2 kept observations, and the
+// calibrated rig (the active cameras' solved parameters).
+void write_solution(BundleBlocks& b, const std::vector<std::vector<TrackObservation>>& tracks,
+                    const std::vector<std::vector<char>>& keep, const std::vector<char>& active, const Rig& nominal,
+                    CalibrationSummary& res) {
+  const int n = static_cast<int>(nominal.cameras.size());
+  const std::vector<double> e2 = squared_errors(b, tracks, nominal);
   std::vector<double> cam_sum(n, 0);
   std::vector<int> cam_n(n, 0);
   double sum = 0;
@@ -425,44 +461,73 @@ CalibrationResult solve_tracks(const Rig& nominal, const Rig& start, std::vector
     rep.calibrated = active[i];
     res.per_camera.push_back(rep);
     if (!active[i]) continue;
-    const Mat3 r = exp_rotation(delta[i].data(), r_nom[i]);
+    const Mat3 r = exp_rotation(b.delta[i].data(), b.r_nom[i]);
     c.frame.t = r.row(0).transpose();
     c.frame.u = r.row(1).transpose();
     c.frame.v = r.row(2).transpose();
-    const double* f = fcc_block(i);
+    const double* f = b.fcc_block(i);
     c.in.fu = f[0], c.in.fv = f[1], c.in.cu = f[2], c.in.cv = f[3];
-    const double* k = k_block(i);
+    const double* k = b.k_block(i);
     for (int j = 0; j < 5; ++j) c.in.k[j] = k[j];
   }
   res.rig.validate();
-  for (size_t ti = 0; ti < tracks.size(); ++ti) {
-    if (!on_tube[ti]) continue;
-    Eigen::Vector4d x(axis[0] + axis[2] * uv[ti][1] + tube_r * std::cos(uv[ti][0]),
-                      axis[1] + axis[3] * uv[ti][1] + tube_r * std::sin(uv[ti][0]), uv[ti][1], 1.0);
-    x.normalize();
-    points[ti] = {x[0], x[1], x[2], x[3]};
+}
+
+}  // namespace
+
+CalibrationSummary solve_tracks(const Rig& nominal, const Rig& start, std::vector<std::vector<TrackObservation>> tracks,
+                                SceneModel scene, const CalibrationOptions& opt, CalibrationSummary res,
+                                SolveState* state) {
+  res.uncalibrated_ids.clear();
+  res.per_camera.clear();
+  res.tracks = res.observations = res.rejected = 0;
+  // 4. Cameras with too few observations keep their nominal values.
+  const std::vector<char> active = drop_inactive_cameras(nominal, tracks, opt, res);
+  // 5. Parameters, then the passes.
+  BundleBlocks b = detail::init_bundle_blocks(nominal, start, tracks, scene, opt,
+                                              state ? state->tube_axis : std::nullopt);
+  // Per-observation keep mask (outlier removal between the solves).
+  std::vector<std::vector<char>> keep(tracks.size());
+  for (size_t ti = 0; ti < tracks.size(); ++ti) keep[ti].assign(tracks[ti].size(), 1);
+  {
+    const std::vector<double> e2 = squared_errors(b, tracks, nominal);
+    double s = 0;
+    for (double v : e2) s += std::min(v, 1e4);
+    res.initial_rms_px = e2.empty() ? 0 : std::sqrt(s / e2.size());
   }
-  if (tube)
-    spdlog::info("calibrate: tube axis offset ({:.3f}, {:.3f}) mm, tilt ({:.4f}, {:.4f})", axis[0], axis[1], axis[2],
-                 axis[3]);
+  run_passes(b, tracks, keep, nominal, opt, res);
+  // 6. Statistics and the calibrated rig.
+  write_solution(b, tracks, keep, active, nominal, res);
+  for (size_t ti = 0; ti < tracks.size(); ++ti) {
+    if (!b.on_tube[ti]) continue;
+    Eigen::Vector4d x(b.axis[0] + b.axis[2] * b.uv[ti][1] + b.tube_r * std::cos(b.uv[ti][0]),
+                      b.axis[1] + b.axis[3] * b.uv[ti][1] + b.tube_r * std::sin(b.uv[ti][0]), b.uv[ti][1], 1.0);
+    x.normalize();
+    b.points[ti] = {x[0], x[1], x[2], x[3]};
+  }
+  if (b.tube)
+    spdlog::info("calibrate: tube axis offset ({:.3f}, {:.3f}) mm, tilt ({:.4f}, {:.4f})", b.axis[0], b.axis[1],
+                 b.axis[2], b.axis[3]);
   if (state) {
     state->tracks = tracks;
-    state->points = points;
-    if (tube) state->tube_axis = axis;
+    state->points = b.points;
+    if (b.tube) state->tube_axis = b.axis;
   }
   spdlog::info("calibrate: reprojection RMS {:.3f} px (nominal rig {:.3f} px), {} tracks, {} observations, {} rejected",
                res.rms_px, res.initial_rms_px, res.tracks, res.observations, res.rejected);
   return res;
 }
 
-CalibrationResult calibrate_from_tracks(const Rig& nominal, std::vector<std::vector<TrackObservation>> tracks,
+CalibrationSummary calibrate_from_tracks(const Rig& nominal, std::vector<std::vector<TrackObservation>> tracks,
                                         SceneModel scene, const CalibrationOptions& opt) {
   if (scene == SceneModel::kAuto) throw std::invalid_argument("calibrate_from_tracks: scene must be far or near");
+  std::string why;
+  if (!opt.IsValid(&why)) throw std::invalid_argument("calibrate_from_tracks: " + why);
   const int n = static_cast<int>(nominal.cameras.size());
   for (const auto& t : tracks)
     for (const auto& o : t)
       if (o.cam < 0 || o.cam >= n) throw std::invalid_argument(fmt::format("calibrate_from_tracks: camera index {} out of range", o.cam));
-  CalibrationResult res;
+  CalibrationSummary res;
   res.rig = nominal;
   res.scene = scene;
   return solve_tracks(nominal, nominal, std::move(tracks), scene, opt, std::move(res));

@@ -20,33 +20,48 @@
 
 namespace omma::calib {
 
-CalibrationResult calibrate_rig(const Rig& nominal, const std::vector<cv::Mat>& frames,
-                                const CalibrationOptions& opt) {
-  const int n = static_cast<int>(nominal.cameras.size());
-  if (static_cast<int>(frames.size()) != n)
-    throw std::invalid_argument(fmt::format("calibrate: {} frames for a rig of {} cameras", frames.size(), n));
-  if (n < 2) throw std::invalid_argument("calibrate: the rig needs at least 2 cameras");
-  for (int i = 0; i < n; ++i)
-    if (frames[i].cols != nominal.cameras[i].in.width || frames[i].rows != nominal.cameras[i].in.height)
-      throw std::invalid_argument(fmt::format("calibrate: frame of camera {} is {}x{}, the rig says {}x{}",
-                                              nominal.cameras[i].id, frames[i].cols, frames[i].rows,
-                                              nominal.cameras[i].in.width, nominal.cameras[i].in.height));
-  CalibrationResult res;
-  res.rig = nominal;
+bool CalibrationOptions::IsValid(std::string* why) const {
+  auto fail = [&](const std::string& m) {
+    if (why) *why = m;
+    return false;
+  };
+  std::string sub;
+  if (!features.IsValid(&sub)) return fail("features: " + sub);
+  if (!match.IsValid(&sub)) return fail("match: " + sub);
+  if (!subpixel.IsValid(&sub)) return fail("subpixel: " + sub);
+  if (!dense_subpixel.IsValid(&sub)) return fail("dense_subpixel: " + sub);
+  if (!(near_ratio > 0)) return fail("near_ratio must be > 0");
+  if (!(overlap_margin_deg >= 0 && overlap_margin_deg < 180)) return fail("overlap_margin_deg must be in [0, 180)");
+  if (radial_terms < 0 || radial_terms > 3) return fail(fmt::format("radial_terms must be 0..3, got {}", radial_terms));
+  if (loss != "auto" && loss != "huber" && loss != "cauchy" && loss != "none")
+    return fail("loss must be auto, huber, cauchy or none, got '" + loss + "'");
+  if (!(loss_scale_px > 0) || !(outlier_px > 0) || !(refine_outlier_px > 0))
+    return fail("loss_scale_px, outlier_px and refine_outlier_px must be > 0");
+  if (!(prior_rotation_deg >= 0) || !(prior_mean_focal >= 0))
+    return fail("prior_rotation_deg and prior_mean_focal must be >= 0");
+  if (refine_rounds < 0 || dense_rounds < 0) return fail("refine_rounds and dense_rounds must be >= 0");
+  if (!(refine_min_fraction >= 0 && refine_min_fraction <= 1)) return fail("refine_min_fraction must be in [0, 1]");
+  if (dense_neighbours < 1) return fail("dense_neighbours must be >= 1");
+  if (!(dense_max_gap_px > 0) || !(dense_weight_floor > 0) || !(dense_reference_weight > 0))
+    return fail("dense_max_gap_px, dense_weight_floor and dense_reference_weight must be > 0");
+  if (!(tube_diameter_mm >= 0) || !std::isfinite(tube_diameter_mm))
+    return fail("tube_diameter_mm must be a diameter in mm (> 0), or 0 for none");
+  if (!(tube_tolerance > 0 && tube_tolerance < 1) || !(tube_tolerance_refined > 0 && tube_tolerance_refined < 1))
+    return fail("tube_tolerance and tube_tolerance_refined must be in (0, 1)");
+  if (max_iterations < 1) return fail("max_iterations must be >= 1");
+  if (min_observations < 0) return fail("min_observations must be >= 0");
+  if (threads < 1) return fail("threads must be >= 1");
+  return true;
+}
 
-  // 1. Features.
-  std::vector<CameraFeatures> feats(n);
-  {
-    Progress progress("calibrate: features", n);
-    for (int i = 0; i < n; ++i) {
-      feats[i] = detect_features(frames[i], opt.features);
-      progress.step();
-    }
-  }
-  // 2. Pairwise matching between overlapping cameras.
+namespace {
+
+// Step 2 of calibrate_rig: matches between the overlapping cameras (pms), the scene model (auto: the
+// consensus over all pairs) under which every pair keeps its inliers, and the counts in res.
+SceneModel match_pairs(const Rig& nominal, const std::vector<CameraFeatures>& feats, const CalibrationOptions& opt,
+                       std::vector<PairMatches>& pms, CalibrationSummary& res) {
   const auto pairs = overlapping_pairs(nominal, deg2rad(opt.overlap_margin_deg));
   res.pairs = static_cast<int>(pairs.size());
-  std::vector<PairMatches> pms;
   long rot_total = 0, ess_total = 0;
   {
     Progress progress("calibrate: matching", pairs.size());
@@ -81,9 +96,75 @@ CalibrationResult calibrate_rig(const Rig& nominal, const std::vector<cv::Mat>& 
     spdlog::warn("calibrate: {}", res.warnings.back());
   }
   for (const auto& pm : pms) res.inliers += static_cast<int>(pm.inliers.size());
-  spdlog::info("calibrate: {} cameras, {} overlapping pairs, {} matches, {} RANSAC inliers, {} scene", n,
-               res.pairs, res.matches, res.inliers, to_string(scene));
+  spdlog::info("calibrate: {} cameras, {} overlapping pairs, {} matches, {} RANSAC inliers, {} scene",
+               nominal.cameras.size(), res.pairs, res.matches, res.inliers, to_string(scene));
+  return scene;
+}
 
+// The subpixel refinement rounds of calibrate_rig: align every observation (dense: new ones from
+// every keypoint), then solve again from the previous solution; stops with a warning when too few align.
+void refine_rounds(const Rig& nominal, const std::vector<cv::Mat>& frames, const std::vector<CameraFeatures>& feats,
+                   SceneModel scene, const CalibrationOptions& opt, SolveState& st, CalibrationSummary& res) {
+  const int n = static_cast<int>(nominal.cameras.size());
+  std::vector<cv::Mat> gray(n);
+  const bool dense = scene == SceneModel::kNear && opt.dense_refine;
+  const SubpixelOptions& so = dense ? opt.dense_subpixel : opt.subpixel;
+  for (int i = 0; i < n; ++i) gray[i] = to_alignment_image(frames[i], so.flatfield_sigma_px);
+  CalibrationOptions ropt = opt;
+  ropt.outlier_px = opt.refine_outlier_px;
+  const double initial_rms = res.initial_rms_px;
+  const int rounds = dense ? opt.dense_rounds : opt.refine_rounds;
+  for (int round = 0; round < rounds; ++round) {
+    int attempted = 0, refined = 0;
+    auto rtracks = dense ? dense_tracks(res.rig, gray, feats, st, opt, &attempted, &refined)
+                         : refine_tracks(res.rig, gray, st, scene == SceneModel::kNear, opt.subpixel, &attempted, &refined);
+    spdlog::info("calibrate: subpixel refinement round {}: {} of {} observations aligned, {} tracks", round + 1,
+                 refined, attempted, rtracks.size());
+    if (refined < opt.refine_min_fraction * attempted) {
+      // Texture the alignment cannot lock onto (flat cells, repetitive patterns): keep the
+      // unrefined solution rather than solve again from a few observations.
+      res.warnings.push_back(fmt::format(
+          "subpixel refinement skipped: only {} of {} observations aligned; the unrefined solution is kept",
+          refined, attempted));
+      spdlog::warn("calibrate: {}", res.warnings.back());
+      break;
+    }
+    const Rig start = res.rig;
+    res = solve_tracks(nominal, start, std::move(rtracks), scene, ropt, std::move(res), &st);
+  }
+  res.initial_rms_px = initial_rms;
+}
+
+}  // namespace
+
+CalibrationSummary calibrate_rig(const Rig& nominal, const std::vector<cv::Mat>& frames,
+                                const CalibrationOptions& opt) {
+  std::string why;
+  if (!opt.IsValid(&why)) throw std::invalid_argument("calibrate: " + why);
+  const int n = static_cast<int>(nominal.cameras.size());
+  if (static_cast<int>(frames.size()) != n)
+    throw std::invalid_argument(fmt::format("calibrate: {} frames for a rig of {} cameras", frames.size(), n));
+  if (n < 2) throw std::invalid_argument("calibrate: the rig needs at least 2 cameras");
+  for (int i = 0; i < n; ++i)
+    if (frames[i].cols != nominal.cameras[i].in.width || frames[i].rows != nominal.cameras[i].in.height)
+      throw std::invalid_argument(fmt::format("calibrate: frame of camera {} is {}x{}, the rig says {}x{}",
+                                              nominal.cameras[i].id, frames[i].cols, frames[i].rows,
+                                              nominal.cameras[i].in.width, nominal.cameras[i].in.height));
+  CalibrationSummary res;
+  res.rig = nominal;
+
+  // 1. Features.
+  std::vector<CameraFeatures> feats(n);
+  {
+    Progress progress("calibrate: features", n);
+    for (int i = 0; i < n; ++i) {
+      feats[i] = detect_features(frames[i], opt.features);
+      progress.step();
+    }
+  }
+  // 2. Pairwise matching between overlapping cameras, and the scene model.
+  std::vector<PairMatches> pms;
+  const SceneModel scene = match_pairs(nominal, feats, opt, pms, res);
   // 3. Tracks (union-find over keypoints), tracks seen twice by one camera are dropped.
   std::vector<std::vector<TrackObservation>> tracks = build_tracks(feats, pms);
 
@@ -95,35 +176,7 @@ CalibrationResult calibrate_rig(const Rig& nominal, const std::vector<cv::Mat>& 
   }
   SolveState st;
   res = solve_tracks(nominal, nominal, std::move(tracks), scene, opt, std::move(res), &st);
-  if (opt.refine_rounds > 0) {
-    std::vector<cv::Mat> gray(n);
-    const bool dense = scene == SceneModel::kNear && opt.dense_refine;
-    const SubpixelOptions& so = dense ? opt.dense_subpixel : opt.subpixel;
-    for (int i = 0; i < n; ++i) gray[i] = to_alignment_image(frames[i], so.flatfield_sigma_px);
-    CalibrationOptions ropt = opt;
-    ropt.outlier_px = opt.refine_outlier_px;
-    const double initial_rms = res.initial_rms_px;
-    const int rounds = dense ? opt.dense_rounds : opt.refine_rounds;
-    for (int round = 0; round < rounds; ++round) {
-      int attempted = 0, refined = 0;
-      auto rtracks = dense ? dense_tracks(res.rig, gray, feats, st, opt, &attempted, &refined)
-                           : refine_tracks(res.rig, gray, st, scene == SceneModel::kNear, opt.subpixel, &attempted, &refined);
-      spdlog::info("calibrate: subpixel refinement round {}: {} of {} observations aligned, {} tracks", round + 1,
-                   refined, attempted, rtracks.size());
-      if (refined < opt.refine_min_fraction * attempted) {
-        // Texture the alignment cannot lock onto (flat cells, repetitive patterns): keep the
-        // unrefined solution rather than solve again from a few observations.
-        res.warnings.push_back(fmt::format(
-            "subpixel refinement skipped: only {} of {} observations aligned; the unrefined solution is kept",
-            refined, attempted));
-        spdlog::warn("calibrate: {}", res.warnings.back());
-        break;
-      }
-      const Rig start = res.rig;
-      res = solve_tracks(nominal, start, std::move(rtracks), scene, ropt, std::move(res), &st);
-    }
-    res.initial_rms_px = initial_rms;
-  }
+  if (opt.refine_rounds > 0) refine_rounds(nominal, frames, feats, scene, opt, st, res);
   return res;
 }
 

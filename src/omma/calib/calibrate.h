@@ -139,6 +139,9 @@ struct CalibrationOptions {
   int min_observations = 30;      // a camera with fewer keeps its nominal values (warning)
   int threads = 2;                // Ceres threads; near-field results vary with the summation order
                                   // of a multi-threaded solve, 1 = reproducible
+
+  // False (with the reason in *why) when a value lies outside the range the code relies on.
+  bool IsValid(std::string* why = nullptr) const;
 };
 
 struct CameraReport {
@@ -148,7 +151,7 @@ struct CameraReport {
   bool calibrated = true;
 };
 
-struct CalibrationResult {
+struct CalibrationSummary {
   Rig rig;                       // the calibrated rig (uncalibrated cameras keep nominal values)
   SceneModel scene = SceneModel::kFar;  // the model used
   int matches = 0;               // pairwise matches after the ratio test, all pairs
@@ -166,7 +169,7 @@ struct CalibrationResult {
 
 // Throws std::runtime_error if nothing can be calibrated (e.g. textureless frames: no camera has
 // enough matches). `frames` are in rig order (see omma/core/frames.h load_frames).
-CalibrationResult calibrate_rig(const Rig& nominal, const std::vector<cv::Mat>& frames,
+CalibrationSummary calibrate_rig(const Rig& nominal, const std::vector<cv::Mat>& frames,
                                 const CalibrationOptions& opt = {});
 
 // Several shots of a static scene: the frame sets averaged in linear light (sRGB decoded,
@@ -181,7 +184,7 @@ std::vector<cv::Mat> average_frame_sets(const std::vector<std::vector<cv::Mat>>&
 // Used to check the model: tracks made by projecting known points through a rig must give that
 // rig back. Throws std::invalid_argument on a bad camera index or kAuto, std::runtime_error if
 // fewer than 2 cameras have min_observations.
-CalibrationResult calibrate_from_tracks(const Rig& nominal, std::vector<std::vector<TrackObservation>> tracks,
+CalibrationSummary calibrate_from_tracks(const Rig& nominal, std::vector<std::vector<TrackObservation>> tracks,
                                         SceneModel scene, const CalibrationOptions& opt = {});
 
 }  // namespace omma::calib

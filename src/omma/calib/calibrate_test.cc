@@ -26,7 +26,7 @@ const PanoGrid kGrid{Projection::kEquirect, 720, 180};
 const char* kPerturb = "orient=2,focal=0.03,center=5,k1=0.05";  // the assumed manufacturing errors
 
 struct Outcome {
-  CalibrationResult result;
+  CalibrationSummary result;
   RigDiff before, after;
   double psnr_true = 0, psnr_calibrated = 0, psnr_nominal = 0;
 };
@@ -49,7 +49,7 @@ Outcome run_simulated(const std::string& scene_spec) {
   so.truth_grid = kGrid;
   so.effects.supersample = 2;
   so.progress = false;
-  const sim::SimulateResult sr = sim::simulate(nominal, *scene, so);
+  const sim::SimulateSummary sr = sim::simulate(nominal, *scene, so);
   std::vector<cv::Mat> frames;
   for (const auto& f : sr.frames) frames.push_back(f.image);
   Outcome o;
@@ -167,8 +167,8 @@ TEST(Calibrate, CalibrationTubeFewShots) {
     for (const auto& f : fs) out.push_back(f.image);
     return out;
   };
-  const sim::SimulateResult tube = sim::simulate(nominal, *sim::make_tube_scene(), so);
-  const sim::SimulateResult flat = sim::simulate(nominal, *sim::make_flat_scene(), so);
+  const sim::SimulateSummary tube = sim::simulate(nominal, *sim::make_tube_scene(), so);
+  const sim::SimulateSummary flat = sim::simulate(nominal, *sim::make_flat_scene(), so);
   const auto frames = flat_field_frames(average_frame_sets({images(tube.frames), images(tube.more_shots[0])}),
                                         {images(flat.frames), images(flat.more_shots[0])});
   CalibrationOptions opt;
@@ -176,7 +176,7 @@ TEST(Calibrate, CalibrationTubeFewShots) {
   opt.tube_diameter_mm = 35;
   opt.dense_rounds = 1;
   opt.features.upsample = 1;  // SIFT on the frames as they are: a quarter of the work
-  const CalibrationResult r = calibrate_rig(nominal, frames, opt);
+  const CalibrationSummary r = calibrate_rig(nominal, frames, opt);
   const RigDiff d = diff_rigs(r.rig, tube.true_rig);
   std::printf("tube, 2 shots: orientation median %.3f max %.3f deg, focal median %.4f max %.4f, centre median %.3f px, "
               "RMS %.3f px, %d tracks\n", d.orientation_error_deg.median, d.orientation_error_deg.max,
@@ -222,14 +222,14 @@ TEST(Calibrate, NearFieldModelRecoversTrueRigFromPerfectTracks) {
   CalibrationOptions opt;
   opt.prior_rotation_deg = 0;  // near field: the fixed camera positions fix the gauge
   opt.prior_mean_focal = 0;
-  const CalibrationResult r = calibrate_from_tracks(nominal, tube_tracks(truth, 3000, 0, 3), SceneModel::kNear, opt);
+  const CalibrationSummary r = calibrate_from_tracks(nominal, tube_tracks(truth, 3000, 0, 3), SceneModel::kNear, opt);
   const RigDiff d = diff_rigs(r.rig, truth);
   EXPECT_LT(r.rms_px, 1e-3);
   EXPECT_LT(d.orientation_error_deg.max, 1e-3);
   EXPECT_LT(d.focal_error_rel.max, 1e-5);
   EXPECT_LT(d.center_error_px.max, 1e-2);
   // The same with SIFT-like noise: the conditioning limit (numbers in the comment above).
-  const CalibrationResult rn = calibrate_from_tracks(nominal, tube_tracks(truth, 3000, 0.2, 3), SceneModel::kNear, opt);
+  const CalibrationSummary rn = calibrate_from_tracks(nominal, tube_tracks(truth, 3000, 0.2, 3), SceneModel::kNear, opt);
   const RigDiff dn = diff_rigs(rn.rig, truth, /*align=*/true);  // as the accuracy tests
   std::printf("perfect tracks: orientation %.5f deg, focal %.6f, centre %.4f px; 0.2 px noise: %.3f deg, %.4f, %.3f px\n",
               d.orientation_error_deg.median, d.focal_error_rel.median, d.center_error_px.median,
@@ -269,6 +269,55 @@ TEST(RigDiff, IdenticalRigsAndKnownRotation) {
   const Rig g = rotate_rig(a, Eigen::AngleAxisd(deg2rad(2), Vec3(1, 1, 0).normalized()).toRotationMatrix());
   EXPECT_NEAR(diff_rigs(g, a).orientation_error_deg.median, 2, 1e-6);
   EXPECT_LT(diff_rigs(g, a, true).orientation_error_deg.max, 1e-6);
+}
+
+// The message of the std::invalid_argument f throws, or "" if it throws none.
+template <typename F>
+std::string refusal(F f) {
+  try {
+    f();
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Options, FeatureOptionsRefuseBadValues) {
+  FeatureOptions o;
+  EXPECT_TRUE(o.IsValid());
+  o.upsample = 0;
+  std::string why;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("upsample"), std::string::npos);
+  EXPECT_NE(refusal([&] { detect_features(cv::Mat(64, 64, CV_8UC1, cv::Scalar(128)), o); }).find("upsample"),
+            std::string::npos);
+}
+
+TEST(Options, MatchOptionsRefuseBadValues) {
+  MatchOptions o;
+  EXPECT_TRUE(o.IsValid());
+  o.ratio = 1.5;
+  EXPECT_FALSE(o.IsValid());
+  const Rig rig = design::thesis_prototype_rig();
+  EXPECT_NE(refusal([&] { match_pair(rig, 0, 1, {}, {}, SceneModel::kFar, o); }).find("ratio"), std::string::npos);
+}
+
+TEST(Options, CalibrationOptionsRefuseBadValues) {
+  EXPECT_TRUE(CalibrationOptions{}.IsValid());
+  const Rig rig = design::thesis_prototype_rig();
+  CalibrationOptions o;
+  o.radial_terms = 4;
+  EXPECT_NE(refusal([&] { calibrate_rig(rig, {}, o); }).find("radial_terms"), std::string::npos);
+  o = {};
+  o.loss = "l2";
+  EXPECT_FALSE(o.IsValid());
+  o = {};
+  o.dense_subpixel.max_iterations = 0;  // nested options are checked too
+  std::string why;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("dense_subpixel"), std::string::npos);
+  EXPECT_NE(refusal([&] { calibrate_from_tracks(rig, {}, SceneModel::kFar, o); }).find("dense_subpixel"),
+            std::string::npos);
 }
 
 }  // namespace

@@ -13,6 +13,33 @@
 
 namespace omma::calib {
 
+bool FeatureOptions::IsValid(std::string* why) const {
+  auto fail = [&](const std::string& m) {
+    if (why) *why = m;
+    return false;
+  };
+  if (max_features < 0) return fail("max_features must be >= 0 (0: every keypoint SIFT finds)");
+  if (!(contrast_threshold > 0)) return fail("contrast_threshold must be > 0");
+  if (border_px < 0) return fail("border_px must be >= 0");
+  if (upsample < 1 || upsample > 8) return fail("upsample must be 1..8");
+  if (!(blur_sigma >= 0) || !(clahe_clip >= 0) || clahe_below < 0)
+    return fail("blur_sigma, clahe_clip and clahe_below must be >= 0");
+  return true;
+}
+
+bool MatchOptions::IsValid(std::string* why) const {
+  auto fail = [&](const std::string& m) {
+    if (why) *why = m;
+    return false;
+  };
+  if (!(ratio > 0 && ratio <= 1)) return fail("ratio must be in (0, 1]");
+  if (!(overlap_margin_deg >= 0 && overlap_margin_deg < 180)) return fail("overlap_margin_deg must be in [0, 180)");
+  if (!(ransac_threshold_px > 0)) return fail("ransac_threshold_px must be > 0");
+  if (ransac_iterations < 1) return fail("ransac_iterations must be >= 1");
+  if (min_inliers < 1) return fail("min_inliers must be >= 1");
+  return true;
+}
+
 constexpr double kSiftToContinuous = 0.25;
 
 namespace {
@@ -50,6 +77,8 @@ CameraFeatures detect(const cv::Mat& gray_in, const FeatureOptions& opt, bool cl
 }  // namespace
 
 CameraFeatures detect_features(const cv::Mat& image, const FeatureOptions& opt) {
+  std::string why;
+  if (!opt.IsValid(&why)) throw std::invalid_argument("detect_features: " + why);
   cv::Mat gray = image;
   if (gray.channels() == 3) cv::cvtColor(gray, gray, cv::COLOR_BGR2GRAY);
   if (gray.channels() == 4) cv::cvtColor(gray, gray, cv::COLOR_BGRA2GRAY);
@@ -139,6 +168,8 @@ std::vector<int> in_overlap(const CameraModel& from, const CameraFeatures& f, co
 
 PairMatches match_pair(const Rig& nominal, int cam_a, int cam_b, const CameraFeatures& fa,
                        const CameraFeatures& fb, SceneModel model, const MatchOptions& opt) {
+  std::string why;
+  if (!opt.IsValid(&why)) throw std::invalid_argument("match_pair: " + why);
   PairMatches pm;
   pm.cam_a = cam_a;
   pm.cam_b = cam_b;

@@ -12,6 +12,7 @@
 //     normalised coordinates (cv::findEssentialMat, 5-point RANSAC).
 #pragma once
 
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -36,6 +37,9 @@ struct FeatureOptions {
   double clahe_clip = 3.0;        // contrast-limited histogram equalisation (0: off), applied only
   int clahe_below = 200;          // when plain SIFT finds fewer keypoints than this: brings out
                                   // texture in dark, low-contrast views (night sky)
+
+  // False (with the reason in *why) when a value lies outside the range the code relies on.
+  bool IsValid(std::string* why = nullptr) const;
 };
 
 // SIFT on one camera image (8U or 16U, 1 or 3 channels).
@@ -58,6 +62,9 @@ struct MatchOptions {
   int ransac_iterations = 500;
   int min_inliers = 8;             // fewer: the pair is dropped
   unsigned seed = 1;
+
+  // False (with the reason in *why) when a value lies outside the range the code relies on.
+  bool IsValid(std::string* why = nullptr) const;
 };
 
 struct Match {

@@ -79,7 +79,7 @@ TEST(PhotometricCalibration, FlatFieldMeetsOnePercentTargets) {
   sim::SimulateOptions so = sim_options();
   so.shots = 2;
   const auto flat = sim::make_flat_scene(0.6);
-  const sim::SimulateResult sr = sim::simulate(nominal, *flat, so);
+  const sim::SimulateSummary sr = sim::simulate(nominal, *flat, so);
   const PhotometricSummary s = calibrate_flat_field(sr.true_rig, {images(sr.frames), images(sr.more_shots[0])});
   const Errors e = compare(s.rig, sr.true_rig, so.effects, false);
   std::printf("flat field: gains max %.4f, falloff max %.4f, pixel-model fit %.5f\n", e.gain_max, e.falloff_max,
@@ -96,7 +96,7 @@ TEST(PhotometricCalibration, OverlapsOfAFarScene) {
   const Rig nominal = design::thesis_prototype_rig();
   sim::SimulateOptions so = sim_options();
   const auto lake = sim::make_scene(std::string("photo:") + OMMA_DATA_DIR + "/lake.jpg");
-  const sim::SimulateResult sr = sim::simulate(nominal, *lake, so);
+  const sim::SimulateSummary sr = sim::simulate(nominal, *lake, so);
   PhotometricOptions po;
   po.max_samples_per_pair = 2000;
 

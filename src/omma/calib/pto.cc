@@ -16,6 +16,17 @@
 namespace omma::calib {
 namespace fs = std::filesystem;
 
+bool PtoExportOptions::IsValid(std::string* why) const {
+  auto fail = [&](const std::string& m) {
+    if (why) *why = m;
+    return false;
+  };
+  // The p-line's height is pano_width / 2.
+  if (pano_width < 2) return fail(fmt::format("pano_width must be at least 2, got {}", pano_width));
+  if (interpolator < 0) return fail(fmt::format("interpolator must be >= 0, got {}", interpolator));
+  return true;
+}
+
 namespace {
 
 // PT world axes in the dome frame (see pto.h).
@@ -227,9 +238,11 @@ RigCamera camera_from_pto(const PtoCamera& p, int radial_terms, LensFit* fit) {
   return cam;
 }
 
-PtoExportResult export_pto(const Rig& rig, const PtoExportOptions& opt) {
+PtoExportSummary export_pto(const Rig& rig, const PtoExportOptions& opt) {
+  std::string why;
+  if (!opt.IsValid(&why)) throw std::invalid_argument("export_pto: " + why);
   rig.validate();
-  PtoExportResult res;
+  PtoExportSummary res;
   std::ostringstream os;
   const int pw = opt.pano_width, ph = opt.pano_width / 2;
   os << "# hugin project file written by omma (pto.h documents the convention mapping)\n";
@@ -300,8 +313,8 @@ std::map<std::string, std::string> parse_tokens(const std::string& line) {
 
 }  // namespace
 
-PtoImportResult import_pto(const std::string& text, const fs::path& base_dir) {
-  PtoImportResult res;
+PtoImportSummary import_pto(const std::string& text, const fs::path& base_dir) {
+  PtoImportSummary res;
   res.rig.name = "pto-import";
   std::istringstream is(text);
   std::string line;

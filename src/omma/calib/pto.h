@@ -94,18 +94,21 @@ struct PtoExportOptions {
   bool crop_to_dome = true;  // hemisphere rigs: crop the p-line to the top half (omma's 360 x 90)
   int interpolator = 0;    // m-line i: 0 poly3 (Hugin's default), 5 bilinear, 6 nearest
   bool linear_response = false;  // i-lines Rt1: the frames are linear light (see Photometry above)
+
+  // False (with the reason in *why) when a value lies outside the range the code relies on.
+  bool IsValid(std::string* why = nullptr) const;
 };
 
-struct PtoExportResult {
+struct PtoExportSummary {
   std::string text;
   double max_fit_px = 0;   // largest distortion-conversion residual over all cameras
   double rms_fit_px = 0;
   std::vector<std::string> warnings;
 };
 
-PtoExportResult export_pto(const Rig& rig, const PtoExportOptions& opt = {});
+PtoExportSummary export_pto(const Rig& rig, const PtoExportOptions& opt = {});
 
-struct PtoImportResult {
+struct PtoImportSummary {
   Rig rig;
   double max_fit_px = 0;
   std::vector<std::string> warnings;
@@ -114,6 +117,6 @@ struct PtoImportResult {
 // Parses PTO text. `base_dir` resolves image names (for images whose size the i-line lacks, and
 // to warn about missing images). Throws PtoError on unsupported lens types (anything but f0
 // rectilinear), missing sizes with missing images, or no images at all.
-PtoImportResult import_pto(const std::string& text, const std::filesystem::path& base_dir = {});
+PtoImportSummary import_pto(const std::string& text, const std::filesystem::path& base_dir = {});
 
 }  // namespace omma::calib

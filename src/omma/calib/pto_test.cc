@@ -15,6 +15,7 @@
 #include "omma/calib/rig_diff.h"
 #include "omma/testing/test_scenes.h"
 #include "omma/core/frames.h"
+#include "omma/design/prototype.h"
 #include "omma/calib/photometric.h"
 #include "omma/core/srgb.h"
 #include "omma/isp/photometric.h"
@@ -62,10 +63,10 @@ TEST(Pto, YawPitchRollConventions) {
 
 TEST(Pto, RoundTripIsLosslessForWhatBothHold) {
   const Rig rig = perturbed_k1_rig();
-  const PtoExportResult ex = export_pto(rig);
+  const PtoExportSummary ex = export_pto(rig);
   EXPECT_LT(ex.max_fit_px, 1e-6);  // k1 alone maps exactly onto PanoTools' b (and v)
   // Without omma's comment lines: only what PTO itself holds.
-  const PtoImportResult im = import_pto(strip_omma_comments(ex.text));
+  const PtoImportSummary im = import_pto(strip_omma_comments(ex.text));
   ASSERT_EQ(im.rig.cameras.size(), rig.cameras.size());
   for (size_t i = 0; i < rig.cameras.size(); ++i) {
     const auto& a = rig.cameras[i];
@@ -80,7 +81,7 @@ TEST(Pto, RoundTripIsLosslessForWhatBothHold) {
     EXPECT_NEAR(b.in.k[4], 0, 1e-7);
   }
   // With the comment lines everything comes back (ids, positions, aov).
-  const PtoImportResult full = import_pto(ex.text);
+  const PtoImportSummary full = import_pto(ex.text);
   const RigDiff d = diff_rigs(full.rig, rig);
   EXPECT_LT(d.orientation_error_deg.max, 1e-7);
   EXPECT_LT(d.focal_error_rel.max, 1e-9);
@@ -129,7 +130,7 @@ TEST(Pto, UnsupportedLensAndMissingImagesFail) {
   }
   EXPECT_THROW(import_pto("p f2 w100 h50 v360\n"), PtoError);
   EXPECT_THROW(import_pto("i f0 v60 y0 p0 r0 n\"/nonexistent/cam_00.png\"\n"), PtoError);  // no size, no image
-  const PtoImportResult warn = import_pto("i w250 h250 f0 v60 y0 p0 r0 n\"/nonexistent/cam_00.png\"\n");
+  const PtoImportSummary warn = import_pto("i w250 h250 f0 v60 y0 p0 r0 n\"/nonexistent/cam_00.png\"\n");
   EXPECT_FALSE(warn.warnings.empty());
 }
 
@@ -140,7 +141,7 @@ TEST(Pto, MalformedAndTruncatedProjectsAreRefused) {
   EXPECT_EQ(import_pto(line).rig.cameras.size(), 1u);
   auto refused = [](const std::string& text) {
     try {
-      const PtoImportResult r = import_pto(text);
+      const PtoImportSummary r = import_pto(text);
       ADD_FAILURE() << "imported " << r.rig.cameras.size() << " cameras from:\n" << text;
     } catch (const PtoError& e) {
       return std::string(e.what());
@@ -199,7 +200,7 @@ TEST(Pto, NonaRendersOurExportLikeOurNearestNeighbourStitch) {
   PtoExportOptions opt;
   opt.pano_width = 1440;
   opt.interpolator = 5;  // bilinear, like our sampler
-  const PtoExportResult ex = export_pto(rig, opt);
+  const PtoExportSummary ex = export_pto(rig, opt);
   std::ofstream(dir / "rig.pto") << ex.text;
   const std::string cmd = "cd " + dir.string() + " && nona -m PNG -o nona_out rig.pto >nona.log 2>&1";
   ASSERT_EQ(std::system(cmd.c_str()), 0) << "nona failed, see " << (dir / "nona.log");
@@ -259,7 +260,7 @@ TEST(Pto, PhotometricModelRoundTripsUnderHuginsNames) {
   EXPECT_NE(text.find(fmt::format(" Vb{:.12g} ", p0.vignetting[0])), std::string::npos);
   EXPECT_NE(text.find(fmt::format(" Eev{:.12g} ", -std::log2(p0.gains[1]))), std::string::npos);
   // Import (without our comment lines: from the PTO's own fields alone).
-  const PtoImportResult back = import_pto(strip_omma_comments(text));
+  const PtoImportSummary back = import_pto(strip_omma_comments(text));
   ASSERT_EQ(back.rig.cameras.size(), rig.cameras.size());
   for (size_t i = 0; i < rig.cameras.size(); ++i) {
     ASSERT_TRUE(back.rig.cameras[i].photometric.has_value());
@@ -277,7 +278,7 @@ TEST(Pto, PhotometricModelRoundTripsUnderHuginsNames) {
   EXPECT_FALSE(import_pto(plain).rig.cameras[0].photometric.has_value());
   // Va scales the model (folded into the gains); a non-positive Va or a falloff that reaches zero
   // is an error.
-  const PtoImportResult va = import_pto("i w250 h250 f0 v60 y0 p0 r0 Va2 Vb-0.4 Vm5 Eev0 Er1 Eb1 n\"x.png\"\n");
+  const PtoImportSummary va = import_pto("i w250 h250 f0 v60 y0 p0 r0 Va2 Vb-0.4 Vm5 Eev0 Er1 Eb1 n\"x.png\"\n");
   ASSERT_TRUE(va.rig.cameras[0].photometric.has_value());
   EXPECT_NEAR(va.rig.cameras[0].photometric->vignetting[0], -0.2, 1e-12);
   EXPECT_NEAR(va.rig.cameras[0].photometric->gains[1], 2, 1e-12);
@@ -355,6 +356,25 @@ TEST(Pto, NonaAppliesOurPhotometricModelLikeWeDo) {
   EXPECT_GE(db, 30.0);
   EXPECT_GT(db, db_uncorrected + 3);  // the correction is what agrees, not the geometry alone
   fs::remove_all(dir);
+}
+
+// The message of the std::invalid_argument f throws, or "" if it throws none.
+template <typename F>
+std::string refusal(F f) {
+  try {
+    f();
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Options, PtoExportOptionsRefuseBadValues) {
+  PtoExportOptions o;
+  EXPECT_TRUE(o.IsValid());
+  o.pano_width = 1;
+  EXPECT_FALSE(o.IsValid());
+  EXPECT_NE(refusal([&] { export_pto(design::thesis_prototype_rig(), o); }).find("pano_width"), std::string::npos);
 }
 
 }  // namespace

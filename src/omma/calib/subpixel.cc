@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include <Eigen/Eigenvalues>
 #include <opencv2/imgproc.hpp>
@@ -10,6 +11,22 @@
 #include "omma/core/srgb.h"
 
 namespace omma::calib {
+
+bool SubpixelOptions::IsValid(std::string* why) const {
+  auto fail = [&](const std::string& m) {
+    if (why) *why = m;
+    return false;
+  };
+  if (patch_px < 3) return fail("patch_px must be >= 3");
+  if (search_margin_px < 0) return fail("search_margin_px must be >= 0");
+  if (gauss_px < 0 || (gauss_px > 1 && gauss_px % 2 == 0)) return fail("gauss_px must be 0, 1 or odd (a Gaussian kernel size)");
+  if (max_iterations < 1) return fail("max_iterations must be >= 1");
+  if (!(epsilon > 0)) return fail("epsilon must be > 0");
+  if (!(min_correlation >= -1 && min_correlation <= 1)) return fail("min_correlation must be in [-1, 1]");
+  if (!(max_shift_px > 0)) return fail("max_shift_px must be > 0");
+  if (!(flatfield_sigma_px >= 0)) return fail("flatfield_sigma_px must be >= 0");
+  return true;
+}
 
 cv::Mat to_alignment_image(const cv::Mat& image, double flatfield_sigma_px) {
   auto to_gray = [](cv::Mat m) {
@@ -42,6 +59,8 @@ cv::Mat to_alignment_image(const cv::Mat& image, double flatfield_sigma_px) {
 
 std::optional<Vec2> align_patch(const cv::Mat& a, const Vec2& pa, const cv::Mat& b, const Eigen::Matrix3d& h,
                                 const SubpixelOptions& opt, AlignInfo* info) {
+  std::string why;
+  if (!opt.IsValid(&why)) throw std::invalid_argument("align_patch: " + why);
   const int half = opt.patch_px / 2;
   const int side = 2 * half + 1;
   // Template: the integer-aligned square of A whose centre pixel contains pa (no resampling of A).

@@ -16,6 +16,7 @@
 #pragma once
 
 #include <optional>
+#include <string>
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -38,6 +39,9 @@ struct SubpixelOptions {
                                 // sigma, pixels); 0 = the plain grey image (see below)
   bool noise_corrected_covariance = true;  // AlignInfo::covariance without the noise's share of
                                 // the gradient energy (alignments where nothing is left fail)
+
+  // False (with the reason in *why) when a value lies outside the range the code relies on.
+  bool IsValid(std::string* why = nullptr) const;
 };
 
 // A grey image prepared for alignment: CV_32F, one channel (accepts 8U/16U/32F, 1, 3 or 4

@@ -9,6 +9,8 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "omma/calib/calibrate.h"
+
 namespace omma::calib {
 namespace {
 
@@ -66,6 +68,30 @@ TEST(Subpixel, PatchOutsideTheImageGivesNothing) {
   Eigen::Matrix3d h = Eigen::Matrix3d::Identity();
   h(0, 2) = -170;  // start at (-45, 125)
   EXPECT_FALSE(align_patch(a, Vec2(125, 125), a, h).has_value());
+}
+
+// The message of the std::invalid_argument f throws, or "" if it throws none.
+template <typename F>
+std::string refusal(F f) {
+  try {
+    f();
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Options, SubpixelOptionsRefuseBadValues) {
+  SubpixelOptions o;
+  EXPECT_TRUE(o.IsValid());
+  EXPECT_TRUE(dense_subpixel_defaults().IsValid());
+  o.gauss_px = 4;  // ECC's Gaussian kernel must be odd
+  std::string why;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("gauss_px"), std::string::npos);
+  const cv::Mat img(64, 64, CV_32FC1, cv::Scalar(0.5));
+  EXPECT_NE(refusal([&] { align_patch(img, Vec2(32, 32), img, Eigen::Matrix3d::Identity(), o); }).find("gauss_px"),
+            std::string::npos);
 }
 
 }  // namespace

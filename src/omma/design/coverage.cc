@@ -271,13 +271,13 @@ std::vector<RowResult> scan(const Rig& rig, const Sampling& s, double distance, 
 
 }  // namespace
 
-CoverageStats analyze_coverage(const Rig& rig, double distance_mm, double step_rad, double theta_max_rad) {
+CoverageSummary analyze_coverage(const Rig& rig, double distance_mm, double step_rad, double theta_max_rad) {
   if (!(distance_mm > 0)) throw std::invalid_argument("coverage distance must be > 0 mm");
   const Sampling s = make_sampling(step_rad, rig.dome.sphere, theta_max_rad);
   // At infinity the counts use directions only; R_vir needs the positions (a second scan).
   const bool inf = std::isinf(distance_mm);
   const auto rows = scan(rig, s, distance_mm, true, !inf);
-  CoverageStats st;
+  CoverageSummary st;
   st.distance_mm = distance_mm;
   st.step_deg = rad2deg(step_rad);
   st.theta_max_deg = rad2deg(s.theta_max());
@@ -306,13 +306,13 @@ CoverageStats analyze_coverage(const Rig& rig, double distance_mm, double step_r
   return st;
 }
 
-double CoverageStats::solid_angle_at_least(int n) const {
+double CoverageSummary::solid_angle_at_least(int n) const {
   double a = 0;
   for (size_t k = std::max(0, n); k < solid_angle_by_count.size(); ++k) a += solid_angle_by_count[k];
   return a;
 }
 
-PolarBand CoverageStats::polar_band(int n) const {
+PolarBand CoverageSummary::polar_band(int n) const {
   PolarBand best;
   size_t best_len = 0;
   for (size_t j = 0; j < row_min.size();) {

@@ -55,7 +55,7 @@ struct PolarBand {
   bool empty() const { return to_rad < from_rad; }
 };
 
-struct CoverageStats {
+struct CoverageSummary {
   double distance_mm = 0;       // may be +infinity
   double step_deg = 0;
   double theta_max_deg = 0;     // the sampled field of view: polar 0..theta_max
@@ -74,7 +74,7 @@ struct CoverageStats {
 // Counts at distance_mm (> 0, may be +infinity) and R_vir, on the sampling of the given step;
 // theta_max_rad > 0 limits the field of view to polar 0..theta_max (default: the dome's hemisphere
 // or sphere). Parallel (oneTBB).
-CoverageStats analyze_coverage(const Rig& rig, double distance_mm, double step_rad,
+CoverageSummary analyze_coverage(const Rig& rig, double distance_mm, double step_rad,
                                double theta_max_rad = 0);
 // R_vir only (fast closed form, parallel).
 double virtual_radius(const Rig& rig, double step_rad);

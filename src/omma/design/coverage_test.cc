@@ -66,17 +66,17 @@ TEST(Coverage, NonRadialCamerasAgreeWithBisectionReference) {
 TEST(Coverage, StatisticsOfThePrototype) {
   const Rig rig = thesis_prototype_rig();
   const double step = deg2rad(0.5);
-  const CoverageStats at_rvir = analyze_coverage(rig, virtual_radius(rig, step), step);
+  const CoverageSummary at_rvir = analyze_coverage(rig, virtual_radius(rig, step), step);
   EXPECT_DOUBLE_EQ(at_rvir.covered_fraction, 1.0);
   EXPECT_GE(at_rvir.min_cameras, 1);
   EXPECT_NEAR(at_rvir.r_virtual_mm, 14.0, 0.1);
-  const CoverageStats near = analyze_coverage(rig, 8.0, step);
+  const CoverageSummary near = analyze_coverage(rig, 8.0, step);
   EXPECT_LT(near.covered_fraction, 0.9);
   EXPECT_GT(near.covered_fraction, 0.5);
   EXPECT_EQ(near.min_cameras, 0);
   // Far away every camera sees a cap of radius ~32 deg: the mean count is at most 24 such caps
   // over the hemisphere's area (less, as the lowest layer's caps reach below the rim).
-  const CoverageStats far = analyze_coverage(rig, 1e5, step);
+  const CoverageSummary far = analyze_coverage(rig, 1e5, step);
   EXPECT_DOUBLE_EQ(far.covered_fraction, 1.0);
   const double all_caps = 24 * (1 - std::cos(deg2rad(32)));
   EXPECT_LT(far.mean_cameras, all_caps);

@@ -18,7 +18,7 @@ DesignParams params(double r_virtual, bool sphere = false) {
 
 // The rig covers its whole field of view at `distance` on a finer sampling than the designers'.
 void expect_covered(const Rig& rig, double distance) {
-  const CoverageStats st = analyze_coverage(rig, distance, deg2rad(0.25));
+  const CoverageSummary st = analyze_coverage(rig, distance, deg2rad(0.25));
   EXPECT_DOUBLE_EQ(st.covered_fraction, 1.0) << rig.dome.method << " at " << distance;
   EXPECT_GE(st.min_cameras, 1);
   EXPECT_LE(st.r_virtual_mm, distance);

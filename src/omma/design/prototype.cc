@@ -98,7 +98,7 @@ Rig gigaeye_rig(const GigaEyeLayout& layout) {
 
 double gigaeye_layout_score(const GigaEyeLayout& layout, double distance_mm, double step_rad) {
   const Rig rig = gigaeye_rig(layout);
-  const CoverageStats st = analyze_coverage(rig, distance_mm, step_rad, deg2rad(100));
+  const CoverageSummary st = analyze_coverage(rig, distance_mm, step_rad, deg2rad(100));
   return st.solid_angle_at_least(2) + 1e-3 * st.solid_angle_at_least(1);
 }
 

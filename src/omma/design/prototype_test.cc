@@ -98,7 +98,7 @@ TEST(GigaEye, FortyFourCamerasInLayersOf1_6_15_22) {
 }
 
 TEST(GigaEye, CoverageAtInfinityReachesBelowTheHorizon) {
-  const CoverageStats st = analyze_coverage(gigaeye_rig(), kInfinity, deg2rad(0.5), deg2rad(115));
+  const CoverageSummary st = analyze_coverage(gigaeye_rig(), kInfinity, deg2rad(0.5), deg2rad(115));
   // The bottom ring sees down to 80.8 deg + half its angle along the meridian: 26.5 deg with the
   // portrait cameras chosen (21.5 in landscape, notes §2); Table 7.4 stitches 360 x 100 deg.
   const PolarBand one = st.polar_band(1);

@@ -37,6 +37,9 @@ struct ExportOptions {
   pano::Method method = pano::Method::kLinear;
   bool boundary = false;
   VignettingModel vignetting;  // empty: unit tables (no correction)
+
+  // False (with the reason in *why) when a value lies outside the range the code relies on.
+  bool IsValid(std::string* why = nullptr) const;
 };
 
 struct ExportSummary {
@@ -48,7 +51,7 @@ struct ExportSummary {
 // Throws std::invalid_argument (bad configuration / rig) or IoError (cannot write).
 ExportSummary export_chip(const Rig& rig, const ExportOptions& options, const std::filesystem::path& dir);
 
-struct ImportResult {
+struct ImportSummary {
   HwConfig config;
   PanoGrid grid;
   ChipConfig chip;
@@ -56,7 +59,7 @@ struct ImportResult {
 };
 // Reads config.json and the four word streams. Throws std::invalid_argument / IoError naming the
 // file, line and field on corrupt input.
-ImportResult import_chip(const std::filesystem::path& dir);
+ImportSummary import_chip(const std::filesystem::path& dir);
 
 // Largest differences between two rigs with the same cameras (the round trip's error).
 struct RigDifference {

@@ -72,7 +72,7 @@ struct HwConfig {
 
   // Width-only checks (no rig needed). Returns true if valid; otherwise false and *error names the
   // field and the allowed range.
-  bool IsValid(std::string* error) const;
+  bool IsValid(std::string* error = nullptr) const;
   // Throws std::invalid_argument with IsValid's message.
   void Check() const;
 

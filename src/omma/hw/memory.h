@@ -24,7 +24,7 @@ struct MemoryOptions {
   double fps = 25;
   int th_sys = 4;                // cycles per panorama pixel (throughput.h)
 
-  bool IsValid(std::string* error) const;
+  bool IsValid(std::string* error = nullptr) const;
 };
 
 enum class MacroKind { kDualPortSram, kSinglePortSram, kRom };

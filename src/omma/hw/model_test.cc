@@ -12,6 +12,7 @@
 #include "omma/hw/memory.h"
 #include "omma/hw/regmap.h"
 #include "omma/hw/throughput.h"
+#include "omma/hw/width_sweep.h"
 
 namespace omma::hw {
 namespace {
@@ -205,7 +206,7 @@ TEST(Export, RoundTripWithinQuantisation) {
   for (const char* f : {"config.json", "regs.hex", "pix_pos.hex", "cam_search.hex", "pix_val.hex", "sin_rom.hex",
                         "cos_rom.coe", "vig_mem.hex", "omma_hw_config.h", "config_stream.txt"})
     EXPECT_TRUE(std::filesystem::exists(dir / f)) << f;
-  const ImportResult im = import_chip(dir);
+  const ImportSummary im = import_chip(dir);
   EXPECT_EQ(im.chip.method, pano::Method::kMrf);
   EXPECT_EQ(im.grid.width, 1920);
   EXPECT_EQ(im.chip.angles.k_phi, s.chip.angles.k_phi);
@@ -299,6 +300,44 @@ TEST(Config, BadWidthsNameTheField) {
   c.sincos_addr_bits = 10;
   EXPECT_THROW(check_grid(c, {Projection::kVr180, 4096, 4096}), std::invalid_argument);
   EXPECT_THROW(config_from_json(nlohmann::json{{"angle_bitz", 3}}), std::invalid_argument);
+}
+
+// The message of the std::invalid_argument f throws, or "" if it throws none.
+template <typename F>
+std::string refusal(F f) {
+  try {
+    f();
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Options, ExportOptionsRefuseBadValues) {
+  ExportOptions o;
+  EXPECT_TRUE(o.IsValid());
+  o.grid.height = 0;
+  EXPECT_FALSE(o.IsValid());
+  const Rig rig = design::thesis_prototype_rig();
+  EXPECT_EQ(refusal([&] { export_chip(rig, o, std::filesystem::temp_directory_path() / "omma_never_written"); }),
+            "panorama size must be positive");
+}
+
+TEST(Options, WidthSweepOptionsRefuseBadValues) {
+  WidthSweepOptions o;
+  EXPECT_TRUE(o.IsValid());
+  o.params = {{"angle_bits", {12, 10}}};
+  std::string why;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("ascending"), std::string::npos);
+  const Rig rig = design::thesis_prototype_rig();
+  EXPECT_NE(refusal([&] { run_sweep(rig, {}, o); }).find("width sweep: "), std::string::npos);
+}
+
+TEST(Options, ThroughputOptionsAreCheckedWhereTheyEnter) {
+  ThroughputOptions o;
+  o.fps = 0;
+  EXPECT_NE(refusal([&] { throughput(o); }).find("fps"), std::string::npos);
 }
 
 }  // namespace

@@ -242,20 +242,20 @@ void check_method(pano::Method m) {
 
 }  // namespace
 
-PipelineResult Pipeline::render(pano::Method method, bool boundary, bool progress_on) const {
+PipelineSummary Pipeline::render(pano::Method method, bool boundary, bool progress_on) const {
   check_method(method);
   const Ctx x{cfg_, regs_, cams_, rom_, vig_, mem_, timing()};
-  PipelineResult res;
+  PipelineSummary res;
   res.pano = cv::Mat(grid_.height, grid_.width, CV_8UC3, cv::Scalar::all(0));
   if (boundary) res.boundary = cv::Mat(grid_.height, grid_.width, CV_8UC1, cv::Scalar(0));
   Progress progress("hw pipeline", grid_.height, progress_on);
   struct RowStats {
-    PipelineStats s;
+    PipelineCounters s;
   };
-  std::vector<PipelineStats> rows(grid_.height);
+  std::vector<PipelineCounters> rows(grid_.height);
   tbb::parallel_for(tbb::blocked_range<int>(0, grid_.height, 4), [&](const tbb::blocked_range<int>& rr) {
     for (int row = rr.begin(); row < rr.end(); ++row) {
-      PipelineStats& st = rows[row];
+      PipelineCounters& st = rows[row];
       cv::Vec3b* out = res.pano.ptr<cv::Vec3b>(row);
       for (int col = 0; col < grid_.width; ++col) {
         bool hit = false, fb = false;

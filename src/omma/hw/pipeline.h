@@ -21,7 +21,7 @@
 
 namespace omma::hw {
 
-struct PipelineStats {
+struct PipelineCounters {
   uint64_t cycles = 0;                      // sum over pixels of pixel_cycles (throughput.h)
   std::array<uint64_t, 9> contributors{};   // histogram of valid contributors per pixel (0..8)
   std::array<uint64_t, 33> cone_cameras{};  // histogram of cameras passing the cone test (0..32+)
@@ -30,10 +30,10 @@ struct PipelineStats {
   uint64_t mrf_fallback_pixels = 0;         // MRF: no camera complete, prior alone
 };
 
-struct PipelineResult {
+struct PipelineSummary {
   cv::Mat pano;      // CV_8UC3 BGR
   cv::Mat boundary;  // CV_8UC1, 255 where the boundary unit fired (empty if boundary was off)
-  PipelineStats stats;
+  PipelineCounters stats;
 };
 
 // Everything that happens to one output pixel, for debugging and for RTL comparison.
@@ -64,7 +64,7 @@ class Pipeline {
   void load_frames(const std::vector<cv::Mat>& frames);
 
   // Renders the panorama with nn, linear or mrf (others: std::invalid_argument).
-  PipelineResult render(pano::Method method, bool boundary, bool progress = false) const;
+  PipelineSummary render(pano::Method method, bool boundary, bool progress = false) const;
   PixelTrace trace(int col, int row, pano::Method method, bool boundary) const;
 
   const HwConfig& config() const { return cfg_; }

@@ -46,7 +46,7 @@ const std::vector<cv::Mat>& colon_frames() {
     opt.progress = false;
     opt.effects.supersample = 1;  // sensor noise, vignetting and gains kept; no optical blur
     const auto scene = sim::make_colon_scene();
-    const sim::SimulateResult r = sim::simulate(rig24(), *scene, opt);
+    const sim::SimulateSummary r = sim::simulate(rig24(), *scene, opt);
     std::vector<cv::Mat> out;
     for (const auto& f : r.frames) out.push_back(f.image);
     return out;
@@ -55,10 +55,10 @@ const std::vector<cv::Mat>& colon_frames() {
 }
 
 double hw_vs_float(const std::vector<cv::Mat>& frames, const PanoGrid& grid, pano::Method method,
-                   const HwConfig& cfg = {}, PipelineStats* stats = nullptr) {
+                   const HwConfig& cfg = {}, PipelineCounters* stats = nullptr) {
   Pipeline hw(cfg, rig24(), grid);
   hw.load_frames(frames);
-  const PipelineResult r = hw.render(method, false);
+  const PipelineSummary r = hw.render(method, false);
   if (stats) *stats = r.stats;
   pano::StitchOptions opt;
   opt.method = method;
@@ -153,7 +153,7 @@ TEST(Pipeline, CoarseWidthsCostPsnr) {
 }
 
 TEST(Pipeline, StatisticsAndCycles) {
-  PipelineStats st;
+  PipelineCounters st;
   const PanoGrid grid{Projection::kVr180, 270, 270};
   hw_vs_float(louvre_frames(), grid, pano::Method::kLinear, {}, &st);
   uint64_t pixels = 0, weighted = 0;
@@ -171,7 +171,7 @@ TEST(Pipeline, BoundaryUnitAgreesWithTheFloatBoundaryMap) {
   const PanoGrid grid{Projection::kVr180, 360, 360};
   Pipeline hw(HwConfig{}, rig24(), grid);
   hw.load_frames(colon_frames());
-  const PipelineResult r = hw.render(pano::Method::kLinear, true);
+  const PipelineSummary r = hw.render(pano::Method::kLinear, true);
   const cv::Mat lob = pano::boundary_map(rig24(), rgb565_frames(colon_frames()), grid);
   const cv::Mat ref = pano::boundary_binary(lob, 0.2);
   // Away from the threshold (|L_ob - 0.2| > 1.5 / 255: the integer BT.601 weights and the 8-bit
@@ -215,7 +215,7 @@ TEST(Pipeline, TraceMatchesTheRender) {
   const PanoGrid grid{Projection::kVr180, 120, 120};
   Pipeline hw(HwConfig{}, rig24(), grid);
   hw.load_frames(louvre_frames());
-  const PipelineResult r = hw.render(pano::Method::kMrf, false);
+  const PipelineSummary r = hw.render(pano::Method::kMrf, false);
   for (int y = 3; y < 120; y += 13)
     for (int x = 2; x < 120; x += 11) {
       const PixelTrace t = hw.trace(x, y, pano::Method::kMrf, false);

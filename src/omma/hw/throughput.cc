@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 namespace omma::hw {
 
@@ -24,6 +25,8 @@ bool ThroughputOptions::IsValid(std::string* error) const {
 }
 
 ThroughputSummary throughput(const ThroughputOptions& o) {
+  std::string err;
+  if (!o.IsValid(&err)) throw std::invalid_argument("throughput model: " + err);
   ThroughputSummary s;
   s.blocks = {{"angle generation", o.angle_th},
               {"cartesian vector", 9 / o.table_sets},

@@ -25,7 +25,7 @@ struct ThroughputOptions {
   double fps = 25;
   double clock_mhz = 120;
 
-  bool IsValid(std::string* error) const;
+  bool IsValid(std::string* error = nullptr) const;
 };
 
 struct BlockTh {

@@ -12,6 +12,18 @@
 
 namespace omma::isp {
 
+bool IspOptions::IsValid(std::string* why) const {
+  if (bits < 8 || bits > 16) {  // output_table: 2^bits entries, the 8 most significant bits
+    if (why) *why = bits < 8 ? "ISP needs raw values of at least 8 bits" : "ISP needs raw values of at most 16 bits";
+    return false;
+  }
+  if (!flat_gain.empty() && flat_gain.type() != CV_16UC1) {
+    if (why) *why = "flat-field gain must be CV_16UC1 (Q12)";
+    return false;
+  }
+  return true;
+}
+
 namespace {
 
 // Flat-field correction when a gain map is given (returns the input otherwise).
@@ -65,7 +77,8 @@ void gain_row_any(const uint16_t* p, uint8_t* q, int n, uint32_t gain, uint32_t 
 
 void check_options(const cv::Mat& raw, const IspOptions& o) {
   check_bayer(raw, o.bits);
-  if (o.bits < 8) throw std::invalid_argument("ISP needs raw values of at least 8 bits");
+  std::string why;
+  if (!o.IsValid(&why)) throw std::invalid_argument(why);
   if (!o.flat_gain.empty() && (o.flat_gain.size() != raw.size() || o.flat_gain.type() != CV_16UC1))
     throw std::invalid_argument("flat-field is " + std::to_string(o.flat_gain.cols) + "x" +
                                 std::to_string(o.flat_gain.rows) + " but the raw frame is " +

@@ -30,6 +30,9 @@ struct IspOptions {
   // hardware, §5.2). true: sRGB-encoded 8-bit (IEC 61966-2-1 curve through a 2^bits-entry table),
   // to match sRGB images such as the simulator's cam_XX.png and truth.png (its raw is linear).
   bool srgb = false;
+
+  // False (with the reason in *why) when a value lies outside the range the code relies on.
+  bool IsValid(std::string* why = nullptr) const;
 };
 
 // The output table of develop(): 2^bits entries, value -> 8-bit (linear MSBs or sRGB).

@@ -204,5 +204,30 @@ TEST(IspTableA1, RankingOnRealPhotos) {
   EXPECT_NEAR(bl.b, cvbl.b, 0.01);
 }
 
+// The message of the std::invalid_argument f throws, or "" if it throws none.
+template <typename F>
+std::string refusal(F f) {
+  try {
+    f();
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Isp, OptionsRefuseBadValues) {
+  IspOptions o;
+  EXPECT_TRUE(o.IsValid());
+  o.bits = 17;
+  EXPECT_FALSE(o.IsValid());
+  o.bits = 7;
+  std::string why;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_EQ(refusal([&] { develop(cv::Mat(8, 8, CV_16UC1, cv::Scalar(10)), o); }), why);
+  o = {};
+  o.flat_gain = cv::Mat(8, 8, CV_32FC1, cv::Scalar(1));
+  EXPECT_FALSE(o.IsValid());
+}
+
 }  // namespace
 }  // namespace omma::isp

@@ -102,7 +102,7 @@ class Decoder {
     row_.resize(size_t(cfg.width));
   }
 
-  LinkStats run() {
+  LinkSummary run() {
     size_t i = 1;
     size_t alt = 1, cst = 1;  // alternating / constant run lengths ending at chip i-1
     bool in_const = false;    // inside a constant run already counted as a frame boundary
@@ -271,20 +271,20 @@ class Decoder {
   long rows_seen_ = 0;
   bool synced_ = false;   // row indices known (see take_row)
   bool any_row_ = false;  // a row start has been seen
-  LinkStats stats_;
+  LinkSummary stats_;
 };
 
 }  // namespace
 
-LinkStats decode_link(const uint8_t* data, size_t size, const LinkConfig& config,
+LinkSummary decode_link(const uint8_t* data, size_t size, const LinkConfig& config,
                       const std::function<void(const LinkFrame&)>& on_frame) {
   config.validate();
-  if (size == 0 || data == nullptr) return LinkStats{};
+  if (size == 0 || data == nullptr) return LinkSummary{};
   Decoder dec(data, size, config, on_frame);
   return dec.run();
 }
 
-LinkStats decode_link(const std::vector<uint8_t>& bytes, const LinkConfig& config,
+LinkSummary decode_link(const std::vector<uint8_t>& bytes, const LinkConfig& config,
                       const std::function<void(const LinkFrame&)>& on_frame) {
   return decode_link(bytes.data(), bytes.size(), config, on_frame);
 }

@@ -73,7 +73,7 @@ ChipStream encode_link(const std::vector<LinkFrame>& frames, const LinkConfig& c
 // drops each chip with probability `drop_rate` (a lost sample). Deterministic for a seed.
 ChipStream impair_link(const ChipStream& in, double flip_rate, double drop_rate, uint64_t seed);
 
-struct LinkStats {
+struct LinkSummary {
   int frames = 0;         // frames emitted (frames with at least one intact row)
   long rows_ok = 0;       // rows received intact, over the emitted frames
   long rows_damaged = 0;  // rows of emitted frames that were damaged or lost
@@ -87,9 +87,9 @@ struct LinkStats {
 // Rows are placed by their timing after the last frame boundary. A stream whose first row start
 // is not within 1 PP of a row slot counted from the stream start (a capture begun mid-row) is
 // synchronised at its first frame boundary; rows before it are skipped and not counted. Runs in time linear in the input; never reads out of bounds, whatever the bytes.
-LinkStats decode_link(const uint8_t* data, size_t size, const LinkConfig& config,
+LinkSummary decode_link(const uint8_t* data, size_t size, const LinkConfig& config,
                       const std::function<void(const LinkFrame&)>& on_frame);
-LinkStats decode_link(const std::vector<uint8_t>& bytes, const LinkConfig& config,
+LinkSummary decode_link(const std::vector<uint8_t>& bytes, const LinkConfig& config,
                       const std::function<void(const LinkFrame&)>& on_frame);
 
 // Replaces each damaged row by the nearest intact row of the same Bayer colour (r-2, r+2, r-4,

@@ -20,7 +20,7 @@ LinkFrame random_frame(const LinkConfig& c, unsigned seed) {
 }
 
 struct Decoded {
-  LinkStats stats;
+  LinkSummary stats;
   std::vector<LinkFrame> frames;
 };
 
@@ -184,7 +184,7 @@ TEST(Link, GarbageNeverCrashesOrFindsFrames) {
   inputs.push_back(rnd);
   for (const auto& in : inputs) {
     int frames = 0;
-    const LinkStats st = decode_link(in, c, [&](const LinkFrame&) { ++frames; });
+    const LinkSummary st = decode_link(in, c, [&](const LinkFrame&) { ++frames; });
     EXPECT_EQ(st.frames, 0);
     EXPECT_EQ(frames, 0);
     EXPECT_EQ(st.bytes, in.size());

@@ -66,7 +66,7 @@ struct EngineOptions {
   // coarse grid and the taps moved to it (map.method, not sad). A dropped camera's last frame stays
   // in use (no recompile in this mode).
   bool depth = false;
-  pano::SweepOptions depth_sweep = render::engine_sweep_options();
+  pano::PlaneSweepOptions depth_sweep = render::engine_sweep_options();
   // Apply the rig's photometric model (vignetting and colour gains, core/photometric.h) to every
   // frame as it arrives, in its camera's thread (per-camera tables, isp/photometric.h), so that the
   // frame store holds corrected frames and the render loop does no extra work.

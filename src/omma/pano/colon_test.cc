@@ -40,7 +40,7 @@ TEST(PanoColon, AllMethodsAgainstTheTruth) {
   const Simulated photo =
       simulate(rig, *sim::make_photo_scene(std::string(OMMA_DATA_DIR) + "/louvre.jpg"), grid);
   const cv::Mat seam = seam_mask(coverage_map(rig, grid), false);
-  std::map<Method, EvalResult> r;
+  std::map<Method, EvalSummary> r;
   for (Method m : all_methods()) {
     StitchOptions opt;
     opt.method = m;

@@ -2,8 +2,21 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 namespace omma::pano {
+
+bool SearchOptions::IsValid(std::string* why) const {
+  if (!q.allFinite()) {
+    if (why) *why = "observer point q must be finite";
+    return false;
+  }
+  if (!(min_r_mm > 0) || !std::isfinite(min_r_mm)) {  // |r| divides the weights (eq. 2.5)
+    if (why) *why = "min_r_mm must be a positive number of mm";
+    return false;
+  }
+  return true;
+}
 
 double orthographic_distance(const Vec3& q, const Vec3& c, const Vec3& w) {
   const Vec3 d = q - c;
@@ -16,6 +29,8 @@ std::vector<Contributor> find_contributors(const Rig& rig, const Vec3& w_in, con
 
 std::vector<Contributor> find_contributors(const Rig& rig, const Vec3& w_in, double depth_mm,
                                            const SearchOptions& opt) {
+  std::string why;
+  if (!opt.IsValid(&why)) throw std::invalid_argument("find_contributors: " + why);
   const Vec3 w = w_in.normalized();
   const bool at_infinity = !(depth_mm < std::numeric_limits<double>::infinity());
   std::vector<Contributor> out;

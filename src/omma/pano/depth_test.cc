@@ -1,8 +1,9 @@
-// The projection surface and depth from the overlaps (surface.h, sweep.h): D = infinity reproduces the
+// The projection surface and depth from the overlaps (surface.h, plane_sweep.h): D = infinity reproduces the
 // thesis's stitcher exactly; on the simulated colon the true depth removes most of the parallax
 // error and the estimated depth closes most of the gap to it.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -18,7 +19,7 @@
 #include "omma/pano/quality.h"
 #include "omma/pano/stitch.h"
 #include "omma/pano/surface.h"
-#include "omma/pano/sweep.h"
+#include "omma/pano/plane_sweep.h"
 #include "omma/testing/test_scenes.h"
 #include "omma/sim/simulate.h"
 
@@ -76,7 +77,7 @@ TEST(PanoSurface, SphereGeometry) {
   bad.at<float>(3, 4) = std::numeric_limits<float>::quiet_NaN();
   EXPECT_THROW(check_depth(bad, grid), std::invalid_argument);
   EXPECT_THROW(check_depth(cv::Mat(10, 10, CV_32FC1, cv::Scalar(5)), grid), std::invalid_argument);
-  SweepOptions so;
+  PlaneSweepOptions so;
   so.near_mm = 4;  // inside the dome
   EXPECT_THROW(DepthSweep(rig, grid, so), std::invalid_argument);
   so.near_mm = 50;
@@ -110,7 +111,7 @@ Colon simulate_colon(const PanoGrid& grid, uint64_t seed) {
 }
 
 struct ColonFigures {
-  EvalResult inf, sphere, truth, estimate;
+  EvalSummary inf, sphere, truth, estimate;
   DepthError depth;
   BoundaryScore thesis, with_depth, from_depth;
   DepthEstimate est;
@@ -183,7 +184,7 @@ TEST(PanoDepth, ColonTruthAndEstimate) {
       // Measured on seeds 1, 2, 3 (vr180 270x270): truth - inf = 6.3 / 6.7 / 5.8 dB, truth - sphere:22 =
       // 2.0 / 2.5 / 1.7 dB; the estimate closes 88 / 77 / 82 % of the gap between the best sphere and the
       // truth (seam band the same; equirect 480x128: 93 / 83 / 88 %). Before the band-pass of the matched
-      // gray levels (sweep.h "Cost") seed 2 closed 28 %: the vignetting ramp at the image edges matched.
+      // gray levels (plane_sweep.h "Cost") seed 2 closed 28 %: the vignetting ramp at the image edges matched.
       // Median relative depth error 2.1 / 1.8 / 1.7 %. Boundaries (best F1 over th_ob): the depth's own
       // jumps F1 0.16 / 0.29 / 0.25 against 0.13 / 0.21 / 0.11 for the thesis's L_ob at infinity
       // (equirect 0.30 / 0.44 / 0.52 against 0.21 / 0.22 / 0.23, where L_ob is best marking everything:
@@ -226,6 +227,39 @@ TEST(PanoDepth, FarFieldNotWorseThanInfinity) {
   std::printf("louvre vr180 270x270 mrf: inf %.2f dB, estimate %.2f dB (median depth %.0f mm)\n", inf, with,
               1 / cv::mean(inv)[0]);
   EXPECT_GT(with, inf - 0.2);  // measured 25.93 and 25.93 dB (540x540 louvre and lake: docs/results/depth_table.md)
+}
+
+// The aggregation alone (plane_sweep.h "Aggregation"), on hand-made cost volumes.
+TEST(PanoDepthSgm, WithoutPenaltiesEveryPathIsTheCostItself) {
+  const int W = 6, H = 4, K = 5;
+  std::vector<float> C(size_t(W) * H * K);
+  for (size_t t = 0; t < C.size(); ++t) C[t] = float((t * 7919) % 13) / 13;
+  const cv::Mat guide(H, W, CV_32FC1, cv::Scalar(0.5));
+  for (int paths : {4, 8}) {
+    const std::vector<float> S = detail::aggregate_sgm(C, W, H, K, guide, 0, 0, 0.03, paths);
+    ASSERT_EQ(S.size(), C.size());
+    for (size_t t = 0; t < C.size(); ++t) ASSERT_NEAR(S[t], paths * C[t], 1e-5) << t;
+  }
+}
+
+TEST(PanoDepthSgm, SmoothnessOverrulesAnIsolatedMinimum) {
+  // Every pixel prefers candidate 1; the centre alone prefers 3 (cost 0 there, 0.5 at 1).
+  const int W = 5, H = 5, K = 4;
+  std::vector<float> C(size_t(W) * H * K, 1.f);
+  for (int u = 0; u < W * H; ++u) C[size_t(u) * K + 1] = 0;
+  const int centre = 2 * W + 2;
+  C[size_t(centre) * K + 1] = 0.5f;
+  C[size_t(centre) * K + 3] = 0;
+  const cv::Mat guide(H, W, CV_32FC1, cv::Scalar(0.5));
+  const std::vector<float> S = detail::aggregate_sgm(C, W, H, K, guide, 0.2, 2.0, 0.03, 8);
+  const float* s = &S[size_t(centre) * K];
+  EXPECT_EQ(std::min_element(s, s + K) - s, 1);
+  // A corner pixel keeps its own minimum.
+  const float* s0 = &S[0];
+  EXPECT_EQ(std::min_element(s0, s0 + K) - s0, 1);
+  // Sizes are checked.
+  EXPECT_THROW(detail::aggregate_sgm(C, W, H + 1, K, guide, 0.2, 2.0, 0.03, 8), std::invalid_argument);
+  EXPECT_THROW(detail::aggregate_sgm(C, W, H, K, guide, 0.2, 2.0, 0.03, 6), std::invalid_argument);
 }
 
 }  // namespace

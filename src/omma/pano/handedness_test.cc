@@ -56,7 +56,7 @@ std::vector<cv::Mat> simulate_frames(const Rig& rig, const sim::Scene& scene) {
   so.effects = sim::CameraEffects::ideal(2);
   so.truth = false;
   so.progress = false;
-  const sim::SimulateResult r = sim::simulate(rig, scene, so);
+  const sim::SimulateSummary r = sim::simulate(rig, scene, so);
   std::vector<cv::Mat> frames;
   for (const sim::CameraFrame& f : r.frames) frames.push_back(f.image);
   return frames;

@@ -16,12 +16,12 @@
 namespace omma::pano {
 namespace {
 
-std::map<Method, EvalResult> table(const Rig& rig, const cv::Mat& tex, const PanoGrid& grid,
+std::map<Method, EvalSummary> table(const Rig& rig, const cv::Mat& tex, const PanoGrid& grid,
                                    const char* label) {
   const auto frames = testing::render_frames(rig, tex);
   const cv::Mat truth = testing::render_truth(grid, tex);
   const cv::Mat seam = seam_mask(coverage_map(rig, grid), false);
-  std::map<Method, EvalResult> out;
+  std::map<Method, EvalSummary> out;
   for (Method m : all_methods()) {
     StitchOptions opt;
     opt.method = m;

@@ -71,8 +71,8 @@ double ssim(const cv::Mat& image, const cv::Mat& truth) {
   return s / static_cast<double>(xs.size());
 }
 
-EvalResult evaluate(const cv::Mat& image, const cv::Mat& truth, const cv::Mat& seam) {
-  EvalResult r;
+EvalSummary evaluate(const cv::Mat& image, const cv::Mat& truth, const cv::Mat& seam) {
+  EvalSummary r;
   r.psnr_db = psnr_db(image, truth);
   r.ssim = ssim(image, truth);
   r.seam_psnr_db = seam.empty() ? std::numeric_limits<double>::quiet_NaN() : psnr_db(image, truth, seam);

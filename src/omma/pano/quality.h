@@ -16,12 +16,12 @@ double psnr_db(const cv::Mat& image, const cv::Mat& truth, const cv::Mat& mask =
 // averaged over the channels and the whole image.
 double ssim(const cv::Mat& image, const cv::Mat& truth);
 
-struct EvalResult {
+struct EvalSummary {
   double psnr_db = 0;
   double ssim = 0;
   double seam_psnr_db = 0;  // NaN when no seam mask was given
 };
 // All three; `seam` is the seam-band mask (CV_8UC1, non-zero inside), or empty.
-EvalResult evaluate(const cv::Mat& image, const cv::Mat& truth, const cv::Mat& seam = {});
+EvalSummary evaluate(const cv::Mat& image, const cv::Mat& truth, const cv::Mat& seam = {});
 
 }  // namespace omma::pano

@@ -16,6 +16,18 @@
 
 namespace omma::pano {
 
+bool StitchOptions::IsValid(std::string* why) const {
+  auto fail = [&](const std::string& m) {
+    if (why) *why = m;
+    return false;
+  };
+  if (grid.width <= 0 || grid.height <= 0) return fail("panorama size must be positive");
+  if (!blend.search.IsValid(why)) return false;
+  if (!(blend.gaussian_sigma_rel > 0)) return fail("gaussian_sigma_rel must be > 0");
+  if (!(blend.sad_epsilon > 0)) return fail("sad_epsilon must be > 0");
+  return true;
+}
+
 void check_frames(const Rig& rig, const std::vector<cv::Mat>& frames) {
   if (rig.cameras.empty()) throw std::invalid_argument("the rig has no cameras");
   if (frames.size() != rig.cameras.size())
@@ -61,7 +73,8 @@ cv::Vec3f sample_bilinear(const cv::Mat& img, const Vec2& px) {
 
 void for_each_pixel_weights(const Rig& rig, const StitchOptions& opt, const PixelWeightsFn& f, Progress* progress) {
   const PanoGrid& grid = opt.grid;
-  if (grid.width <= 0 || grid.height <= 0) throw std::invalid_argument("panorama size must be positive");
+  std::string why;
+  if (!opt.IsValid(&why)) throw std::invalid_argument(why);
   check_depth(opt.depth, grid);
   const bool needs_neighbours = uses_neighbours(opt.method);
   // Work in blocks of rows. Each block finds the contributors (eq. 2.3, 5.21-5.26) of its rows and,
@@ -97,7 +110,8 @@ void for_each_pixel_weights(const Rig& rig, const StitchOptions& opt, const Pixe
 cv::Mat stitch(const Rig& rig, const std::vector<cv::Mat>& frames_in, const StitchOptions& opt) {
   check_frames(rig, frames_in);
   const PanoGrid& grid = opt.grid;
-  if (grid.width <= 0 || grid.height <= 0) throw std::invalid_argument("panorama size must be positive");
+  std::string why;
+  if (!opt.IsValid(&why)) throw std::invalid_argument(why);
   const std::vector<cv::Mat> frames = frames_to_float(frames_in);
   cv::Mat pano(grid.height, grid.width, CV_32FC3, cv::Scalar::all(0));
   Progress progress("stitch " + to_string(opt.method), grid.height, opt.progress);

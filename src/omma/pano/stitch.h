@@ -10,6 +10,7 @@
 
 #include <opencv2/core.hpp>
 #include <functional>
+#include <string>
 #include <vector>
 
 #include "omma/core/grid.h"
@@ -29,6 +30,9 @@ struct StitchOptions {
   // q; empty = +infinity everywhere (the thesis's model, eq. 2.3-2.5). Every method works on any D.
   cv::Mat depth;
   bool progress = true;  // progress bar on stderr (also silenced by set_progress_enabled(false))
+
+  // False (with the reason in *why) when a value lies outside the range the code relies on.
+  bool IsValid(std::string* why = nullptr) const;
 };
 
 // Checks the inputs of every function below: at least one camera, one frame per camera, each the

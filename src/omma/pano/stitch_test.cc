@@ -31,9 +31,9 @@ Scene far_field(const cv::Mat& tex, const PanoGrid& grid, int cam_px) {
   return s;
 }
 
-std::map<Method, EvalResult> run_all(const Scene& s, const char* label) {
+std::map<Method, EvalSummary> run_all(const Scene& s, const char* label) {
   const cv::Mat seam = seam_mask(coverage_map(s.rig, s.grid), false);
-  std::map<Method, EvalResult> out;
+  std::map<Method, EvalSummary> out;
   for (Method m : all_methods()) {
     StitchOptions opt;
     opt.method = m;
@@ -203,6 +203,42 @@ TEST(PanoQuality, PsnrAndSsimOnKnownImages) {
   EXPECT_GT(s, 0.0);
   EXPECT_NEAR(ssim(to_u8(a), a), 1.0, 1e-3);  // 8-bit and float compare in [0,1]
   EXPECT_THROW(psnr_db(a, cv::Mat(10, 10, CV_32FC3)), std::invalid_argument);
+}
+
+// The message of the std::invalid_argument f throws, or "" if it throws none.
+template <typename F>
+std::string refusal(F f) {
+  try {
+    f();
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Options, SearchOptionsRefuseBadValues) {
+  SearchOptions o;
+  EXPECT_TRUE(o.IsValid());
+  o.min_r_mm = 0;  // |r| divides the weights
+  EXPECT_FALSE(o.IsValid());
+  const Rig rig = testing::small_rig();
+  EXPECT_NE(refusal([&] { find_contributors(rig, Vec3(0, 0, 1), o); }).find("min_r_mm"), std::string::npos);
+}
+
+TEST(Options, StitchOptionsRefuseBadValues) {
+  StitchOptions o;
+  EXPECT_TRUE(o.IsValid());
+  o.blend.gaussian_sigma_rel = 0;
+  std::string why;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("gaussian_sigma_rel"), std::string::npos);
+  const Rig rig = testing::small_rig();
+  std::vector<cv::Mat> frames;
+  for (const auto& c : rig.cameras) frames.emplace_back(c.in.height, c.in.width, CV_8UC3, cv::Scalar::all(100));
+  EXPECT_NE(refusal([&] { stitch(rig, frames, o); }).find("gaussian_sigma_rel"), std::string::npos);
+  o = {};
+  o.grid.width = 0;
+  EXPECT_EQ(refusal([&] { stitch(rig, frames, o); }), "panorama size must be positive");
 }
 
 }  // namespace

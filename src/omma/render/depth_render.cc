@@ -18,8 +18,8 @@
 
 namespace omma::render {
 
-pano::SweepOptions engine_sweep_options() {
-  pano::SweepOptions o;
+pano::PlaneSweepOptions engine_sweep_options() {
+  pano::PlaneSweepOptions o;
   o.pitch_deg = 2.0;
   o.steps = 32;
   o.paths = 4;

@@ -29,18 +29,18 @@
 #include <opencv2/core.hpp>
 
 #include "omma/render/compiled_map.h"
-#include "omma/pano/sweep.h"
+#include "omma/pano/plane_sweep.h"
 
 namespace omma::render {
 
-// The sweep the engine runs every frame: the reference's (pano::SweepOptions defaults) on a coarser
+// The sweep the engine runs every frame: the reference's (pano::PlaneSweepOptions defaults) on a coarser
 // grid with fewer candidates and paths, and the temporal term (measured in depth_render_test.cc and
 // docs/results/depth_table.md: speed per frame and PSNR against `omma stitch --depth estimate`).
-pano::SweepOptions engine_sweep_options();
+pano::PlaneSweepOptions engine_sweep_options();
 
 struct DepthRenderOptions {
   MapOptions map;             // grid, method (not sad), params (observer q), min_weight
-  pano::SweepOptions sweep = engine_sweep_options();  // the per-frame estimate (its temporal_weight is used between frames)
+  pano::PlaneSweepOptions sweep = engine_sweep_options();  // the per-frame estimate (its temporal_weight is used between frames)
   double reference_mm = 22;   // the surface the static weights are computed on (the colon wall)
   // Temporal filter of the inverse depth between panoramas: s = s_prev + alpha (s_new - s_prev)
   // (1 = none). With sweep.temporal_weight it keeps the wall's depth from flickering with the noise.

@@ -307,7 +307,7 @@ TEST(SimSimulate, FramesFolderIsComplete) {
   o.truth_grid = PanoGrid{Projection::kVr180, 128, 128};
   o.raw = true;
   o.progress = false;
-  const SimulateResult r = simulate(rig, *scene, o);
+  const SimulateSummary r = simulate(rig, *scene, o);
   ASSERT_EQ(r.frames.size(), rig.cameras.size());
   const auto dir = std::filesystem::temp_directory_path() / "omma_sim_folder_test";
   std::filesystem::remove_all(dir);
@@ -415,6 +415,30 @@ TEST(SimPrototype, EveryCameraOfTheThesisDomeSeesThePhotoWhereItShould) {
   }
   std::printf("  prototype: worst camera vs remapped photo %.2f dB\n", worst);
   EXPECT_GT(worst, 35.0);
+}
+
+// The message of the std::invalid_argument f throws, or "" if it throws none.
+template <typename F>
+std::string refusal(F f) {
+  try {
+    f();
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(SimOptions, RefuseBadValues) {
+  SimulateOptions o;
+  EXPECT_TRUE(o.IsValid());
+  o.shots = 0;
+  EXPECT_FALSE(o.IsValid());
+  const Rig rig = design::thesis_prototype_rig();
+  const auto scene = make_colon_scene();
+  EXPECT_EQ(refusal([&] { simulate(rig, *scene, o); }), "shots must be 1..1000, got 0");
+  o = {};
+  o.truth_supersample = -1;
+  EXPECT_FALSE(o.IsValid());
 }
 
 }  // namespace

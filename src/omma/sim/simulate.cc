@@ -14,21 +14,32 @@
 namespace omma::sim {
 namespace fs = std::filesystem;
 
+bool SimulateOptions::IsValid(std::string* why) const {
+  auto fail = [&](const std::string& m) {
+    if (why) *why = m;
+    return false;
+  };
+  if (truth && (truth_grid.width <= 0 || truth_grid.height <= 0)) return fail("truth size must be positive");
+  if (shots < 1 || shots > 1000) return fail(fmt::format("shots must be 1..1000, got {}", shots));
+  if (truth_supersample < 0 || truth_supersample > 16)
+    return fail(fmt::format("truth supersample must be 0 (auto) or 1..16, got {}", truth_supersample));
+  return true;
+}
+
 namespace {
 double ms_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 }  // namespace
 
-SimulateResult simulate(const Rig& nominal, const Scene& scene, const SimulateOptions& o) {
+SimulateSummary simulate(const Rig& nominal, const Scene& scene, const SimulateOptions& o) {
   if (nominal.cameras.empty()) throw RigError("the rig has no cameras");
   nominal.validate();
-  if (o.truth && (o.truth_grid.width <= 0 || o.truth_grid.height <= 0))
-    throw std::invalid_argument("truth size must be positive");
-  SimulateResult res;
+  std::string why;
+  if (!o.IsValid(&why)) throw std::invalid_argument(why);
+  SimulateSummary res;
   res.nominal = nominal;
   res.true_rig = perturb_rig(nominal, o.perturb, o.effects.seed);
-  if (o.shots < 1 || o.shots > 1000) throw std::invalid_argument(fmt::format("shots must be 1..1000, got {}", o.shots));
   res.frames.resize(nominal.cameras.size());
   res.more_shots.assign(size_t(o.shots - 1), std::vector<CameraFrame>(nominal.cameras.size()));
   {
@@ -69,7 +80,7 @@ ColonCase colon_case(uint64_t seed) {
 }
 
 
-nlohmann::json simulation_summary(const SimulateResult& r, const SimulateOptions& o, const Scene& scene, int shot) {
+nlohmann::json simulation_summary(const SimulateSummary& r, const SimulateOptions& o, const Scene& scene, int shot) {
   nlohmann::json cams = nlohmann::json::array();
   for (size_t i = 0; i < r.frames.size(); ++i) {
     const auto& c = r.true_rig.cameras[i];
@@ -123,7 +134,7 @@ nlohmann::json simulation_summary(const SimulateResult& r, const SimulateOptions
 namespace {
 
 // Writes one shot's frames folder into `target` (which exists).
-void write_shot(const fs::path& target, const SimulateResult& r, const SimulateOptions& o, const Scene& scene,
+void write_shot(const fs::path& target, const SimulateSummary& r, const SimulateOptions& o, const Scene& scene,
                 int shot) {
   const std::vector<CameraFrame>& frames = shot == 0 ? r.frames : r.more_shots[size_t(shot - 1)];
   for (size_t i = 0; i < frames.size(); ++i) {
@@ -174,13 +185,13 @@ void write_folder(const fs::path& dir, Write write) {
 
 }  // namespace
 
-void write_frames_folder(const fs::path& dir, const SimulateResult& r, const SimulateOptions& o, const Scene& scene) {
+void write_frames_folder(const fs::path& dir, const SimulateSummary& r, const SimulateOptions& o, const Scene& scene) {
   write_folder(dir, [&](const fs::path& target) { write_shot(target, r, o, scene, 0); });
 }
 
 std::string shot_folder_name(int shot) { return fmt::format("shot_{:02d}", shot); }
 
-void write_shots_folder(const fs::path& dir, const SimulateResult& r, const SimulateOptions& o, const Scene& scene) {
+void write_shots_folder(const fs::path& dir, const SimulateSummary& r, const SimulateOptions& o, const Scene& scene) {
   write_folder(dir, [&](const fs::path& target) {
     for (int k = 0; k <= static_cast<int>(r.more_shots.size()); ++k) {
       const fs::path sub = target / shot_folder_name(k);

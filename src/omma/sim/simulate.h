@@ -16,6 +16,7 @@
 #pragma once
 
 #include <filesystem>
+#include <string>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -35,9 +36,12 @@ struct SimulateOptions {
   DomePose pose;                                         // where the dome is in the scene
   bool progress = true;                                  // progress bar on stderr
   int shots = 1;                                         // exposures of the static scene (>= 1)
+
+  // False (with the reason in *why) when a value lies outside the range the code relies on.
+  bool IsValid(std::string* why = nullptr) const;
 };
 
-struct SimulateResult {
+struct SimulateSummary {
   Rig nominal;                      // the rig given
   Rig true_rig;                     // the rig rendered (perturbed)
   std::vector<CameraFrame> frames;  // in rig order (shot 0)
@@ -48,12 +52,12 @@ struct SimulateResult {
 };
 
 // Renders everything in memory. Throws std::invalid_argument / RigError on bad options or rig.
-SimulateResult simulate(const Rig& nominal, const Scene& scene, const SimulateOptions& options);
+SimulateSummary simulate(const Rig& nominal, const Scene& scene, const SimulateOptions& options);
 
 // Writes the frames folder. If `dir` does not exist it is written as a temporary sibling folder
 // and renamed at the end (all or nothing); if it exists each file is replaced atomically.
 // Throws IoError if `dir` is a file or cannot be written.
-void write_frames_folder(const std::filesystem::path& dir, const SimulateResult& result,
+void write_frames_folder(const std::filesystem::path& dir, const SimulateSummary& result,
                          const SimulateOptions& options, const Scene& scene);
 
 // The colon cases of the depth tables (tests, `omma demo`, docs/results/depth_table.sh):
@@ -67,12 +71,12 @@ struct ColonCase {
 ColonCase colon_case(uint64_t seed);
 
 // Writes DIR/shot_00 .. DIR/shot_<N-1> (N = 1 + result.more_shots.size()), all or nothing.
-void write_shots_folder(const std::filesystem::path& dir, const SimulateResult& result,
+void write_shots_folder(const std::filesystem::path& dir, const SimulateSummary& result,
                         const SimulateOptions& options, const Scene& scene);
 std::string shot_folder_name(int shot);  // "shot_03"
 
 // The content of DIR/sim.json (of shot `shot`).
-nlohmann::json simulation_summary(const SimulateResult& result, const SimulateOptions& options,
+nlohmann::json simulation_summary(const SimulateSummary& result, const SimulateOptions& options,
                                   const Scene& scene, int shot = 0);
 
 }  // namespace omma::sim

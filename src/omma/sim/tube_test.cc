@@ -85,7 +85,7 @@ TEST(SimShots, SameGainsFreshNoiseOneFolderPerShot) {
   o.shots = 3;
   o.effects.read_noise_dn = 4;
   const auto tube = make_tube_scene();
-  const SimulateResult r = simulate(rig, *tube, o);
+  const SimulateSummary r = simulate(rig, *tube, o);
   ASSERT_EQ(r.more_shots.size(), 2u);
   for (size_t i = 0; i < 2; ++i) {
     const CameraFrame& a = r.frames[i];
@@ -99,7 +99,7 @@ TEST(SimShots, SameGainsFreshNoiseOneFolderPerShot) {
   }
   // Shot 0 is the single-shot simulation (same seed, same noise).
   o.shots = 1;
-  const SimulateResult one = simulate(rig, *tube, o);
+  const SimulateSummary one = simulate(rig, *tube, o);
   EXPECT_EQ(cv::norm(one.frames[1].image, r.frames[1].image, cv::NORM_INF), 0);
 
   o.shots = 3;

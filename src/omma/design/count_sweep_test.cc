@@ -1,5 +1,5 @@
 // Sweeps (Fig. 3.3, 3.7, 3.9) and the SVG writer.
-#include "omma/design/sweep.h"
+#include "omma/design/count_sweep.h"
 
 #include <cmath>
 #include <sstream>
@@ -18,7 +18,7 @@ size_t count(const std::string& s, const std::string& what) {
 }
 
 TEST(Sweep, SmallSweepTablesAndPlots) {
-  SweepParams p;
+  CountSweepOptions p;
   p.r_virtual_mm = {12, 30};
   p.aov_min_deg = 56;
   p.aov_max_deg = 72;
@@ -58,7 +58,7 @@ TEST(Sweep, SmallSweepTablesAndPlots) {
 }
 
 TEST(Sweep, UnreachableDistancesAreEmptyCells) {
-  SweepParams p;
+  CountSweepOptions p;
   p.r_virtual_mm = {6};
   p.aov_min_deg = p.aov_max_deg = 20;  // cones of 20 deg from 5 mm never meet at 6 mm
   p.aov_methods = {Method::kLayered};
@@ -79,6 +79,30 @@ TEST(SvgPlot, NiceTicksAndEscaping) {
   EXPECT_NE(svg.find("a &lt; b &amp; c"), std::string::npos);
   EXPECT_EQ(count(svg, "<circle"), 2u);  // the NaN point is skipped
   EXPECT_EQ(count(svg, " M"), 2u);       // and breaks the line
+}
+
+// The message of the std::invalid_argument f throws, or "" if it throws none.
+template <typename F>
+std::string refusal(F f) {
+  try {
+    f();
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(CountSweep, OptionsRefuseBadValues) {
+  CountSweepOptions p;
+  EXPECT_TRUE(p.IsValid());
+  p.aov_step_deg = 0;  // the range would never end
+  std::string why;
+  EXPECT_FALSE(p.IsValid(&why));
+  EXPECT_NE(why.find("aov_step_deg"), std::string::npos);
+  EXPECT_NE(refusal([&] { run_sweep(p); }).find("aov_step_deg"), std::string::npos);
+  p = {};
+  p.r_phys_mm = -1;
+  EXPECT_EQ(refusal([&] { run_sweep(p); }), "sweep: r_phys must be positive");
 }
 
 }  // namespace

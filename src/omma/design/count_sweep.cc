@@ -1,4 +1,4 @@
-#include "omma/design/sweep.h"
+#include "omma/design/count_sweep.h"
 
 #include <cmath>
 #include <stdexcept>
@@ -10,6 +10,25 @@
 #include "omma/design/svg_plot.h"
 
 namespace omma::design {
+
+bool CountSweepOptions::IsValid(std::string* why) const {
+  auto fail = [&](const std::string& m) {
+    if (why) *why = m;
+    return false;
+  };
+  if (!(r_phys_mm > 0)) return fail("r_phys must be positive");
+  for (double rv : r_virtual_mm)
+    if (!(rv > 0) || !std::isfinite(rv)) return fail(fmt::format("R_vir {} mm must be a positive number", rv));
+  // The ranges are walked from min to max in steps: a step <= 0 would never end.
+  if (!(aov_min_deg > 0 && aov_max_deg >= aov_min_deg && aov_max_deg < 360 && aov_step_deg > 0))
+    return fail("angle of view range: need 0 < aov_min_deg <= aov_max_deg < 360 and aov_step_deg > 0");
+  if (!(fixed_aov_deg > 0 && fixed_aov_deg < 360)) return fail("fixed_aov_deg must be in (0, 360)");
+  if (!(ratio_min > 0 && ratio_max >= ratio_min && ratio_step > 0))
+    return fail("ratio range: need 0 < ratio_min <= ratio_max and ratio_step > 0");
+  if (!(check_step_deg > 0)) return fail("check_step_deg must be positive");
+  return true;
+}
+
 namespace {
 
 std::vector<double> range(double lo, double hi, double step) {
@@ -42,8 +61,9 @@ std::string method_label(Method m) {
 
 }  // namespace
 
-std::vector<SweepRow> run_sweep(const SweepParams& p) {
-  if (!(p.r_phys_mm > 0)) throw std::invalid_argument("sweep: r_phys must be positive");
+std::vector<SweepRow> run_sweep(const CountSweepOptions& p) {
+  std::string why;
+  if (!p.IsValid(&why)) throw std::invalid_argument("sweep: " + why);
   std::vector<SweepRow> rows;
   for (double rv : p.r_virtual_mm)
     for (Method m : p.aov_methods)
@@ -79,7 +99,7 @@ std::string sweep_csv(const std::vector<SweepRow>& rows) {
   return s;
 }
 
-std::string sweep_aov_svg(const std::vector<SweepRow>& rows, const SweepParams& p) {
+std::string sweep_aov_svg(const std::vector<SweepRow>& rows, const CountSweepOptions& p) {
   std::vector<Plot> plots;
   const char* letters = "abcdefghijklmnopqrstuvwxyz";
   for (size_t k = 0; k < p.r_virtual_mm.size(); ++k) {
@@ -103,7 +123,7 @@ std::string sweep_aov_svg(const std::vector<SweepRow>& rows, const SweepParams& 
   return svg_plot_grid(plots, 3, "Cameras needed vs angle of view (thesis Fig. 3.3 / 3.9)");
 }
 
-std::string sweep_ratio_svg(const std::vector<SweepRow>& rows, const SweepParams& p) {
+std::string sweep_ratio_svg(const std::vector<SweepRow>& rows, const CountSweepOptions& p) {
   Plot plot;
   plot.title = fmt::format("Cameras vs R_vir / R_phy at AOV = {:g} deg (thesis Fig. 3.7)",
                            p.fixed_aov_deg);

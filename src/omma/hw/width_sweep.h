@@ -24,13 +24,16 @@ struct SweepParam {
 // bits, pixel fraction bits, distance and vector fraction bits, reciprocal, sample and mantissa widths).
 std::vector<SweepParam> default_sweep_params();
 
-struct SweepOptions {
+struct WidthSweepOptions {
   HwConfig base;
   PanoGrid grid{Projection::kVr180, 540, 540};
   pano::Method method = pano::Method::kLinear;
   double target_db = 45;
   std::vector<SweepParam> params = default_sweep_params();
   std::function<void(const std::string&)> progress;  // called once per configuration rendered
+
+  // False (with the reason in *why) when a value lies outside the range the code relies on.
+  bool IsValid(std::string* why = nullptr) const;
 };
 
 struct SweepPoint {
@@ -40,7 +43,7 @@ struct SweepPoint {
   bool valid = true;  // false if the configuration was rejected (IsValid / check_rig)
 };
 
-struct SweepResult {
+struct WidthSweepSummary {
   std::vector<SweepPoint> points;
   double base_psnr_db = 0;
   HwConfig minimal;             // smallest widths that keep target_db together
@@ -59,10 +62,10 @@ int get_param(const HwConfig& cfg, const std::string& name);
 double psnr_against(const HwConfig& cfg, const Rig& rig, const std::vector<cv::Mat>& frames, const PanoGrid& grid,
                     pano::Method method, const cv::Mat& reference);
 
-SweepResult run_sweep(const Rig& rig, const std::vector<cv::Mat>& frames, const SweepOptions& options);
+WidthSweepSummary run_sweep(const Rig& rig, const std::vector<cv::Mat>& frames, const WidthSweepOptions& options);
 
 // CSV (param,value,psnr_db,meets_target) and an SVG grid of PSNR-vs-width plots.
-std::string sweep_csv(const SweepResult& r, double target_db);
-std::string sweep_svg(const SweepResult& r, double target_db);
+std::string sweep_csv(const WidthSweepSummary& r, double target_db);
+std::string sweep_svg(const WidthSweepSummary& r, double target_db);
 
 }  // namespace omma::hw

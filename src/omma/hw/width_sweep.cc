@@ -1,4 +1,4 @@
-#include "omma/hw/sweep.h"
+#include "omma/hw/width_sweep.h"
 
 #include <fmt/format.h>
 
@@ -13,6 +13,24 @@
 #include "omma/pano/stitch.h"
 
 namespace omma::hw {
+
+bool WidthSweepOptions::IsValid(std::string* why) const {
+  auto fail = [&](const std::string& m) {
+    if (why) *why = m;
+    return false;
+  };
+  std::string sub;
+  if (!base.IsValid(&sub)) return fail("hardware configuration: " + sub);
+  if (grid.width <= 0 || grid.height <= 0) return fail("panorama size must be positive");
+  if (!std::isfinite(target_db)) return fail("target PSNR must be finite");
+  for (const auto& p : params) {
+    if (p.values.empty()) return fail("parameter " + p.name + " has no values");
+    if (!std::is_sorted(p.values.begin(), p.values.end()))
+      return fail("the values of parameter " + p.name + " must be ascending");
+  }
+  return true;
+}
+
 namespace {
 
 int* field(HwConfig& c, const std::string& n) {
@@ -74,14 +92,16 @@ double psnr_against(const HwConfig& cfg, const Rig& rig, const std::vector<cv::M
   return pano::psnr_db(p.render(method, false).pano, reference);
 }
 
-SweepResult run_sweep(const Rig& rig, const std::vector<cv::Mat>& frames, const SweepOptions& o) {
+WidthSweepSummary run_sweep(const Rig& rig, const std::vector<cv::Mat>& frames, const WidthSweepOptions& o) {
   o.base.Check();
+  std::string why;
+  if (!o.IsValid(&why)) throw std::invalid_argument("width sweep: " + why);
   pano::StitchOptions so;
   so.method = o.method;
   so.grid = o.grid;
   so.progress = false;
   const cv::Mat ref = to_u8(pano::stitch(rig, rgb565_frames(frames), so));
-  SweepResult r;
+  WidthSweepSummary r;
   auto eval = [&](const HwConfig& c, const std::string& what) {
     if (o.progress) o.progress(what);
     return psnr_against(c, rig, frames, o.grid, o.method, ref);
@@ -169,7 +189,7 @@ SweepResult run_sweep(const Rig& rig, const std::vector<cv::Mat>& frames, const 
   return r;
 }
 
-std::string sweep_csv(const SweepResult& r, double target_db) {
+std::string sweep_csv(const WidthSweepSummary& r, double target_db) {
   std::string s = "param,value,psnr_db,meets_target\n";
   for (const auto& p : r.points)
     s += fmt::format("{},{},{},{}\n", p.param, p.value, p.valid ? fmt::format("{:.3f}", p.psnr_db) : "invalid",
@@ -177,7 +197,7 @@ std::string sweep_csv(const SweepResult& r, double target_db) {
   return s;
 }
 
-std::string sweep_svg(const SweepResult& r, double target_db) {
+std::string sweep_svg(const WidthSweepSummary& r, double target_db) {
   std::vector<design::Plot> plots;
   std::vector<std::string> names;
   for (const auto& p : r.points)

@@ -1,4 +1,4 @@
-#include "omma/pano/sweep.h"
+#include "omma/pano/plane_sweep.h"
 
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
@@ -17,7 +17,7 @@
 
 namespace omma::pano {
 
-bool SweepOptions::IsValid(std::string* why) const {
+bool PlaneSweepOptions::IsValid(std::string* why) const {
   auto fail = [&](const std::string& m) {
     if (why) *why = m;
     return false;
@@ -80,7 +80,7 @@ void box_sum(const float* in, int w, int h, int r, float* tmp, float* out) {
 struct DepthSweep::Impl {
   Rig rig;
   PanoGrid grid, coarse;
-  SweepOptions opt;
+  PlaneSweepOptions opt;
   std::vector<Vec3> dirs;       // per coarse pixel
   std::vector<double> inv;      // per candidate, 1/mm
   std::vector<double> sigma;    // per camera: blur to the coarse pitch, camera pixels
@@ -90,8 +90,24 @@ struct DepthSweep::Impl {
   int cams() const { return static_cast<int>(rig.cameras.size()); }
 
   Layer make_layer(int k, int i) const;
-  void sample(int k, const std::vector<cv::Mat>& gray, std::vector<Layer>& tmp_layers,
-              std::vector<cv::Mat>& values) const;
+  // The phases of estimate(), in order (see plane_sweep.h).
+  // Per camera: the gray levels blurred to the coarse pitch, and their band-pass.
+  void gray_levels(const std::vector<cv::Mat>& frames, std::vector<cv::Mat>& gray, std::vector<cv::Mat>& band) const;
+  // The pair sums num = sum w (1 - ZNCC), den = sum w, candidate-major (K x N); guide = G, the mean
+  // gray level of the cameras at the middle candidate.
+  void pair_costs(const std::vector<cv::Mat>& gray, const std::vector<cv::Mat>& band, std::vector<float>& num,
+                  std::vector<float>& den, cv::Mat& guide) const;
+  // The cost C(u, k), pixel-major (N x K), with the unknown candidates continued flat and the
+  // temporal term; evidence = the mean sum_ij w_ij per pixel.
+  std::vector<float> final_costs(const std::vector<float>& num, const std::vector<float>& den,
+                                 const cv::Mat& previous, std::vector<float>& evidence) const;
+  // k* refined by the parabola (s_best, 1/mm), the confidence, the median filter.
+  void winners(const std::vector<float>& S, const std::vector<float>& evidence, cv::Mat& s_best, cv::Mat& conf,
+               std::vector<int>& kbest) const;
+  // The prior, the counts at the range's ends, and the fallback: out's coarse fields.
+  void fallback(const cv::Mat& s_best, const cv::Mat& conf, const std::vector<int>& kbest, DepthEstimate& out) const;
+  // depth and confidence on the output grid (bilinear in inverse depth).
+  void upsample_to_output(DepthEstimate& out) const;
 };
 
 Layer DepthSweep::Impl::make_layer(int k, int i) const {
@@ -177,7 +193,7 @@ Layer DepthSweep::Impl::make_layer(int k, int i) const {
   return L;
 }
 
-DepthSweep::DepthSweep(const Rig& rig, const PanoGrid& grid, const SweepOptions& opt)
+DepthSweep::DepthSweep(const Rig& rig, const PanoGrid& grid, const PlaneSweepOptions& opt)
     : impl_(std::make_unique<Impl>()) {
   std::string why;
   if (!opt.IsValid(&why)) throw std::invalid_argument("depth sweep: " + why);
@@ -235,54 +251,188 @@ DepthSweep::DepthSweep(DepthSweep&&) noexcept = default;
 DepthSweep& DepthSweep::operator=(DepthSweep&&) noexcept = default;
 const PanoGrid& DepthSweep::coarse_grid() const { return impl_->coarse; }
 const PanoGrid& DepthSweep::grid() const { return impl_->grid; }
-const SweepOptions& DepthSweep::options() const { return impl_->opt; }
+const PlaneSweepOptions& DepthSweep::options() const { return impl_->opt; }
 double DepthSweep::inverse_depth(int k) const { return impl_->inv.at(k); }
 
-DepthEstimate DepthSweep::estimate(const std::vector<cv::Mat>& frames_in, const cv::Mat& previous,
-                                   bool upsample) const {
-  const Impl& m = *impl_;
-  check_frames(m.rig, frames_in);
-  const SweepOptions& o = m.opt;
-  const int W = m.coarse.width, H = m.coarse.height, K = o.steps, N = W * H, nc = m.cams();
-  if (!previous.empty() && (previous.type() != CV_32FC1 || previous.cols != W || previous.rows != H))
-    throw std::invalid_argument("depth sweep: the previous estimate is not on this sweep's coarse grid");
-  // Gray levels, blurred to the coarse pitch (the guide of the edge-aware penalty), and their band-pass
-  // (minus a blur band_ratio times wider: the signal that is matched).
-  std::vector<cv::Mat> gray(nc), band(nc);
+namespace detail {
+
+std::vector<float> aggregate_sgm(const std::vector<float>& C, int W, int H, int K, const cv::Mat& guide, double p1,
+                                 double p2, double edge_gray, int paths) {
+  const int N = W * H;
+  if (W < 1 || H < 1 || K < 1 || C.size() != size_t(N) * K)
+    throw std::invalid_argument("aggregate_sgm: the cost volume is not W x H x K");
+  if (guide.type() != CV_32FC1 || guide.cols != W || guide.rows != H)
+    throw std::invalid_argument("aggregate_sgm: the guide is not a CV_32FC1 image of W x H");
+  if (paths != 4 && paths != 8) throw std::invalid_argument("aggregate_sgm: paths must be 4 or 8");
+  std::vector<float> S(size_t(N) * K, 0.f);
+  const int dirs8[8][2] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}, {1, 1}, {-1, -1}, {1, -1}, {-1, 1}};
+  const float P1 = float(p1);
+  auto run_path = [&](int dx, int dy, std::vector<float>& out) {
+    std::vector<float> prev(size_t(W) * K), cur(size_t(W) * K);
+    std::vector<float> prev_min(W), cur_min(W);
+    const int y0 = dy >= 0 ? 0 : H - 1, ys = dy >= 0 ? 1 : -1;
+    const int x0 = dx >= 0 ? 0 : W - 1, xs = dx >= 0 ? 1 : -1;
+    for (int yi = 0, y = y0; yi < H; ++yi, y += ys) {
+      for (int xi = 0, x = x0; xi < W; ++xi, x += xs) {
+        const int u = y * W + x;
+        const float* c = &C[size_t(u) * K];
+        float* L = &cur[size_t(x) * K];
+        const int px = x - dx, py = y - dy;
+        const bool has = px >= 0 && px < W && py >= 0 && py < H && (dy == 0 || yi > 0);
+        float mn = std::numeric_limits<float>::max();
+        if (!has) {
+          for (int k = 0; k < K; ++k) {
+            L[k] = c[k];
+            mn = std::min(mn, L[k]);
+          }
+        } else {
+          const float* Lp = dy == 0 ? &cur[size_t(px) * K] : &prev[size_t(px) * K];
+          const float mp = dy == 0 ? cur_min[px] : prev_min[px];
+          const float dg = std::abs(guide.at<float>(y, x) - guide.at<float>(py, px));
+          const float P2 = std::max(P1, float(p2 / (1 + dg / edge_gray)));
+          for (int k = 0; k < K; ++k) {
+            float best = std::min(Lp[k], mp + P2);
+            if (k > 0) best = std::min(best, Lp[k - 1] + P1);
+            if (k + 1 < K) best = std::min(best, Lp[k + 1] + P1);
+            L[k] = c[k] + best - mp;
+            mn = std::min(mn, L[k]);
+          }
+        }
+        cur_min[x] = mn;
+        float* o2 = &out[size_t(u) * K];
+        for (int k = 0; k < K; ++k) o2[k] += L[k];
+      }
+      std::swap(prev, cur);
+      std::swap(prev_min, cur_min);
+    }
+  };
+  // Paths on two workers, each summing its paths into its own buffer.
+  std::vector<float> part(size_t(N) * K, 0.f);
+  tbb::parallel_for(0, 2, [&](int g) {
+    std::vector<float>& dst = g == 0 ? S : part;
+    for (int d = g; d < paths; d += 2) run_path(dirs8[d][0], dirs8[d][1], dst);
+  });
+  for (size_t t = 0; t < S.size(); ++t) S[t] += part[t];
+  return S;
+}
+
+}  // namespace detail
+
+namespace {
+
+// Adds one camera pair's term of the cost (see "Cost" in plane_sweep.h) at one candidate:
+// num += w_ij (1 - ZNCC_ij), den += w_ij over the coarse pixels both cameras see. li, lj: the two
+// layers, vi, vj: their band-pass values; nk, dk: the candidate's rows of num and den (W wide).
+// ch, sum, tmp: scratch buffers kept between calls.
+void add_pair_cost(const Layer& li, const Layer& lj, const cv::Mat& vi_val, const cv::Mat& vj_val, int r,
+                   float win_area, float sn2, int W, float* nk, float* dk, std::vector<float> (&ch)[6],
+                   std::vector<float> (&sum)[6], std::vector<float>& tmp) {
+  const cv::Rect R = li.rect & lj.rect;
+  if (R.area() == 0) return;
+  // The pixels both cameras see lie in a box much smaller than the two footprints' common
+  // rectangle (which spans the whole width where a footprint wraps round or holds a pole):
+  // everything below runs on that box I (outside it the channels are zero).
+  int bx0 = R.width, by0 = R.height, bx1 = -1, by1 = -1;
+  for (int y = 0; y < R.height; ++y) {
+    const uint8_t* vi = li.valid.ptr<uint8_t>(R.y - li.rect.y + y) + (R.x - li.rect.x);
+    const uint8_t* vj = lj.valid.ptr<uint8_t>(R.y - lj.rect.y + y) + (R.x - lj.rect.x);
+    for (int x = 0; x < R.width; ++x)
+      if (vi[x] & vj[x]) {
+        bx0 = std::min(bx0, x);
+        bx1 = std::max(bx1, x);
+        by0 = std::min(by0, y);
+        by1 = y;
+      }
+  }
+  if (bx1 < 0) return;
+  const cv::Rect I(R.x + bx0, R.y + by0, bx1 - bx0 + 1, by1 - by0 + 1);
+  const int w = I.width, h = I.height, n = w * h;
+  for (auto& v : ch) v.assign(n, 0.f);
+  for (auto& v : sum) v.resize(n);
+  tmp.resize(n);
+  const cv::Point oi = I.tl() - li.rect.tl(), oj = I.tl() - lj.rect.tl();
+  for (int y = 0; y < h; ++y) {
+    const uint8_t* vi = li.valid.ptr<uint8_t>(y + oi.y) + oi.x;
+    const uint8_t* vj = lj.valid.ptr<uint8_t>(y + oj.y) + oj.x;
+    const float* ai = vi_val.ptr<float>(y + oi.y) + oi.x;
+    const float* bj = vj_val.ptr<float>(y + oj.y) + oj.x;
+    for (int x = 0; x < w; ++x) {
+      if (!(vi[x] & vj[x])) continue;
+      const float a = ai[x], b = bj[x];
+      const int p = y * w + x;
+      ch[0][p] = 1;
+      ch[1][p] = a;
+      ch[2][p] = b;
+      ch[3][p] = a * a;
+      ch[4][p] = b * b;
+      ch[5][p] = a * b;
+    }
+  }
+  for (int c = 0; c < 6; ++c) box_sum(ch[c].data(), w, h, r, tmp.data(), sum[c].data());
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const int p = y * w + x;
+      if (ch[0][p] == 0) continue;
+      const float cnt = sum[0][p];
+      if (cnt < 0.5f * win_area) continue;
+      const float ma = sum[1][p] / cnt, mb = sum[2][p] / cnt;
+      const float va = std::max(0.f, sum[3][p] / cnt - ma * ma), vb = std::max(0.f, sum[4][p] / cnt - mb * mb);
+      const float cov = sum[5][p] / cnt - ma * mb;
+      const float zncc = std::clamp(cov / std::sqrt(va * vb + 1e-12f), -1.f, 1.f);
+      const float v = std::min(va, vb);
+      const float wt = (cnt / win_area) * (cnt / win_area) * v / (v + sn2);
+      const size_t u = size_t(y + I.y) * W + (x + I.x);
+      nk[u] += wt * (1 - zncc);
+      dk[u] += wt;
+    }
+}
+
+}  // namespace
+
+void DepthSweep::Impl::gray_levels(const std::vector<cv::Mat>& frames, std::vector<cv::Mat>& gray,
+                                   std::vector<cv::Mat>& band) const {
+  const int nc = cams();
+  gray.assign(nc, cv::Mat());
+  band.assign(nc, cv::Mat());
   tbb::parallel_for(0, nc, [&](int i) {
-    cv::Mat f = frames_in[i], g;
+    cv::Mat f = frames[i], g;
     if (f.channels() == 3) cv::cvtColor(f, f, cv::COLOR_BGR2GRAY);  // BT.601 luma
     f.convertTo(g, CV_32F, f.depth() == CV_8U ? 1 / 255.0 : f.depth() == CV_16U ? 1 / 65535.0 : 1.0);
     // sigma (camera pixels) = the pyramid's (pyrDown: sigma^2 = (4^level - 1) / 3) + the rest.
-    const int lv = m.level[i];
+    const int lv = level[i];
     for (int l = 0; l < lv; ++l) cv::pyrDown(g, g);
     const double at = 1.0 / (1 << lv);  // camera pixels -> pixels of the level
-    const double rest = std::sqrt(std::max(0.0, m.sigma[i] * m.sigma[i] - ((1 << 2 * lv) - 1) / 3.0)) * at;
+    const double rest = std::sqrt(std::max(0.0, sigma[i] * sigma[i] - ((1 << 2 * lv) - 1) / 3.0)) * at;
     if (rest > 0.3) cv::GaussianBlur(g, g, cv::Size(), rest);
     gray[i] = g;
-    if (o.band_ratio > 0) {
+    if (opt.band_ratio > 0) {
       cv::Mat lo;
-      cv::GaussianBlur(g, lo, cv::Size(), std::max(1.0, m.sigma[i]) * o.band_ratio * at);
+      cv::GaussianBlur(g, lo, cv::Size(), std::max(1.0, sigma[i]) * opt.band_ratio * at);
       band[i] = g - lo;
     } else {
       band[i] = g;
     }
   });
-  // Cost volume, candidate-major while it is filled: num = sum w (1 - zncc), den = sum w.
-  std::vector<float> num(size_t(K) * N, 0.f), den(size_t(K) * N, 0.f);
+}
+
+void DepthSweep::Impl::pair_costs(const std::vector<cv::Mat>& gray, const std::vector<cv::Mat>& band,
+                                  std::vector<float>& num, std::vector<float>& den, cv::Mat& guide) const {
+  const int W = coarse.width, H = coarse.height, K = opt.steps, N = W * H, nc = cams();
+  num.assign(size_t(K) * N, 0.f);
+  den.assign(size_t(K) * N, 0.f);
   cv::Mat guide_sum(H, W, CV_32FC1, cv::Scalar(0)), guide_n(H, W, CV_32FC1, cv::Scalar(0));
   const int kmid = K / 2;
-  const int r = o.window;
+  const int r = opt.window;
   const float win_area = float((2 * r + 1) * (2 * r + 1));
-  const float sn2 = float(o.noise_sigma * o.noise_sigma);
+  const float sn2 = float(opt.noise_sigma * opt.noise_sigma);
   tbb::parallel_for(0, K, [&](int k) {
-    std::vector<Layer> own(m.cached ? 0 : nc);
+    std::vector<Layer> own(cached ? 0 : nc);
     std::vector<const Layer*> lay(nc);
     for (int i = 0; i < nc; ++i) {
-      if (m.cached) {
-        lay[i] = &m.layers[size_t(k) * nc + i];
+      if (cached) {
+        lay[i] = &layers[size_t(k) * nc + i];
       } else {
-        own[i] = m.make_layer(k, i);
+        own[i] = make_layer(k, i);
         lay[i] = &own[i];
       }
     }
@@ -305,73 +455,21 @@ DepthEstimate DepthSweep::estimate(const std::vector<cv::Mat>& frames_in, const 
     for (int i = 0; i < nc; ++i)
       for (int j = i + 1; j < nc; ++j) {
         if (lay[i]->empty() || lay[j]->empty()) continue;
-        const cv::Rect R = lay[i]->rect & lay[j]->rect;
-        if (R.area() == 0) continue;
-        // The pixels both cameras see lie in a box much smaller than the two footprints' common
-        // rectangle (which spans the whole width where a footprint wraps round or holds a pole):
-        // everything below runs on that box I (outside it the channels are zero).
-        int bx0 = R.width, by0 = R.height, bx1 = -1, by1 = -1;
-        for (int y = 0; y < R.height; ++y) {
-          const uint8_t* vi = lay[i]->valid.ptr<uint8_t>(R.y - lay[i]->rect.y + y) + (R.x - lay[i]->rect.x);
-          const uint8_t* vj = lay[j]->valid.ptr<uint8_t>(R.y - lay[j]->rect.y + y) + (R.x - lay[j]->rect.x);
-          for (int x = 0; x < R.width; ++x)
-            if (vi[x] & vj[x]) {
-              bx0 = std::min(bx0, x);
-              bx1 = std::max(bx1, x);
-              by0 = std::min(by0, y);
-              by1 = y;
-            }
-        }
-        if (bx1 < 0) continue;
-        const cv::Rect I(R.x + bx0, R.y + by0, bx1 - bx0 + 1, by1 - by0 + 1);
-        const int w = I.width, h = I.height, n = w * h;
-        for (auto& v : ch) v.assign(n, 0.f);
-        for (auto& v : sum) v.resize(n);
-        tmp.resize(n);
-        const cv::Point oi = I.tl() - lay[i]->rect.tl(), oj = I.tl() - lay[j]->rect.tl();
-        for (int y = 0; y < h; ++y) {
-          const uint8_t* vi = lay[i]->valid.ptr<uint8_t>(y + oi.y) + oi.x;
-          const uint8_t* vj = lay[j]->valid.ptr<uint8_t>(y + oj.y) + oj.x;
-          const float* ai = val[i].ptr<float>(y + oi.y) + oi.x;
-          const float* bj = val[j].ptr<float>(y + oj.y) + oj.x;
-          for (int x = 0; x < w; ++x) {
-            if (!(vi[x] & vj[x])) continue;
-            const float a = ai[x], b = bj[x];
-            const int p = y * w + x;
-            ch[0][p] = 1;
-            ch[1][p] = a;
-            ch[2][p] = b;
-            ch[3][p] = a * a;
-            ch[4][p] = b * b;
-            ch[5][p] = a * b;
-          }
-        }
-        for (int c = 0; c < 6; ++c) box_sum(ch[c].data(), w, h, r, tmp.data(), sum[c].data());
-        for (int y = 0; y < h; ++y)
-          for (int x = 0; x < w; ++x) {
-            const int p = y * w + x;
-            if (ch[0][p] == 0) continue;
-            const float cnt = sum[0][p];
-            if (cnt < 0.5f * win_area) continue;
-            const float ma = sum[1][p] / cnt, mb = sum[2][p] / cnt;
-            const float va = std::max(0.f, sum[3][p] / cnt - ma * ma), vb = std::max(0.f, sum[4][p] / cnt - mb * mb);
-            const float cov = sum[5][p] / cnt - ma * mb;
-            const float zncc = std::clamp(cov / std::sqrt(va * vb + 1e-12f), -1.f, 1.f);
-            const float v = std::min(va, vb);
-            const float wt = (cnt / win_area) * (cnt / win_area) * v / (v + sn2);
-            const size_t u = size_t(y + I.y) * W + (x + I.x);
-            nk[u] += wt * (1 - zncc);
-            dk[u] += wt;
-          }
+        add_pair_cost(*lay[i], *lay[j], val[i], val[j], r, win_area, sn2, W, nk, dk, ch, sum, tmp);
       }
   });
-  // Final cost C(u, k), pixel-major; evidence per pixel.
+  cv::divide(guide_sum, cv::max(guide_n, 1.0), guide);
+}
+
+std::vector<float> DepthSweep::Impl::final_costs(const std::vector<float>& num, const std::vector<float>& den,
+                                                 const cv::Mat& previous, std::vector<float>& evidence) const {
+  const int K = opt.steps, N = coarse.width * coarse.height;
   std::vector<float> C(size_t(N) * K);
-  std::vector<float> evidence(N, 0.f);
-  const float w0 = float(o.w0), neutral = float(o.neutral_cost);
-  const float unknown = float(o.unknown_cost);
+  evidence.assign(N, 0.f);
+  const float w0 = float(opt.w0), neutral = float(opt.neutral_cost);
+  const float unknown = float(opt.unknown_cost);
   constexpr float kEvidence = 0.05f;  // pair weight below which a candidate has no evidence
-  const double srange = m.inv.front() - m.inv.back();
+  const double srange = inv.front() - inv.back();
   tbb::parallel_for(0, N, [&](int u) {
     float e = 0;
     const float sp = previous.empty() ? 0.f : previous.ptr<float>()[u];
@@ -411,79 +509,23 @@ DepthEstimate DepthSweep::estimate(const std::vector<cv::Mat>& frames_in, const 
     for (int k = 0; k < K; ++k) {
       const float d = den[size_t(k) * N + u];
       float c = d >= kEvidence ? (num[size_t(k) * N + u] + w0 * neutral) / (d + w0) : ext[k];
-      if (o.temporal_weight > 0 && sp > 0)
-        c += float(o.temporal_weight *
-                   std::min(1.0, std::abs(m.inv[k] - sp) / srange * (K - 1)));
+      if (opt.temporal_weight > 0 && sp > 0)
+        c += float(opt.temporal_weight * std::min(1.0, std::abs(inv[k] - sp) / srange * (K - 1)));
       C[size_t(u) * K + k] = c;
       e += d;
     }
     evidence[u] = e / K;
   });
-  num.clear();
-  num.shrink_to_fit();
-  den.clear();
-  den.shrink_to_fit();
-  cv::Mat guide;
-  cv::divide(guide_sum, cv::max(guide_n, 1.0), guide);
-  // Semi-global aggregation.
-  std::vector<float> S(size_t(N) * K, 0.f);
-  const int dirs8[8][2] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}, {1, 1}, {-1, -1}, {1, -1}, {-1, 1}};
-  const float P1 = float(o.p1);
-  auto run_path = [&](int dx, int dy, std::vector<float>& out) {
-    std::vector<float> prev(size_t(W) * K), cur(size_t(W) * K);
-    std::vector<float> prev_min(W), cur_min(W);
-    const int y0 = dy >= 0 ? 0 : H - 1, ys = dy >= 0 ? 1 : -1;
-    const int x0 = dx >= 0 ? 0 : W - 1, xs = dx >= 0 ? 1 : -1;
-    for (int yi = 0, y = y0; yi < H; ++yi, y += ys) {
-      for (int xi = 0, x = x0; xi < W; ++xi, x += xs) {
-        const int u = y * W + x;
-        const float* c = &C[size_t(u) * K];
-        float* L = &cur[size_t(x) * K];
-        const int px = x - dx, py = y - dy;
-        const bool has = px >= 0 && px < W && py >= 0 && py < H && (dy == 0 || yi > 0);
-        float mn = std::numeric_limits<float>::max();
-        if (!has) {
-          for (int k = 0; k < K; ++k) {
-            L[k] = c[k];
-            mn = std::min(mn, L[k]);
-          }
-        } else {
-          const float* Lp = dy == 0 ? &cur[size_t(px) * K] : &prev[size_t(px) * K];
-          const float mp = dy == 0 ? cur_min[px] : prev_min[px];
-          const float dg = std::abs(guide.at<float>(y, x) - guide.at<float>(py, px));
-          const float P2 = std::max(P1, float(o.p2 / (1 + dg / o.edge_gray)));
-          for (int k = 0; k < K; ++k) {
-            float best = std::min(Lp[k], mp + P2);
-            if (k > 0) best = std::min(best, Lp[k - 1] + P1);
-            if (k + 1 < K) best = std::min(best, Lp[k + 1] + P1);
-            L[k] = c[k] + best - mp;
-            mn = std::min(mn, L[k]);
-          }
-        }
-        cur_min[x] = mn;
-        float* o2 = &out[size_t(u) * K];
-        for (int k = 0; k < K; ++k) o2[k] += L[k];
-      }
-      std::swap(prev, cur);
-      std::swap(prev_min, cur_min);
-    }
-  };
-  {
-    // Paths on two workers, each summing its paths into its own buffer.
-    const int P = o.paths;
-    std::vector<float> part(size_t(N) * K, 0.f);
-    tbb::parallel_for(0, 2, [&](int g) {
-      std::vector<float>& dst = g == 0 ? S : part;
-      for (int d = g; d < P; d += 2) run_path(dirs8[d][0], dirs8[d][1], dst);
-    });
-    for (size_t t = 0; t < S.size(); ++t) S[t] += part[t];
-  }
-  C.clear();
-  C.shrink_to_fit();
-  // Winner, sub-candidate refinement, confidence.
-  cv::Mat s_best(H, W, CV_32FC1), conf(H, W, CV_32FC1);
-  std::vector<int> kbest(N);
-  const double dinv = (m.inv.back() - m.inv.front()) / (K - 1);
+  return C;
+}
+
+void DepthSweep::Impl::winners(const std::vector<float>& S, const std::vector<float>& evidence, cv::Mat& s_best,
+                               cv::Mat& conf, std::vector<int>& kbest) const {
+  const int W = coarse.width, H = coarse.height, K = opt.steps, N = W * H;
+  s_best.create(H, W, CV_32FC1);
+  conf.create(H, W, CV_32FC1);
+  kbest.assign(N, 0);
+  const double dinv = (inv.back() - inv.front()) / (K - 1);
   tbb::parallel_for(0, N, [&](int u) {
     const float* s = &S[size_t(u) * K];
     int kb = int(std::min_element(s, s + K) - s);
@@ -497,17 +539,21 @@ DepthEstimate DepthSweep::estimate(const std::vector<cv::Mat>& frames_in, const 
       if (std::abs(k - kb) >= 2) second = std::min(second, s[k]);
     const double margin = second == std::numeric_limits<float>::max() ? 0 : second - s[kb];
     const double e = evidence[u];
-    const double c = (1 - std::exp(-margin / (o.paths * o.margin_scale))) * e / (e + o.w0);
+    const double c = (1 - std::exp(-margin / (opt.paths * opt.margin_scale))) * e / (e + opt.w0);
     kbest[u] = kb;
-    s_best.ptr<float>()[u] = float(m.inv.front() + kf * dinv);
+    s_best.ptr<float>()[u] = float(inv.front() + kf * dinv);
     conf.ptr<float>()[u] = float(std::clamp(c, 0.0, 1.0));
   });
-  if (o.median > 0) {  // outliers of the winner-take-all (isolated wrong minima)
+  if (opt.median > 0) {  // outliers of the winner-take-all (isolated wrong minima)
     cv::Mat med;
-    cv::medianBlur(s_best, med, 2 * o.median + 1);
+    cv::medianBlur(s_best, med, 2 * opt.median + 1);
     s_best = med;
   }
-  DepthEstimate out;
+}
+
+void DepthSweep::Impl::fallback(const cv::Mat& s_best, const cv::Mat& conf, const std::vector<int>& kbest,
+                                DepthEstimate& out) const {
+  const int K = opt.steps, N = coarse.width * coarse.height;
   // Prior: the median confident estimate (or the option), and the ends of the range.
   std::vector<float> good;
   long near_n = 0, far_n = 0;
@@ -521,41 +567,74 @@ DepthEstimate DepthSweep::estimate(const std::vector<cv::Mat>& frames_in, const 
   out.at_near = good.empty() ? 0 : double(near_n) / good.size();
   out.at_far = good.empty() ? 0 : double(far_n) / good.size();
   double s_prior;
-  if (o.prior_mm > 0) {
-    s_prior = 1 / o.prior_mm;
+  if (opt.prior_mm > 0) {
+    s_prior = 1 / opt.prior_mm;
   } else if (!good.empty()) {
     std::nth_element(good.begin(), good.begin() + good.size() / 2, good.end());
     s_prior = good[good.size() / 2];
   } else {
-    s_prior = 0.5 * (m.inv.front() + m.inv.back());
+    s_prior = 0.5 * (inv.front() + inv.back());
   }
   out.prior_mm = 1 / s_prior;
   // Fallback by normalised convolution towards the prior.
   cv::Mat cs = conf.mul(s_best), cs_blur, c_blur;
-  cv::GaussianBlur(cs, cs_blur, cv::Size(), o.fill_sigma, o.fill_sigma, cv::BORDER_REPLICATE);
-  cv::GaussianBlur(conf, c_blur, cv::Size(), o.fill_sigma, o.fill_sigma, cv::BORDER_REPLICATE);
-  cv::Mat fill = (cs_blur + o.fill_lambda * s_prior) / (c_blur + o.fill_lambda);
-  cv::Mat s_final = conf.mul(s_best) + (1 - conf).mul(fill);
-  out.coarse_inverse = s_final;
+  cv::GaussianBlur(cs, cs_blur, cv::Size(), opt.fill_sigma, opt.fill_sigma, cv::BORDER_REPLICATE);
+  cv::GaussianBlur(conf, c_blur, cv::Size(), opt.fill_sigma, opt.fill_sigma, cv::BORDER_REPLICATE);
+  cv::Mat fill = (cs_blur + opt.fill_lambda * s_prior) / (c_blur + opt.fill_lambda);
+  out.coarse_inverse = conf.mul(s_best) + (1 - conf).mul(fill);
   out.coarse_confidence = conf;
-  if (upsample) {
-    cv::Mat s_up, c_up;
-    cv::resize(s_final, s_up, cv::Size(m.grid.width, m.grid.height), 0, 0, cv::INTER_LINEAR);
-    cv::resize(conf, c_up, cv::Size(m.grid.width, m.grid.height), 0, 0, cv::INTER_LINEAR);
-    out.depth.create(s_up.size(), CV_32FC1);
-    const float s_min = float(m.inv.back());
-    for (int r = 0; r < s_up.rows; ++r)
-      for (int c = 0; c < s_up.cols; ++c) {
-        const float s = std::max(s_min, s_up.at<float>(r, c));
-        out.depth.at<float>(r, c) = s > 0 ? 1 / s : std::numeric_limits<float>::infinity();
-      }
-    out.confidence = c_up;
-  }
+}
+
+void DepthSweep::Impl::upsample_to_output(DepthEstimate& out) const {
+  cv::Mat s_up, c_up;
+  cv::resize(out.coarse_inverse, s_up, cv::Size(grid.width, grid.height), 0, 0, cv::INTER_LINEAR);
+  cv::resize(out.coarse_confidence, c_up, cv::Size(grid.width, grid.height), 0, 0, cv::INTER_LINEAR);
+  out.depth.create(s_up.size(), CV_32FC1);
+  const float s_min = float(inv.back());
+  for (int r = 0; r < s_up.rows; ++r)
+    for (int c = 0; c < s_up.cols; ++c) {
+      const float s = std::max(s_min, s_up.at<float>(r, c));
+      out.depth.at<float>(r, c) = s > 0 ? 1 / s : std::numeric_limits<float>::infinity();
+    }
+  out.confidence = c_up;
+}
+
+DepthEstimate DepthSweep::estimate(const std::vector<cv::Mat>& frames_in, const cv::Mat& previous,
+                                   bool upsample) const {
+  const Impl& m = *impl_;
+  check_frames(m.rig, frames_in);
+  const PlaneSweepOptions& o = m.opt;
+  const int W = m.coarse.width, H = m.coarse.height;
+  if (!previous.empty() && (previous.type() != CV_32FC1 || previous.cols != W || previous.rows != H))
+    throw std::invalid_argument("depth sweep: the previous estimate is not on this sweep's coarse grid");
+  // Gray levels, blurred to the coarse pitch (the guide of the edge-aware penalty), and their band-pass
+  // (minus a blur band_ratio times wider: the signal that is matched).
+  std::vector<cv::Mat> gray, band;
+  m.gray_levels(frames_in, gray, band);
+  // Cost volume, candidate-major while it is filled: num = sum w (1 - zncc), den = sum w.
+  std::vector<float> num, den;
+  cv::Mat guide;
+  m.pair_costs(gray, band, num, den, guide);
+  // Final cost C(u, k), pixel-major; evidence per pixel.
+  std::vector<float> evidence;
+  std::vector<float> C = m.final_costs(num, den, previous, evidence);
+  num = {};
+  den = {};
+  // Semi-global aggregation.
+  const std::vector<float> S = detail::aggregate_sgm(C, W, H, o.steps, guide, o.p1, o.p2, o.edge_gray, o.paths);
+  C = {};
+  // Winner, sub-candidate refinement, confidence; the fallback towards the prior.
+  cv::Mat s_best, conf;
+  std::vector<int> kbest;
+  m.winners(S, evidence, s_best, conf, kbest);
+  DepthEstimate out;
+  m.fallback(s_best, conf, kbest, out);
+  if (upsample) m.upsample_to_output(out);
   return out;
 }
 
 DepthEstimate estimate_depth(const Rig& rig, const std::vector<cv::Mat>& frames, const PanoGrid& grid,
-                             const SweepOptions& opt) {
+                             const PlaneSweepOptions& opt) {
   return DepthSweep(rig, grid, opt).estimate(frames);
 }
 

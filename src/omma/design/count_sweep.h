@@ -9,7 +9,7 @@
 
 namespace omma::design {
 
-struct SweepParams {
+struct CountSweepOptions {
   double r_phys_mm = 5.0;
   std::vector<double> r_virtual_mm = {8, 10, 12, 25, 30, 40};  // Fig. 3.3 / 3.9 panels
   double aov_min_deg = 40, aov_max_deg = 120, aov_step_deg = 4;
@@ -18,6 +18,9 @@ struct SweepParams {
   double ratio_min = 1.6, ratio_max = 10.0, ratio_step = 0.2;  // R_vir / R_phy: 8/5 .. 50/5
   std::vector<Method> ratio_methods = {Method::kLayered, Method::kMinCameras};
   double check_step_deg = 0.5;
+
+  // False (with the reason in *why) when a value lies outside the range the code relies on.
+  bool IsValid(std::string* why = nullptr) const;
 };
 
 struct SweepRow {
@@ -28,12 +31,12 @@ struct SweepRow {
 };
 
 // Runs every design (in parallel, oneTBB), with a progress bar on stderr.
-std::vector<SweepRow> run_sweep(const SweepParams& p);
+std::vector<SweepRow> run_sweep(const CountSweepOptions& p);
 
 std::string sweep_csv(const std::vector<SweepRow>& rows);
 // Fig. 3.3/3.9: one panel per R_vir, cameras vs AOV, one line per method.
-std::string sweep_aov_svg(const std::vector<SweepRow>& rows, const SweepParams& p);
+std::string sweep_aov_svg(const std::vector<SweepRow>& rows, const CountSweepOptions& p);
 // Fig. 3.7: cameras vs R_vir / R_phy at the fixed AOV.
-std::string sweep_ratio_svg(const std::vector<SweepRow>& rows, const SweepParams& p);
+std::string sweep_ratio_svg(const std::vector<SweepRow>& rows, const CountSweepOptions& p);
 
 }  // namespace omma::design

@@ -75,9 +75,9 @@
 
 namespace omma::pano {
 
-inline constexpr int kMaxSteps = 256;  // candidates per sweep at most (SweepOptions::steps)
+inline constexpr int kMaxSteps = 256;  // candidates per sweep at most (PlaneSweepOptions::steps)
 
-struct SweepOptions {
+struct PlaneSweepOptions {
   double near_mm = 8;      // nearest candidate distance from q, mm (must lie outside the dome)
   // Farthest candidate, mm; +infinity (the default) makes the last candidate the scene at infinity.
   // A 5 mm dome still sees 2 pixels of parallax at 300 mm: far-field scenes need infinity.
@@ -124,7 +124,7 @@ class DepthSweep {
  public:
   // Throws std::invalid_argument if the options are invalid (IsValid) or near_mm does not lie
   // outside every camera centre.
-  DepthSweep(const Rig& rig, const PanoGrid& grid, const SweepOptions& opt);
+  DepthSweep(const Rig& rig, const PanoGrid& grid, const PlaneSweepOptions& opt);
   ~DepthSweep();
   DepthSweep(DepthSweep&&) noexcept;
   DepthSweep& operator=(DepthSweep&&) noexcept;
@@ -137,7 +137,7 @@ class DepthSweep {
 
   const PanoGrid& coarse_grid() const;
   const PanoGrid& grid() const;
-  const SweepOptions& options() const;
+  const PlaneSweepOptions& options() const;
   // Candidate k's inverse depth (1/mm).
   double inverse_depth(int k) const;
 
@@ -146,8 +146,17 @@ class DepthSweep {
   std::unique_ptr<Impl> impl_;
 };
 
+namespace detail {
+// The semi-global aggregation of DepthSweep::estimate ("Aggregation" above): C is the cost volume,
+// pixel-major (C[(y W + x) K + k], W x H coarse pixels, K candidates), guide the CV_32FC1 W x H gray
+// levels G of the edge-aware P2; returns S(u, k) = sum over `paths` (4 or 8) directions of L_r(u, k),
+// in the same layout. Throws std::invalid_argument on mismatched sizes.
+std::vector<float> aggregate_sgm(const std::vector<float>& C, int W, int H, int K, const cv::Mat& guide, double p1,
+                                 double p2, double edge_gray, int paths);
+}  // namespace detail
+
 // One-shot: DepthSweep(rig, grid, opt).estimate(frames).
 DepthEstimate estimate_depth(const Rig& rig, const std::vector<cv::Mat>& frames, const PanoGrid& grid,
-                             const SweepOptions& opt = {});
+                             const PlaneSweepOptions& opt = {});
 
 }  // namespace omma::pano
