@@ -1,5 +1,7 @@
 // omma bench: the engine's renderer against OpenCV peers and the memory bandwidth bound
 // (thesis §5.4).
+#include "omma/bench/bench.h"
+
 #include <algorithm>
 #include <iostream>
 #include <thread>
@@ -8,7 +10,6 @@
 
 #include "apps/command.h"
 #include "omma/core/rig.h"
-#include "omma/bench/bench.h"
 #include "omma/design/prototype.h"
 
 namespace omma::app {
@@ -27,7 +28,8 @@ void add_bench_command(CLI::App& root) {
     std::vector<std::string> only;
   };
   static Opts o;
-  cmd->add_option("--rig", o.rig, "Rig file (JSON); default: the thesis prototype, 24 cameras 250x250, 64 deg");
+  cmd->add_option("--rig", o.rig,
+                  "Rig file (JSON); default: the thesis prototype, 24 cameras 250x250, 64 deg");
   cmd->add_option("--save-rig", o.save_rig, "Also write the rig used to this file (JSON)");
   cmd->add_option("--seconds", o.seconds, "Minimum measuring time per workload in all, seconds (default 2)")
       ->check(CLI::Range(0.01, 60.0));
@@ -37,13 +39,15 @@ void add_bench_command(CLI::App& root) {
       ->check(CLI::Range(1, 100));
   cmd->add_option("--only", o.only, "Run only workloads whose name contains one of these strings");
   cmd->add_flag("--quick", o.quick, "Small panoramas (216x216, 384x102) for smoke tests");
-  cmd->add_flag("--depth", o.depth,
-                "Also the depth-adaptive mrf renderer (`omma run --depth`): depth estimated every frame on a\n"
-                "coarse grid, taps moved; reported beside the static mrf map of the same run (target >= 25 fps\n"
-                "at 1080x1080)");
-  cmd->add_flag("--json", o.json,
-                "Print {\"results\": [{\"name\", \"fps\", ...}], \"ratios\": [{\"name\", \"vs_opencv_remap\", "
-                "\"vs_opencv_multiband\", \"memcpy_bound_over_ours\", targets met}]} on stdout");
+  cmd->add_flag(
+      "--depth", o.depth,
+      "Also the depth-adaptive mrf renderer (`omma run --depth`): depth estimated every frame on a\n"
+      "coarse grid, taps moved; reported beside the static mrf map of the same run (target >= 25 fps\n"
+      "at 1080x1080)");
+  cmd->add_flag(
+      "--json", o.json,
+      "Print {\"results\": [{\"name\", \"fps\", ...}], \"ratios\": [{\"name\", \"vs_opencv_remap\", "
+      "\"vs_opencv_multiband\", \"memcpy_bound_over_ours\", targets met}]} on stdout");
   cmd->callback([] {
     set_json_mode(o.json);
     const Rig rig = o.rig.empty() ? design::thesis_prototype_rig() : design::load_rig_or_builtin(o.rig);
@@ -67,8 +71,12 @@ void add_bench_command(CLI::App& root) {
     nlohmann::json ratios_json = nlohmann::json::array();
     for (const auto& r : ratios) ratios_json.push_back(r.to_json());
     if (o.json) {
-      print_json({{"results", results}, {"ratios", ratios_json}, {"skipped", skipped}, {"rig", rig.name},
-                  {"cameras", rig.cameras.size()}, {"hardware_threads", std::thread::hardware_concurrency()}});
+      print_json({{"results", results},
+                  {"ratios", ratios_json},
+                  {"skipped", skipped},
+                  {"rig", rig.name},
+                  {"cameras", rig.cameras.size()},
+                  {"hardware_threads", std::thread::hardware_concurrency()}});
       return;
     }
     std::cout << fmt::format("{:<36} {:>12}\n", "workload", "fps");
@@ -84,14 +92,16 @@ void add_bench_command(CLI::App& root) {
         return fmt::format("{:.1f}-{:.1f}", *lo, *hi);
       };
       for (const auto& r : ratios)
-        std::cout << fmt::format("{:<36} {:>12} {:>14} {:>14}   per round: A {}, B {}\n", r.name, num(r.vs_remap),
-                                 num(r.vs_multiband), num(r.bound_over), range(r.vs_remap_rounds),
-                                 range(r.vs_multiband_rounds));
+        std::cout << fmt::format("{:<36} {:>12} {:>14} {:>14}   per round: A {}, B {}\n", r.name,
+                                 num(r.vs_remap), num(r.vs_multiband), num(r.bound_over),
+                                 range(r.vs_remap_rounds), range(r.vs_multiband_rounds));
       std::cout << "targets (mrf 1080x1080): >= 400 fps, >= 10x A, >= 100x B, bound / ours <= 2\n";
       for (const auto& r : ratios)
         if (r.vs_static > 0)
-          std::cout << fmt::format("{}: {:.1f} fps = {:.3f} x the static map (target: >= 25 fps at "
-                                   "1080x1080, depth every frame)\n", r.name, r.fps, r.vs_static);
+          std::cout << fmt::format(
+              "{}: {:.1f} fps = {:.3f} x the static map (target: >= 25 fps at "
+              "1080x1080, depth every frame)\n",
+              r.name, r.fps, r.vs_static);
     }
   });
 }

@@ -1,17 +1,19 @@
 // omma calibrate: calibrate a rig from one set of camera frames (thesis §3.6): SIFT features,
 // matching between cameras whose nominal views overlap, RANSAC, Ceres bundle adjustment.
+#include "omma/calib/calibrate.h"
+
 #include <chrono>
 #include <filesystem>
 #include <iostream>
+
 #include <fmt/format.h>
 
 #include "apps/command.h"
-#include "omma/design/prototype.h"
-#include "omma/calib/calibrate.h"
 #include "omma/calib/photometric.h"
 #include "omma/core/frames.h"
 #include "omma/core/log.h"
 #include "omma/core/rig.h"
+#include "omma/design/prototype.h"
 
 namespace omma::app {
 
@@ -23,7 +25,7 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 struct CalibrateArgs {
   std::vector<std::string> frames;
   std::string rig, out, flat, scene = "auto", focal = "per-camera", center = "per-camera",
-                                distortion = "per-camera", loss = "auto";
+                              distortion = "per-camera", loss = "auto";
   int radial_terms = 1, max_iterations = 50, min_matches = 30, upsample = 2, threads = 2,
       dense_rounds = calib::CalibrationOptions{}.dense_rounds;
   double loss_scale = 1.0, ransac_px = 5, prior_deg = 5, prior_mean_focal = 0.002, tube = 0;
@@ -33,10 +35,15 @@ struct CalibrateArgs {
 
 // "per-camera" | "shared" | "fixed" -> (estimate, share)
 void parse_mode(const std::string& what, const std::string& mode, bool* estimate, bool* share) {
-  if (mode == "per-camera") *estimate = true, *share = false;
-  else if (mode == "shared") *estimate = true, *share = true;
-  else if (mode == "fixed") *estimate = false, *share = false;
-  else throw std::invalid_argument(fmt::format("--{} must be per-camera, shared or fixed (got '{}')", what, mode));
+  if (mode == "per-camera")
+    *estimate = true, *share = false;
+  else if (mode == "shared")
+    *estimate = true, *share = true;
+  else if (mode == "fixed")
+    *estimate = false, *share = false;
+  else
+    throw std::invalid_argument(
+        fmt::format("--{} must be per-camera, shared or fixed (got '{}')", what, mode));
 }
 }  // namespace
 
@@ -45,40 +52,53 @@ void add_calibrate_command(CLI::App& root) {
   auto* cmd = root.add_subcommand(
       "calibrate",
       "Calibrate a rig from camera frames (thesis §3.6): SIFT features in every camera, matching between\n"
-      "cameras whose nominal cones of view intersect, RANSAC (rotation-only model for a far scene, essential\n"
+      "cameras whose nominal cones of view intersect, RANSAC (rotation-only model for a far scene, "
+      "essential\n"
       "matrix with parallax), then a Ceres bundle adjustment of each camera's rotation, fu, fv, cu, cv and\n"
-      "radial distortion with a robust loss. Cameras with too few matches keep their nominal values (warning).\n"
-      "Several shots of a static scene (--frames repeated, or a shots folder) are averaged. --photometric adds\n"
-      "each camera's vignetting and colour gains (from the overlaps, or --flat DIR), applied from then on by\n"
+      "radial distortion with a robust loss. Cameras with too few matches keep their nominal values "
+      "(warning).\n"
+      "Several shots of a static scene (--frames repeated, or a shots folder) are averaged. --photometric "
+      "adds\n"
+      "each camera's vignetting and colour gains (from the overlaps, or --flat DIR), applied from then on "
+      "by\n"
       "stitch, run and the engine.");
   cmd->add_option("--rig", a.rig, "Nominal rig (JSON)")->required();
-  cmd->add_option("--frames", a.frames,
-                  "Frames folder (DIR/cam_XX.png per camera, omma/core/frames.h) or shots folder (DIR/shot_XX/, "
-                  "`omma simulate --shots`); repeat for several shots of a static scene: the geometric calibration "
-                  "averages them in linear light (noise / sqrt(shots)), the photometric one pools their overlaps")
+  cmd->add_option(
+         "--frames", a.frames,
+         "Frames folder (DIR/cam_XX.png per camera, omma/core/frames.h) or shots folder (DIR/shot_XX/, "
+         "`omma simulate --shots`); repeat for several shots of a static scene: the geometric calibration "
+         "averages them in linear light (noise / sqrt(shots)), the photometric one pools their overlaps")
       ->required();
   cmd->add_option("--out", a.out, "Calibrated rig to write (JSON, atomic)")->required();
-  cmd->add_option("--scene", a.scene, "Scene model: far (rotation only), near (parallax: scene points, camera "
-                                      "positions fixed at nominal) or auto (default: from the RANSAC consensus)");
+  cmd->add_option("--scene", a.scene,
+                  "Scene model: far (rotation only), near (parallax: scene points, camera "
+                  "positions fixed at nominal) or auto (default: from the RANSAC consensus)");
   cmd->add_option("--focal", a.focal, "fu, fv: per-camera (default), shared or fixed");
   cmd->add_option("--center", a.center, "cu, cv: per-camera (default), shared or fixed");
   cmd->add_option("--distortion", a.distortion, "radial k: per-camera (default), shared or fixed");
-  cmd->add_option("--radial-terms", a.radial_terms, "How many radial coefficients to estimate: 1 = k1 (default), "
-                                                    "2 = k1, k2, 3 = k1, k2, k5");
-  cmd->add_option("--loss", a.loss, "Robust loss: auto (default: huber in the far field, cauchy in the near field), huber, cauchy or none");
+  cmd->add_option("--radial-terms", a.radial_terms,
+                  "How many radial coefficients to estimate: 1 = k1 (default), "
+                  "2 = k1, k2, 3 = k1, k2, k5");
+  cmd->add_option(
+      "--loss", a.loss,
+      "Robust loss: auto (default: huber in the far field, cauchy in the near field), huber, cauchy or none");
   cmd->add_option("--loss-scale", a.loss_scale, "Robust loss scale, pixels (default 1)");
   cmd->add_option("--ransac-px", a.ransac_px, "RANSAC inlier threshold, pixels (default 5)");
   cmd->add_option("--prior-deg", a.prior_deg, "Gauge prior on the rotation corrections, degrees (default 5)");
-  cmd->add_option("--prior-mean-focal", a.prior_mean_focal,
-                  "Near field only: sigma (relative) of the prior holding the cameras' MEAN focal length at the "
-                  "nominal one, against the focal/depth ambiguity of small-baseline parallax (default 0.002; 0 = off)");
-  cmd->add_option("--tube", a.tube,
-                  "The frames show the calibration tube of this diameter (mm; the thesis's is 35) around the dome: "
-                  "near field, and scene points on its wall are constrained to it (its axis offset is estimated; "
-                  "its axis defines the rig's z axis, as the thesis's fixture does); default 0 = a scene of unknown shape");
-  cmd->add_flag("--tube-tilt", a.tube_tilt,
-                "Estimate the tube's tilt too (a mount that is not trusted): the rig's tilt is then held only by the "
-                "5 mm parallax of the camera positions; compare with rig-diff --align");
+  cmd->add_option(
+      "--prior-mean-focal", a.prior_mean_focal,
+      "Near field only: sigma (relative) of the prior holding the cameras' MEAN focal length at the "
+      "nominal one, against the focal/depth ambiguity of small-baseline parallax (default 0.002; 0 = off)");
+  cmd->add_option(
+      "--tube", a.tube,
+      "The frames show the calibration tube of this diameter (mm; the thesis's is 35) around the dome: "
+      "near field, and scene points on its wall are constrained to it (its axis offset is estimated; "
+      "its axis defines the rig's z axis, as the thesis's fixture does); default 0 = a scene of unknown "
+      "shape");
+  cmd->add_flag(
+      "--tube-tilt", a.tube_tilt,
+      "Estimate the tube's tilt too (a mount that is not trusted): the rig's tilt is then held only by the "
+      "5 mm parallax of the camera positions; compare with rig-diff --align");
   cmd->add_option("--max-iterations", a.max_iterations, "Ceres iterations per solve (default 50)");
   cmd->add_option("--dense-rounds", a.dense_rounds,
                   "Near field: rounds of dense patch alignment and re-solve after the first solve")
@@ -88,17 +108,21 @@ void add_calibrate_command(CLI::App& root) {
                   "Ceres threads (default 2); 1 = reproducible to the last digit (near-field results move by "
                   "~0.2 deg with the summation order of a multi-threaded solve)")
       ->check(CLI::Range(1, 256));
-  cmd->add_option("--min-matches", a.min_matches, "Matched observations a camera needs to be calibrated "
-                                                  "(default 30)");
+  cmd->add_option("--min-matches", a.min_matches,
+                  "Matched observations a camera needs to be calibrated "
+                  "(default 30)");
   cmd->add_option("--upsample", a.upsample, "Run SIFT on frames upsampled this much (default 2; 1 = off)");
-  cmd->add_flag("--photometric", a.photometric,
-                "Also calibrate each camera's vignetting and colour gains (calib/photometric.h) from the overlaps "
-                "of the frames (after the geometric calibration, on its rig), and store them in the rig file");
-  cmd->add_option("--flat", a.flat,
-                  "Calibrate vignetting and gains from this flat-field frames (or shots) folder instead: a uniformly "
-                  "lit white target (implies --photometric)");
-  cmd->add_flag("--no-geometric", a.no_geometric,
-                "Keep the rig's geometry as given (already calibrated); only the photometric calibration runs");
+  cmd->add_flag(
+      "--photometric", a.photometric,
+      "Also calibrate each camera's vignetting and colour gains (calib/photometric.h) from the overlaps "
+      "of the frames (after the geometric calibration, on its rig), and store them in the rig file");
+  cmd->add_option(
+      "--flat", a.flat,
+      "Calibrate vignetting and gains from this flat-field frames (or shots) folder instead: a uniformly "
+      "lit white target (implies --photometric)");
+  cmd->add_flag(
+      "--no-geometric", a.no_geometric,
+      "Keep the rig's geometry as given (already calibrated); only the photometric calibration runs");
   cmd->add_flag("--json", a.json, "Print one JSON object on stdout");
   cmd->callback([] {
     set_json_mode(a.json);
@@ -155,8 +179,8 @@ void add_calibrate_command(CLI::App& root) {
       calib::PhotometricOptions po;
       po.threads = a.threads;
       const auto t1 = std::chrono::steady_clock::now();
-      const calib::PhotometricSummary ps =
-          a.flat.empty() ? calib::calibrate_photometric(out, sets, po) : calib::calibrate_flat_field(out, flats, po);
+      const calib::PhotometricSummary ps = a.flat.empty() ? calib::calibrate_photometric(out, sets, po)
+                                                          : calib::calibrate_flat_field(out, flats, po);
       out = ps.rig;
       warnings.insert(warnings.end(), ps.warnings.begin(), ps.warnings.end());
       pj = {{"source", a.flat.empty() ? "overlaps" : "flat-field"},
@@ -173,22 +197,36 @@ void add_calibrate_command(CLI::App& root) {
     if (a.json) {
       nlohmann::json per = nlohmann::json::array();
       for (const auto& c : r.per_camera)
-        per.push_back({{"id", c.id}, {"rms_px", c.rms_px}, {"matches", c.matches}, {"calibrated", c.calibrated}});
-      print_json({{"cameras", out.cameras.size()}, {"shots", sets.size()}, {"geometric", !a.no_geometric},
-                  {"matches", r.matches}, {"inliers", r.inliers},
-                  {"rms_px", r.rms_px}, {"initial_rms_px", r.initial_rms_px}, {"scene", calib::to_string(r.scene)},
-                  {"pairs", r.pairs}, {"tracks", r.tracks}, {"observations", r.observations},
-                  {"rejected", r.rejected}, {"uncalibrated", r.uncalibrated_ids}, {"warnings", warnings},
-                  {"per_camera", per}, {"geometric_seconds", geometric_s}, {"photometric", pj}, {"out", a.out}});
+        per.push_back(
+            {{"id", c.id}, {"rms_px", c.rms_px}, {"matches", c.matches}, {"calibrated", c.calibrated}});
+      print_json({{"cameras", out.cameras.size()},
+                  {"shots", sets.size()},
+                  {"geometric", !a.no_geometric},
+                  {"matches", r.matches},
+                  {"inliers", r.inliers},
+                  {"rms_px", r.rms_px},
+                  {"initial_rms_px", r.initial_rms_px},
+                  {"scene", calib::to_string(r.scene)},
+                  {"pairs", r.pairs},
+                  {"tracks", r.tracks},
+                  {"observations", r.observations},
+                  {"rejected", r.rejected},
+                  {"uncalibrated", r.uncalibrated_ids},
+                  {"warnings", warnings},
+                  {"per_camera", per},
+                  {"geometric_seconds", geometric_s},
+                  {"photometric", pj},
+                  {"out", a.out}});
     } else {
       if (!a.no_geometric)
-        std::cout << fmt::format("{}: {} cameras ({} uncalibrated) from {} shot(s), {} matches, {} inliers, {} scene, "
-                                 "reprojection RMS {:.3f} px (nominal rig {:.3f} px)\n",
-                                 a.out, out.cameras.size(), r.uncalibrated_ids.size(), sets.size(), r.matches,
-                                 r.inliers, calib::to_string(r.scene), r.rms_px, r.initial_rms_px);
+        std::cout << fmt::format(
+            "{}: {} cameras ({} uncalibrated) from {} shot(s), {} matches, {} inliers, {} scene, "
+            "reprojection RMS {:.3f} px (nominal rig {:.3f} px)\n",
+            a.out, out.cameras.size(), r.uncalibrated_ids.size(), sets.size(), r.matches, r.inliers,
+            calib::to_string(r.scene), r.rms_px, r.initial_rms_px);
       if (!pj.is_null())
-        std::cout << fmt::format("{}: photometric model from {} ({} samples), RMS {:.4f} -> {:.4f} (log)\n", a.out,
-                                 pj["source"].get<std::string>(), pj["samples"].get<int>(),
+        std::cout << fmt::format("{}: photometric model from {} ({} samples), RMS {:.4f} -> {:.4f} (log)\n",
+                                 a.out, pj["source"].get<std::string>(), pj["samples"].get<int>(),
                                  pj["initial_rms_log"].get<double>(), pj["rms_log"].get<double>());
     }
   });

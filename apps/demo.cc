@@ -6,27 +6,28 @@
 #include <chrono>
 #include <filesystem>
 #include <iostream>
+
 #include <fmt/format.h>
 #include <opencv2/imgproc.hpp>
 
 #include "apps/command.h"
 #include "apps/demo_depth.h"
-#include "omma/calib/photometric.h"
 #include "apps/giga_demo.h"
+#include "omma/bench/bench.h"
+#include "omma/calib/photometric.h"
 #include "omma/core/frames.h"
 #include "omma/core/io.h"
-#include "omma/io/metadata.h"
 #include "omma/core/log.h"
 #include "omma/core/progress.h"
 #include "omma/design/coverage.h"
 #include "omma/design/prototype.h"
-#include "omma/bench/bench.h"
-#include "omma/render/compiled_map.h"
-#include "omma/render/render.h"
+#include "omma/io/metadata.h"
 #include "omma/isp/photometric.h"
 #include "omma/pano/maps.h"
 #include "omma/pano/quality.h"
 #include "omma/pano/stitch.h"
+#include "omma/render/compiled_map.h"
+#include "omma/render/render.h"
 #include "omma/sim/simulate.h"
 
 namespace omma::app {
@@ -71,7 +72,7 @@ cv::Mat frame_mosaic(const Rig& rig, const std::vector<cv::Mat>& frames) {
 // agreement with the reference stitch and its speed.
 struct EngineRow {
   double compile_s = 0;
-  double fps = 0;            // all threads (bench::measure_fps)
+  double fps = 0;  // all threads (bench::measure_fps)
   double psnr_vs_reference = 0;
   double bytes_per_pixel = 0;
 };
@@ -109,7 +110,7 @@ struct PhotometricDemo {
   calib::PhotometricSummary summary;
   double seconds = 0;
   double gain_error_max = 0, falloff_error_max = 0;  // against the simulator's truth (per-channel gauge)
-  std::vector<MethodRow> after;                       // the same methods on the corrected frames
+  std::vector<MethodRow> after;                      // the same methods on the corrected frames
 };
 
 PhotometricDemo photometric_demo(const fs::path& dir, const Rig& rig, const std::vector<cv::Mat>& frames,
@@ -131,13 +132,15 @@ PhotometricDemo photometric_demo(const fs::path& dir, const Rig& rig, const std:
     const RigCamera& c = simr.true_rig.cameras[i];
     const Photometric& p = *d.summary.rig.cameras[i].photometric;
     for (int k = 0; k < 3; ++k)
-      d.gain_error_max = std::max(d.gain_error_max, std::abs(std::exp(std::log(p.gains[k]) - le[k] -
-                                                                      std::log(simr.frames[i].gains[k]) + lt[k]) - 1));
+      d.gain_error_max = std::max(
+          d.gain_error_max,
+          std::abs(std::exp(std::log(p.gains[k]) - le[k] - std::log(simr.frames[i].gains[k]) + lt[k]) - 1));
     for (int r = 0; r < c.in.height; r += 3)
       for (int col = 0; col < c.in.width; col += 3)
-        d.falloff_error_max =
-            std::max(d.falloff_error_max, std::abs(vignetting_falloff(p, c.in.width, c.in.height, col + 0.5, r + 0.5) /
-                                                       sim::true_falloff(c, effects, Vec2(col + 0.5, r + 0.5)) - 1));
+        d.falloff_error_max = std::max(
+            d.falloff_error_max, std::abs(vignetting_falloff(p, c.in.width, c.in.height, col + 0.5, r + 0.5) /
+                                              sim::true_falloff(c, effects, Vec2(col + 0.5, r + 0.5)) -
+                                          1));
   }
   save_rig(d.summary.rig, dir / "rig_photometric.json");
   const std::vector<cv::Mat> corrected = isp::correct_frames(d.summary.rig, frames);
@@ -160,42 +163,49 @@ PhotometricDemo photometric_demo(const fs::path& dir, const Rig& rig, const std:
 std::string photometric_markdown(const PhotometricDemo& d, const std::vector<MethodRow>& before) {
   std::string md = fmt::format(
       "## Photometric calibration (vignetting and colour gains)\n\n"
-      "Estimated from the overlaps of these frames alone ({} samples over {} camera pairs, {:.1f} s; RMS of the "
-      "log ratio {:.3f} -> {:.3f}), stored in `rig_photometric.json`. Against the simulator's truth: gains within "
+      "Estimated from the overlaps of these frames alone ({} samples over {} camera pairs, {:.1f} s; RMS of "
+      "the "
+      "log ratio {:.3f} -> {:.3f}), stored in `rig_photometric.json`. Against the simulator's truth: gains "
+      "within "
       "{:.2f} % (one scale per channel), falloff within {:.2f} % over every pixel. The same methods on the "
       "corrected frames:\n\n| method | PSNR before (dB) | PSNR after (dB) | SSIM before | SSIM after |\n"
       "|---|---|---|---|---|\n",
       d.summary.samples, d.summary.pairs, d.seconds, d.summary.initial_rms_log, d.summary.rms_log,
       100 * d.gain_error_max, 100 * d.falloff_error_max);
   for (size_t i = 0; i < before.size() && i < d.after.size(); ++i)
-    md += fmt::format("| {} | {:.2f} | {:.2f} | {:.4f} | {:.4f} |\n", before[i].method, before[i].eval.psnr_db,
-                      d.after[i].eval.psnr_db, before[i].eval.ssim, d.after[i].eval.ssim);
+    md +=
+        fmt::format("| {} | {:.2f} | {:.2f} | {:.4f} | {:.4f} |\n", before[i].method, before[i].eval.psnr_db,
+                    d.after[i].eval.psnr_db, before[i].eval.ssim, d.after[i].eval.ssim);
   md += "\nBefore: ![mrf before](pano_mrf.png) After: ![mrf after](pano_mrf_photometric.png)\n";
   return md;
 }
 
 std::string photometric_html(const PhotometricDemo& d, const std::vector<MethodRow>& before) {
   std::string html = fmt::format(
-      "<h2>Photometric calibration</h2><p>Vignetting and colour gains estimated from the overlaps of these frames "
-      "({} samples, {} pairs, {:.1f} s), within {:.2f} % (gains) and {:.2f} % (falloff) of the simulator's truth."
+      "<h2>Photometric calibration</h2><p>Vignetting and colour gains estimated from the overlaps of these "
+      "frames "
+      "({} samples, {} pairs, {:.1f} s), within {:.2f} % (gains) and {:.2f} % (falloff) of the simulator's "
+      "truth."
       "</p><table><tr><th>method</th><th>PSNR before</th><th>PSNR after</th><th>SSIM before</th>"
       "<th>SSIM after</th></tr>",
       d.summary.samples, d.summary.pairs, d.seconds, 100 * d.gain_error_max, 100 * d.falloff_error_max);
   for (size_t i = 0; i < before.size() && i < d.after.size(); ++i)
     html += fmt::format("<tr><td>{}</td><td>{:.2f}</td><td>{:.2f}</td><td>{:.4f}</td><td>{:.4f}</td></tr>",
-                        before[i].method, before[i].eval.psnr_db, d.after[i].eval.psnr_db, before[i].eval.ssim,
-                        d.after[i].eval.ssim);
-  html += "</table><div class=\"row\"><div><h3>mrf before</h3><img src=\"pano_mrf.png\"></div><div><h3>mrf after"
-          "</h3><img src=\"pano_mrf_photometric.png\"></div></div>";
+                        before[i].method, before[i].eval.psnr_db, d.after[i].eval.psnr_db,
+                        before[i].eval.ssim, d.after[i].eval.ssim);
+  html +=
+      "</table><div class=\"row\"><div><h3>mrf before</h3><img src=\"pano_mrf.png\"></div><div><h3>mrf after"
+      "</h3><img src=\"pano_mrf_photometric.png\"></div></div>";
   return html;
 }
 
-void write_report(const fs::path& dir, const DemoOptions& o, const Rig& rig, const std::vector<MethodRow>& rows,
-                  const EngineRow& eng, double inter_psnr, double r_vir, double total_s, const DepthDemo& depth,
-                  const PhotometricDemo& ph) {
+void write_report(const fs::path& dir, const DemoOptions& o, const Rig& rig,
+                  const std::vector<MethodRow>& rows, const EngineRow& eng, double inter_psnr, double r_vir,
+                  double total_s, const DepthDemo& depth, const PhotometricDemo& ph) {
   const std::string engine_text = fmt::format(
       "The real-time engine (`omma run`) renders the same mrf panorama from a compiled map ({:.1f} bytes per "
-      "output pixel, compiled in {:.2f} s) at {:.0f} panoramas/s on this machine ({:.0f}x the thesis FPGA's 25 fps); "
+      "output pixel, compiled in {:.2f} s) at {:.0f} panoramas/s on this machine ({:.0f}x the thesis FPGA's "
+      "25 fps); "
       "it matches the reference stitch to {:.1f} dB PSNR.",
       eng.bytes_per_pixel, eng.compile_s, eng.fps, eng.fps / 25, eng.psnr_vs_reference);
   std::string md = fmt::format(
@@ -216,10 +226,12 @@ void write_report(const fs::path& dir, const DemoOptions& o, const Rig& rig, con
   for (const auto& r : rows)
     md += fmt::format("| {} | {:.2f} | {:.4f} | {:.2f} | {:.0f} |\n", r.method, r.eval.psnr_db, r.eval.ssim,
                       r.eval.seam_psnr_db, r.ms);
-  md += "\nGround truth: the ideal panorama from the dome centre, rendered noise-free by the simulator "
-        "(truth.png). Seam PSNR: the directions seen by two or more cameras. Times: the plain reference "
-        "stitcher (pano::stitch).\n\n" + photometric_markdown(ph, rows) +
-        "\n## Real-time engine (thesis ch. 5)\n\n" + engine_text + "\n\n" + depth.markdown;
+  md +=
+      "\nGround truth: the ideal panorama from the dome centre, rendered noise-free by the simulator "
+      "(truth.png). Seam PSNR: the directions seen by two or more cameras. Times: the plain reference "
+      "stitcher (pano::stitch).\n\n" +
+      photometric_markdown(ph, rows) + "\n## Real-time engine (thesis ch. 5)\n\n" + engine_text + "\n\n" +
+      depth.markdown;
   write_text_atomically(dir / "report.md", md);
 
   std::string html =
@@ -228,26 +240,32 @@ void write_report(const fs::path& dir, const DemoOptions& o, const Rig& rig, con
       "img{max-width:100%;border:1px solid #ccc}table{border-collapse:collapse}"
       "td,th{border:1px solid #999;padding:4px 10px;text-align:right}th{background:#eee}"
       ".row{display:flex;gap:12px}.row>div{flex:1}</style></head><body>";
-  html += fmt::format("<h1>omma demo report</h1><p>Rig <code>{}</code>: {} cameras, {} mm dome, R_vir {:.1f} mm. "
-                      "Scene <code>{}</code>. Panorama {} {}. Total {:.1f} s.</p>",
-                      rig.name, rig.cameras.size(), rig.dome.radius_mm, r_vir, o.scene, o.projection, o.size,
-                      total_s);
+  html += fmt::format(
+      "<h1>omma demo report</h1><p>Rig <code>{}</code>: {} cameras, {} mm dome, R_vir {:.1f} mm. "
+      "Scene <code>{}</code>. Panorama {} {}. Total {:.1f} s.</p>",
+      rig.name, rig.cameras.size(), rig.dome.radius_mm, r_vir, o.scene, o.projection, o.size, total_s);
   html += "<h2>Camera frames</h2><img src=\"frames_mosaic.png\">";
-  html += "<div class=\"row\"><div><h2>Panorama (MRF)</h2><img src=\"pano_mrf.png\"></div>"
-          "<div><h2>Ground truth</h2><img src=\"truth.png\"></div></div>";
-  html += fmt::format("<div class=\"row\"><div><h2>Object boundaries (threshold {:.2f})</h2>"
-                      "<img src=\"boundary_overlay.png\"></div><div><h2>Boundary map</h2>"
-                      "<img src=\"boundary.png\"></div></div>", o.threshold);
-  html += "<div class=\"row\"><div><h2>Single-camera directions</h2><img src=\"single_camera.png\"></div>"
-          "<div><h2>Coverage count</h2><img src=\"coverage.png\"></div></div>";
-  html += fmt::format("<h2>Blending methods against the ground truth</h2><p>Inter-camera PSNR "
-                      "(eq. 4.19-4.21): <b>{:.2f} dB</b></p><table><tr><th>method</th><th>PSNR (dB)</th>"
-                      "<th>SSIM</th><th>seam PSNR (dB)</th><th>time (ms)</th><th>panorama</th></tr>",
-                      inter_psnr);
+  html +=
+      "<div class=\"row\"><div><h2>Panorama (MRF)</h2><img src=\"pano_mrf.png\"></div>"
+      "<div><h2>Ground truth</h2><img src=\"truth.png\"></div></div>";
+  html += fmt::format(
+      "<div class=\"row\"><div><h2>Object boundaries (threshold {:.2f})</h2>"
+      "<img src=\"boundary_overlay.png\"></div><div><h2>Boundary map</h2>"
+      "<img src=\"boundary.png\"></div></div>",
+      o.threshold);
+  html +=
+      "<div class=\"row\"><div><h2>Single-camera directions</h2><img src=\"single_camera.png\"></div>"
+      "<div><h2>Coverage count</h2><img src=\"coverage.png\"></div></div>";
+  html += fmt::format(
+      "<h2>Blending methods against the ground truth</h2><p>Inter-camera PSNR "
+      "(eq. 4.19-4.21): <b>{:.2f} dB</b></p><table><tr><th>method</th><th>PSNR (dB)</th>"
+      "<th>SSIM</th><th>seam PSNR (dB)</th><th>time (ms)</th><th>panorama</th></tr>",
+      inter_psnr);
   for (const auto& r : rows)
-    html += fmt::format("<tr><td>{0}</td><td>{1:.2f}</td><td>{2:.4f}</td><td>{3:.2f}</td><td>{4:.0f}</td>"
-                        "<td><a href=\"pano_{0}.png\">image</a></td></tr>",
-                        r.method, r.eval.psnr_db, r.eval.ssim, r.eval.seam_psnr_db, r.ms);
+    html += fmt::format(
+        "<tr><td>{0}</td><td>{1:.2f}</td><td>{2:.4f}</td><td>{3:.2f}</td><td>{4:.0f}</td>"
+        "<td><a href=\"pano_{0}.png\">image</a></td></tr>",
+        r.method, r.eval.psnr_db, r.eval.ssim, r.eval.seam_psnr_db, r.ms);
   html += "</table><p>Times: the plain reference stitcher (pano::stitch).</p>" + photometric_html(ph, rows) +
           "<h2>Real-time engine</h2><p>" + engine_text + "</p>" + depth.html + "</body></html>\n";
   write_text_atomically(dir / "report.html", html);
@@ -256,19 +274,28 @@ void write_report(const fs::path& dir, const DemoOptions& o, const Rig& rig, con
 nlohmann::json photometric_json(const PhotometricDemo& d, const std::vector<MethodRow>& before) {
   nlohmann::json m = nlohmann::json::object();
   for (size_t i = 0; i < before.size() && i < d.after.size(); ++i)
-    m[before[i].method] = {{"psnr_before_db", before[i].eval.psnr_db}, {"psnr_after_db", d.after[i].eval.psnr_db},
-                           {"ssim_before", before[i].eval.ssim}, {"ssim_after", d.after[i].eval.ssim}};
-  return {{"samples", d.summary.samples}, {"pairs", d.summary.pairs}, {"seconds", d.seconds},
-          {"rms_log", d.summary.rms_log}, {"initial_rms_log", d.summary.initial_rms_log},
-          {"gain_error_max", d.gain_error_max}, {"falloff_error_max", d.falloff_error_max}, {"methods", m}};
+    m[before[i].method] = {{"psnr_before_db", before[i].eval.psnr_db},
+                           {"psnr_after_db", d.after[i].eval.psnr_db},
+                           {"ssim_before", before[i].eval.ssim},
+                           {"ssim_after", d.after[i].eval.ssim}};
+  return {{"samples", d.summary.samples},
+          {"pairs", d.summary.pairs},
+          {"seconds", d.seconds},
+          {"rms_log", d.summary.rms_log},
+          {"initial_rms_log", d.summary.initial_rms_log},
+          {"gain_error_max", d.gain_error_max},
+          {"falloff_error_max", d.falloff_error_max},
+          {"methods", m}};
 }
 
 std::string photometric_text(const PhotometricDemo& d, const std::vector<MethodRow>& before) {
-  std::string t = fmt::format("photometric calibration from the overlaps ({:.1f} s): gains within {:.2f} %, falloff "
-                              "within {:.2f} % of the truth; PSNR before -> after:",
-                              d.seconds, 100 * d.gain_error_max, 100 * d.falloff_error_max);
+  std::string t = fmt::format(
+      "photometric calibration from the overlaps ({:.1f} s): gains within {:.2f} %, falloff "
+      "within {:.2f} % of the truth; PSNR before -> after:",
+      d.seconds, 100 * d.gain_error_max, 100 * d.falloff_error_max);
   for (size_t i = 0; i < before.size() && i < d.after.size(); ++i)
-    t += fmt::format(" {} {:.2f} -> {:.2f}", before[i].method, before[i].eval.psnr_db, d.after[i].eval.psnr_db);
+    t += fmt::format(" {} {:.2f} -> {:.2f}", before[i].method, before[i].eval.psnr_db,
+                     d.after[i].eval.psnr_db);
   return t + "\n";
 }
 
@@ -338,27 +365,41 @@ void run_demo(const DemoOptions& o) {
   if (o.json) {
     nlohmann::json methods = nlohmann::json::object();
     for (const auto& r : rows)
-      methods[r.method] = {{"psnr_db", r.eval.psnr_db}, {"ssim", r.eval.ssim},
-                           {"seam_psnr_db", r.eval.seam_psnr_db}, {"ms", r.ms}};
-    print_json({{"out", fs::absolute(dir).string()}, {"cameras", rig.cameras.size()}, {"scene", o.scene},
-                {"width", grid.width}, {"height", grid.height}, {"inter_camera_psnr_db", inter},
-                {"r_virtual_mm", r_vir}, {"methods", methods},
-                {"engine", {{"method", "mrf"}, {"fps", eng.fps}, {"compile_s", eng.compile_s},
-                            {"bytes_per_pixel", eng.bytes_per_pixel}, {"psnr_vs_reference_db", eng.psnr_vs_reference}}},
+      methods[r.method] = {{"psnr_db", r.eval.psnr_db},
+                           {"ssim", r.eval.ssim},
+                           {"seam_psnr_db", r.eval.seam_psnr_db},
+                           {"ms", r.ms}};
+    print_json({{"out", fs::absolute(dir).string()},
+                {"cameras", rig.cameras.size()},
+                {"scene", o.scene},
+                {"width", grid.width},
+                {"height", grid.height},
+                {"inter_camera_psnr_db", inter},
+                {"r_virtual_mm", r_vir},
+                {"methods", methods},
+                {"engine",
+                 {{"method", "mrf"},
+                  {"fps", eng.fps},
+                  {"compile_s", eng.compile_s},
+                  {"bytes_per_pixel", eng.bytes_per_pixel},
+                  {"psnr_vs_reference_db", eng.psnr_vs_reference}}},
                 {"depth", depth.json},
                 {"photometric", photometric_json(ph, rows)},
                 {"seconds", total_s}});
   } else {
-    std::cout << fmt::format("\n{:<14} {:>9} {:>7} {:>10} {:>8}\n", "method", "PSNR dB", "SSIM", "seam dB", "ms");
+    std::cout << fmt::format("\n{:<14} {:>9} {:>7} {:>10} {:>8}\n", "method", "PSNR dB", "SSIM", "seam dB",
+                             "ms");
     for (const auto& r : rows)
       std::cout << fmt::format("{:<14} {:>9.2f} {:>7.4f} {:>10.2f} {:>8.0f}\n", r.method, r.eval.psnr_db,
                                r.eval.ssim, r.eval.seam_psnr_db, r.ms);
-    std::cout << fmt::format("real-time engine, mrf: {:.0f} panoramas/s ({:.0f}x the FPGA's 25 fps), {:.1f} dB "
-                             "against the reference stitch, map compiled in {:.2f} s\n",
-                             eng.fps, eng.fps / 25, eng.psnr_vs_reference, eng.compile_s);
+    std::cout << fmt::format(
+        "real-time engine, mrf: {:.0f} panoramas/s ({:.0f}x the FPGA's 25 fps), {:.1f} dB "
+        "against the reference stitch, map compiled in {:.2f} s\n",
+        eng.fps, eng.fps / 25, eng.psnr_vs_reference, eng.compile_s);
     std::cout << depth.summary << "\n";
     std::cout << photometric_text(ph, rows);
-    std::cout << fmt::format("inter-camera PSNR (eq. 4.19-4.21): {:.2f} dB; total {:.1f} s\n", inter, total_s);
+    std::cout << fmt::format("inter-camera PSNR (eq. 4.19-4.21): {:.2f} dB; total {:.1f} s\n", inter,
+                             total_s);
     std::cout << "demo written to " << fs::absolute(dir).string() << "/ (open report.html)\n";
   }
 }
@@ -368,10 +409,12 @@ void run_demo(const DemoOptions& o) {
 void add_demo_command(CLI::App& root) {
   auto opts = std::make_shared<DemoOptions>();
   auto* cmd = root.add_subcommand(
-      "demo", "The main job: the thesis's 24-camera dome in a simulated colon; frames, panoramas by all six "
-              "methods against the ground truth, boundary, single-camera and coverage maps, and a report");
+      "demo",
+      "The main job: the thesis's 24-camera dome in a simulated colon; frames, panoramas by all six "
+      "methods against the ground truth, boundary, single-camera and coverage maps, and a report");
   cmd->add_option("--out", opts->out, "Output folder")->capture_default_str();
-  cmd->add_option("--scene", opts->scene, "Scene: colon, photo:PATH, usaf[:MM], checker[:MM]")->capture_default_str();
+  cmd->add_option("--scene", opts->scene, "Scene: colon, photo:PATH, usaf[:MM], checker[:MM]")
+      ->capture_default_str();
   cmd->add_option("--size", opts->size, "Panorama size WxH")->capture_default_str();
   cmd->add_option("--projection", opts->projection, "vr180 or equirect")->capture_default_str();
   cmd->add_option("--threshold", opts->threshold, "Boundary threshold th_ob on luma in [0,1] (eq. 4.16)")
@@ -381,15 +424,18 @@ void add_demo_command(CLI::App& root) {
   // The Giga-Eye (thesis ch. 7): its own demo (giga_demo.h).
   static std::string rig = "thesis-24";
   static GigaDemoOptions giga;
-  cmd->add_option("--rig", rig,
-                  "thesis-24 (default) or gigaeye-44: the Giga-Eye end to end (plan, coverage, a simulated raw "
-                  "recording, calibration, 21.6 MP panoramas; --out, --seed, --json and --size apply, --scene "
-                  "defaults to photo:../shared/data/lake.jpg if present, else checker:50000; --giga-mode and "
-                  "--frame-sets below)")
+  cmd->add_option(
+         "--rig", rig,
+         "thesis-24 (default) or gigaeye-44: the Giga-Eye end to end (plan, coverage, a simulated raw "
+         "recording, calibration, 21.6 MP panoramas; --out, --seed, --json and --size apply, --scene "
+         "defaults to photo:../shared/data/lake.jpg if present, else checker:50000; --giga-mode and "
+         "--frame-sets below)")
       ->capture_default_str();
-  cmd->add_option("--giga-mode", giga.mode, "Giga-Eye demo: sensor mode of the recording (full, skip1, skip2, skip3, skip5)")
+  cmd->add_option("--giga-mode", giga.mode,
+                  "Giga-Eye demo: sensor mode of the recording (full, skip1, skip2, skip3, skip5)")
       ->capture_default_str();
-  cmd->add_option("--frame-sets", giga.frame_sets, "Giga-Eye demo: frame sets to record")->capture_default_str();
+  cmd->add_option("--frame-sets", giga.frame_sets, "Giga-Eye demo: frame sets to record")
+      ->capture_default_str();
   cmd->callback([opts, cmd] {
     if (rig == "thesis-24") return run_demo(*opts);
     if (rig != "gigaeye-44") throw std::invalid_argument("--rig must be thesis-24 or gigaeye-44");

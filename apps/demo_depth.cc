@@ -1,24 +1,23 @@
 #include "apps/demo_depth.h"
 
-#include <fmt/format.h>
-
 #include <chrono>
 #include <cmath>
 
+#include <fmt/format.h>
 #include <opencv2/imgproc.hpp>
 
+#include "omma/bench/bench.h"
 #include "omma/core/frames.h"
 #include "omma/core/io.h"
 #include "omma/core/log.h"
-#include "omma/bench/bench.h"
-#include "omma/render/depth_render.h"
-#include "omma/render/render.h"
 #include "omma/pano/depth_eval.h"
 #include "omma/pano/maps.h"
+#include "omma/pano/plane_sweep.h"
 #include "omma/pano/quality.h"
 #include "omma/pano/stitch.h"
 #include "omma/pano/surface.h"
-#include "omma/pano/plane_sweep.h"
+#include "omma/render/depth_render.h"
+#include "omma/render/render.h"
 
 namespace omma::app {
 
@@ -53,7 +52,8 @@ DepthDemo run_depth_demo(const Rig& rig, const PanoGrid& grid, const std::vector
   const cv::Mat occl = pano::depth_discontinuities(truth_depth);
   const int tol = std::max(1, grid.width / 270);
   double th_inf = 0, th_depth = 0, th_jump = 0;
-  const pano::BoundaryScore b_inf = pano::best_boundary_score(pano::boundary_map(rig, frames, grid), occl, tol, &th_inf);
+  const pano::BoundaryScore b_inf =
+      pano::best_boundary_score(pano::boundary_map(rig, frames, grid), occl, tol, &th_inf);
   const pano::BoundaryScore b_with =
       pano::best_boundary_score(pano::boundary_map(rig, frames, grid, {}, est.depth), occl, tol, &th_depth);
   const cv::Mat jumps = pano::depth_jump_map(est.depth);
@@ -74,7 +74,8 @@ DepthDemo run_depth_demo(const Rig& rig, const PanoGrid& grid, const std::vector
   for (size_t i = 0; i < frames.size(); ++i) store->set(int(i), frames[i]);
   auto out = std::make_shared<cv::Mat>();
   const bench::Workload w{"omma-mrf-depth", 0, [&] { dr->render(*store, frames, *out); }, {}};
-  const double fps = bench::measure_fps(w, 2.0, 10);  // 2 s: single seconds vary by +-15 % on the 2-core machine
+  const double fps =
+      bench::measure_fps(w, 2.0, 10);  // 2 s: single seconds vary by +-15 % on the 2-core machine
   write_image(dir / "pano_mrf_engine_depth.png", *out);
   const double engine_psnr = pano::psnr_db(*out, truth), engine_vs_ref = render::psnr_u8(*out, with_depth);
 
@@ -82,59 +83,79 @@ DepthDemo run_depth_demo(const Rig& rig, const PanoGrid& grid, const std::vector
   const double closed = 100 * (estimate.psnr_db - sphere.psnr_db) / (with_truth.psnr_db - sphere.psnr_db);
   const std::string table = fmt::format(
       "| projection surface (mrf) | PSNR (dB) | seam PSNR (dB) | SSIM |\n|---|---|---|---|\n"
-      "| infinity (the thesis) | {:.2f} | {:.2f} | {:.4f} |\n| sphere 22 mm (a stitching distance) | {:.2f} | {:.2f} | {:.4f} |\n"
-      "| estimated depth | **{:.2f}** | {:.2f} | {:.4f} |\n| true depth (upper bound) | {:.2f} | {:.2f} | {:.4f} |\n",
+      "| infinity (the thesis) | {:.2f} | {:.2f} | {:.4f} |\n| sphere 22 mm (a stitching distance) | {:.2f} "
+      "| {:.2f} | {:.4f} |\n"
+      "| estimated depth | **{:.2f}** | {:.2f} | {:.4f} |\n| true depth (upper bound) | {:.2f} | {:.2f} | "
+      "{:.4f} |\n",
       at_inf.psnr_db, at_inf.seam_psnr_db, at_inf.ssim, sphere.psnr_db, sphere.seam_psnr_db, sphere.ssim,
       estimate.psnr_db, estimate.seam_psnr_db, estimate.ssim, with_truth.psnr_db, with_truth.seam_psnr_db,
       with_truth.ssim);
   const std::string facts = fmt::format(
       "The estimate (sphere sweep over {} candidate distances, ZNCC, semi-global smoothing; {:.1f} s) closes "
       "{:.0f} % of the gap between the fixed sphere and the true depth; median relative depth error {:.1f} % "
-      "({:.0f} % of the wall within 10 %). Boundaries against the true occlusion boundaries (precision / recall "
-      "/ F1, each map at its best threshold): the thesis's L_ob at infinity {:.2f} / {:.2f} / {:.2f}, L_ob on "
+      "({:.0f} % of the wall within 10 %). Boundaries against the true occlusion boundaries (precision / "
+      "recall "
+      "/ F1, each map at its best threshold): the thesis's L_ob at infinity {:.2f} / {:.2f} / {:.2f}, L_ob "
+      "on "
       "the estimated depth {:.2f} / {:.2f} / {:.2f}, the estimate's own depth jumps {:.2f} / {:.2f} / {:.2f} "
       "(green above). The engine's depth-adaptive renderer (`omma run --depth`: depth every panorama on a "
       "coarse grid, taps moved) renders {:.1f} panoramas/s here, {:.2f} dB against the truth ({:.1f} dB from "
       "the reference stitch on the estimate).",
-      pano::PlaneSweepOptions{}.steps, est_s, closed, 100 * derr.median_rel, 100 * derr.within_10, b_inf.precision,
-      b_inf.recall, b_inf.f1, b_with.precision, b_with.recall, b_with.f1, b_jump.precision, b_jump.recall,
-      b_jump.f1, fps, engine_psnr, engine_vs_ref);
-  d.markdown = "## Depth from the overlaps\n\n"
-               "![estimated depth](depth_estimate.png) ![true depth](depth_truth.png)\n\n"
-               "Without depth (infinity) and with the estimated depth:\n\n"
-               "![without](pano_mrf.png) ![with](pano_mrf_depth.png)\n\n"
-               "Boundaries from depth: ![boundary from depth](boundary_depth.png)\n\n" +
-               table + "\n" + facts + "\n";
-  d.html = "<h2>Depth from the overlaps</h2><div class=\"row\"><div><h3>Estimated depth</h3>"
-           "<img src=\"depth_estimate.png\"></div><div><h3>True depth</h3><img src=\"depth_truth.png\"></div></div>"
-           "<div class=\"row\"><div><h3>Without depth (infinity)</h3><img src=\"pano_mrf.png\"></div>"
-           "<div><h3>With the estimated depth</h3><img src=\"pano_mrf_depth.png\"></div></div>"
-           "<div class=\"row\"><div><h3>Boundaries from depth</h3><img src=\"boundary_depth.png\"></div>"
-           "<div><h3>Engine, depth every panorama</h3><img src=\"pano_mrf_engine_depth.png\"></div></div>";
-  d.html += "<table><tr><th>projection surface (mrf)</th><th>PSNR (dB)</th><th>seam PSNR (dB)</th><th>SSIM</th></tr>";
+      pano::PlaneSweepOptions{}.steps, est_s, closed, 100 * derr.median_rel, 100 * derr.within_10,
+      b_inf.precision, b_inf.recall, b_inf.f1, b_with.precision, b_with.recall, b_with.f1, b_jump.precision,
+      b_jump.recall, b_jump.f1, fps, engine_psnr, engine_vs_ref);
+  d.markdown =
+      "## Depth from the overlaps\n\n"
+      "![estimated depth](depth_estimate.png) ![true depth](depth_truth.png)\n\n"
+      "Without depth (infinity) and with the estimated depth:\n\n"
+      "![without](pano_mrf.png) ![with](pano_mrf_depth.png)\n\n"
+      "Boundaries from depth: ![boundary from depth](boundary_depth.png)\n\n" +
+      table + "\n" + facts + "\n";
+  d.html =
+      "<h2>Depth from the overlaps</h2><div class=\"row\"><div><h3>Estimated depth</h3>"
+      "<img src=\"depth_estimate.png\"></div><div><h3>True depth</h3><img "
+      "src=\"depth_truth.png\"></div></div>"
+      "<div class=\"row\"><div><h3>Without depth (infinity)</h3><img src=\"pano_mrf.png\"></div>"
+      "<div><h3>With the estimated depth</h3><img src=\"pano_mrf_depth.png\"></div></div>"
+      "<div class=\"row\"><div><h3>Boundaries from depth</h3><img src=\"boundary_depth.png\"></div>"
+      "<div><h3>Engine, depth every panorama</h3><img src=\"pano_mrf_engine_depth.png\"></div></div>";
+  d.html +=
+      "<table><tr><th>projection surface (mrf)</th><th>PSNR (dB)</th><th>seam PSNR "
+      "(dB)</th><th>SSIM</th></tr>";
   auto row = [](const char* name, const pano::EvalSummary& e) {
     return fmt::format("<tr><td>{}</td><td>{:.2f}</td><td>{:.2f}</td><td>{:.4f}</td></tr>", name, e.psnr_db,
                        e.seam_psnr_db, e.ssim);
   };
-  d.html += row("infinity (the thesis)", at_inf) + row("sphere 22 mm", sphere) + row("estimated depth", estimate) +
-            row("true depth (upper bound)", with_truth) + "</table><p>" + facts + "</p>";
+  d.html += row("infinity (the thesis)", at_inf) + row("sphere 22 mm", sphere) +
+            row("estimated depth", estimate) + row("true depth (upper bound)", with_truth) + "</table><p>" +
+            facts + "</p>";
   auto score = [](const pano::BoundaryScore& s, double th) {
     return nlohmann::json{{"precision", s.precision}, {"recall", s.recall}, {"f1", s.f1}, {"threshold", th}};
   };
-  d.json = {{"psnr_db", {{"inf", at_inf.psnr_db}, {"sphere_22", sphere.psnr_db}, {"estimate", estimate.psnr_db},
-                         {"truth", with_truth.psnr_db}}},
-            {"seam_psnr_db", {{"inf", at_inf.seam_psnr_db}, {"sphere_22", sphere.seam_psnr_db},
-                              {"estimate", estimate.seam_psnr_db}, {"truth", with_truth.seam_psnr_db}}},
+  d.json = {{"psnr_db",
+             {{"inf", at_inf.psnr_db},
+              {"sphere_22", sphere.psnr_db},
+              {"estimate", estimate.psnr_db},
+              {"truth", with_truth.psnr_db}}},
+            {"seam_psnr_db",
+             {{"inf", at_inf.seam_psnr_db},
+              {"sphere_22", sphere.seam_psnr_db},
+              {"estimate", estimate.seam_psnr_db},
+              {"truth", with_truth.seam_psnr_db}}},
             {"gap_closed", closed / 100},
             {"depth_median_rel_error", derr.median_rel},
             {"estimate_s", est_s},
-            {"boundary", {{"thesis", score(b_inf, th_inf)}, {"with_depth", score(b_with, th_depth)},
-                          {"from_depth", score(b_jump, th_jump)}}},
+            {"boundary",
+             {{"thesis", score(b_inf, th_inf)},
+              {"with_depth", score(b_with, th_depth)},
+              {"from_depth", score(b_jump, th_jump)}}},
             {"engine", {{"fps", fps}, {"psnr_db", engine_psnr}, {"psnr_vs_reference_db", engine_vs_ref}}}};
   d.summary = fmt::format(
-      "depth (mrf): inf {:.2f} dB, sphere 22 mm {:.2f} dB, estimate {:.2f} dB, truth {:.2f} dB ({:.0f} % of the gap "
+      "depth (mrf): inf {:.2f} dB, sphere 22 mm {:.2f} dB, estimate {:.2f} dB, truth {:.2f} dB ({:.0f} % of "
+      "the gap "
       "closed), median depth error {:.1f} %; engine with depth every panorama {:.1f} panoramas/s",
-      at_inf.psnr_db, sphere.psnr_db, estimate.psnr_db, with_truth.psnr_db, closed, 100 * derr.median_rel, fps);
+      at_inf.psnr_db, sphere.psnr_db, estimate.psnr_db, with_truth.psnr_db, closed, 100 * derr.median_rel,
+      fps);
   return d;
 }
 

@@ -49,8 +49,7 @@ void add_design_command(CLI::App& root) {
       ->capture_default_str();
   cmd->add_flag("--sphere", o->sphere, "Design a full sphere instead of the hemisphere around +z");
   cmd->add_option("--out", o->out, "Write the rig file (JSON) here");
-  cmd->add_flag("--json", o->json,
-                "Print one JSON object {method, cameras, layers, r_virtual_mm} on stdout");
+  cmd->add_flag("--json", o->json, "Print one JSON object {method, cameras, layers, r_virtual_mm} on stdout");
   cmd->callback([o] {
     set_json_mode(o->json);
     design::DesignParams p;

@@ -1,18 +1,18 @@
 // omma eval: compare a panorama with a ground truth (PSNR, SSIM, PSNR over the seam band).
-#include <fmt/format.h>
-
 #include <cmath>
 #include <iostream>
-#include <opencv2/imgcodecs.hpp>
 #include <stdexcept>
 
+#include <fmt/format.h>
+#include <opencv2/imgcodecs.hpp>
+
 #include "apps/command.h"
-#include "omma/design/prototype.h"
 #include "omma/core/grid.h"
 #include "omma/core/io.h"
 #include "omma/core/rig.h"
-#include "omma/pano/maps.h"
+#include "omma/design/prototype.h"
 #include "omma/pano/depth_eval.h"
+#include "omma/pano/maps.h"
 #include "omma/pano/quality.h"
 #include "omma/pano/surface.h"
 
@@ -62,7 +62,7 @@ void run_eval(const EvalArgs& a) {
   if (!a.truth_depth.empty()) true_depth = pano::read_depth(a.truth_depth, grid);
   auto score_json = [](const pano::BoundaryScore& s, double th) {
     return nlohmann::json{{"precision", s.precision}, {"recall", s.recall}, {"f1", s.f1},
-                          {"predicted", s.predicted}, {"truth", s.truth}, {"threshold", th}};
+                          {"predicted", s.predicted}, {"truth", s.truth},   {"threshold", th}};
   };
   cv::Mat occlusions;
   if (!true_depth.empty()) occlusions = pano::depth_discontinuities(true_depth, a.jump);
@@ -70,13 +70,18 @@ void run_eval(const EvalArgs& a) {
     const cv::Mat used = pano::read_depth(a.depth, grid);
     const pano::DepthError e = pano::depth_error(used, true_depth, a.max_depth);
     double th = 0;
-    const pano::BoundaryScore s = pano::best_boundary_score(pano::depth_jump_map(used), occlusions, a.tolerance, &th);
-    depth_json = {{"median_rel", e.median_rel}, {"mean_rel", e.mean_rel}, {"within_10", e.within_10},
-                  {"pixels", e.pixels}, {"boundary_from_depth", score_json(s, th)}};
+    const pano::BoundaryScore s =
+        pano::best_boundary_score(pano::depth_jump_map(used), occlusions, a.tolerance, &th);
+    depth_json = {{"median_rel", e.median_rel},
+                  {"mean_rel", e.mean_rel},
+                  {"within_10", e.within_10},
+                  {"pixels", e.pixels},
+                  {"boundary_from_depth", score_json(s, th)}};
   }
   if (!a.boundary.empty()) {
     cv::Mat b = read_image(a.boundary, cv::IMREAD_GRAYSCALE), bf;
-    if (b.size() != pano_img.size()) throw std::invalid_argument("--boundary: size differs from the panorama");
+    if (b.size() != pano_img.size())
+      throw std::invalid_argument("--boundary: size differs from the panorama");
     b.convertTo(bf, CV_32F, 1 / 255.0);
     const pano::BoundaryScore s =
         pano::boundary_score(pano::boundary_binary(bf, a.threshold), occlusions, a.tolerance);
@@ -97,7 +102,8 @@ void run_eval(const EvalArgs& a) {
     if (!depth_json.is_null())
       std::cout << fmt::format(", depth error median {:.1f} %", 100 * depth_json["median_rel"].get<double>());
     if (!boundary_json.is_null())
-      std::cout << fmt::format(", boundary P {:.2f} R {:.2f} F1 {:.2f}", boundary_json["precision"].get<double>(),
+      std::cout << fmt::format(", boundary P {:.2f} R {:.2f} F1 {:.2f}",
+                               boundary_json["precision"].get<double>(),
                                boundary_json["recall"].get<double>(), boundary_json["f1"].get<double>());
     std::cout << "\n";
   }
@@ -121,17 +127,20 @@ void add_eval_command(CLI::App& root) {
   cmd->add_option("--rig", a.rig, "Or: compute the seam band from this rig (with --projection)");
   cmd->add_option("--projection", a.projection, "Projection of the panorama for --rig: equirect or vr180")
       ->capture_default_str();
-  cmd->add_option("--truth-depth", a.truth_depth,
-                  "True depth of the panorama (the simulator's truth_depth.tiff), for --depth and --boundary");
-  cmd->add_option("--depth", a.depth,
-                  "A depth used for stitching (`omma stitch --depth-out`'s .tiff): median relative error against\n"
-                  "--truth-depth where the truth is at most --max-depth mm");
+  cmd->add_option(
+      "--truth-depth", a.truth_depth,
+      "True depth of the panorama (the simulator's truth_depth.tiff), for --depth and --boundary");
+  cmd->add_option(
+      "--depth", a.depth,
+      "A depth used for stitching (`omma stitch --depth-out`'s .tiff): median relative error against\n"
+      "--truth-depth where the truth is at most --max-depth mm");
   cmd->add_option("--max-depth", a.max_depth, "Compare depths up to this many mm")->capture_default_str();
-  cmd->add_option("--boundary", a.boundary,
-                  "A boundary map L_ob (`omma stitch --boundary`, gray 255 = 1.0), thresholded at --threshold\n"
-                  "(eq. 4.16): precision, recall and F1 against the true occlusion boundaries (where the true\n"
-                  "depth jumps by more than --jump between neighbours), within --tolerance pixels; and at the\n"
-                  "map's best threshold (\"best\"). With --depth also the boundaries of the depth's own jumps");
+  cmd->add_option(
+      "--boundary", a.boundary,
+      "A boundary map L_ob (`omma stitch --boundary`, gray 255 = 1.0), thresholded at --threshold\n"
+      "(eq. 4.16): precision, recall and F1 against the true occlusion boundaries (where the true\n"
+      "depth jumps by more than --jump between neighbours), within --tolerance pixels; and at the\n"
+      "map's best threshold (\"best\"). With --depth also the boundaries of the depth's own jumps");
   cmd->add_option("--threshold", a.threshold, "th_ob of eq. 4.16 for --boundary")->capture_default_str();
   cmd->add_option("--jump", a.jump, "Depth ratio that makes an occlusion boundary")->capture_default_str();
   cmd->add_option("--tolerance", a.tolerance, "Boundary match tolerance, pixels")->capture_default_str();

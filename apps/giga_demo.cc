@@ -22,11 +22,11 @@
 #include "omma/design/dome.h"
 #include "omma/design/prototype.h"
 #include "omma/design/recording_plan.h"
-#include "omma/render/pano_render.h"
-#include "omma/live/recorder.h"
 #include "omma/io/pano_file.h"
 #include "omma/io/tiff_writer.h"
+#include "omma/live/recorder.h"
 #include "omma/pano/quality.h"
+#include "omma/render/pano_render.h"
 #include "omma/sim/perturb.h"
 #include "omma/sim/render.h"
 #include "omma/sim/simulate.h"
@@ -44,7 +44,8 @@ void run_giga_demo(const GigaDemoOptions& opts) {
   auto secs = [](clock::time_point a) { return std::chrono::duration<double>(clock::now() - a).count(); };
   const Size2 size = parse_size(o.size);
   if (o.frame_sets < 1 || o.frame_sets > 100) throw std::invalid_argument("--frame-sets must be 1..100");
-  const Rig nominal = design::load_rig_or_builtin("gigaeye-44" + (o.mode == "full" ? std::string() : "-" + o.mode));
+  const Rig nominal =
+      design::load_rig_or_builtin("gigaeye-44" + (o.mode == "full" ? std::string() : "-" + o.mode));
   const sim::PerturbSpec spec = sim::parse_perturb(o.perturb);
   const Rig truth_rig = sim::perturb_rig(nominal, spec, o.seed);
   const fs::path dir = o.out;
@@ -56,25 +57,34 @@ void run_giga_demo(const GigaDemoOptions& opts) {
   // 1. The plan of Table 7.2 (option 5): 44 cameras, 1296x972, 12 bit, 30 fps, 66 MHz, 17 min.
   const design::RecordingPlan plan = design::make_plan(design::plan_input(design::table71()[4]));
   md += fmt::format(
-      "## Recording plan (Table 7.2)\n\n44 cameras 1296x972 at 30 fps, 12 bit: {:.2f} MiB/s per camera, {:.1f} MB/s per "
-      "SSD (2 cameras, 150 MB/s), {:.3f} GB/s for the rig; a 128 GB SSD holds {:.1f} min (thesis: 17 min planned); "
+      "## Recording plan (Table 7.2)\n\n44 cameras 1296x972 at 30 fps, 12 bit: {:.2f} MiB/s per camera, "
+      "{:.1f} MB/s per "
+      "SSD (2 cameras, 150 MB/s), {:.3f} GB/s for the rig; a 128 GB SSD holds {:.1f} min (thesis: 17 min "
+      "planned); "
       "{}.\n\n",
       plan.camera_mib_per_s, plan.device_bytes_per_s / 1e6, plan.rig_bytes_per_s / 1e9, plan.max_minutes,
       plan.feasible() ? "every constraint holds" : "FAILS: " + plan.failed());
-  js["plan"] = {{"feasible", plan.feasible()}, {"max_minutes", plan.max_minutes}, {"rig_gb_per_s", plan.rig_bytes_per_s / 1e9}};
+  js["plan"] = {{"feasible", plan.feasible()},
+                {"max_minutes", plan.max_minutes},
+                {"rig_gb_per_s", plan.rig_bytes_per_s / 1e9}};
 
   // 2. Coverage at 1 m and far away (Fig. 7.5).
-  md += "## Coverage (Fig. 7.5)\n\n| distance | >= 2 cameras, polar | cameras there | max |\n|---|---|---|---|\n";
+  md +=
+      "## Coverage (Fig. 7.5)\n\n| distance | >= 2 cameras, polar | cameras there | max "
+      "|\n|---|---|---|---|\n";
   for (double d : {1000.0, design::kInfinity}) {
     const auto st = design::analyze_coverage(design::gigaeye_rig(), d, deg2rad(0.5), deg2rad(100));
     const auto band = st.polar_band(2);
     const std::string name = std::isinf(d) ? "inf" : "1m";
-    md += fmt::format("| {} | {:.1f}..{:.1f} deg | {}..{} | {} |\n", name, rad2deg(band.from_rad), rad2deg(band.to_rad),
-                      band.min_cameras, band.max_cameras, st.max_cameras);
-    const cv::Mat counts = design::coverage_count_map(design::gigaeye_rig(), PanoGrid{Projection::kEquirect100, 1800, 500}, d);
-    write_image(dir / ("coverage_" + name + ".png"),
-                design::render_coverage_map(counts, fmt::format("gigaeye-44: cameras per direction at {}", name)));
-    js["coverage"][name] = {{"band_from_deg", rad2deg(band.from_rad)}, {"band_to_deg", rad2deg(band.to_rad)},
+    md += fmt::format("| {} | {:.1f}..{:.1f} deg | {}..{} | {} |\n", name, rad2deg(band.from_rad),
+                      rad2deg(band.to_rad), band.min_cameras, band.max_cameras, st.max_cameras);
+    const cv::Mat counts =
+        design::coverage_count_map(design::gigaeye_rig(), PanoGrid{Projection::kEquirect100, 1800, 500}, d);
+    write_image(
+        dir / ("coverage_" + name + ".png"),
+        design::render_coverage_map(counts, fmt::format("gigaeye-44: cameras per direction at {}", name)));
+    js["coverage"][name] = {{"band_from_deg", rad2deg(band.from_rad)},
+                            {"band_to_deg", rad2deg(band.to_rad)},
                             {"max_cameras", st.max_cameras}};
   }
   md += "\n![coverage](coverage_inf.png)\n\n";
@@ -107,15 +117,17 @@ void run_giga_demo(const GigaDemoOptions& opts) {
   const auto rs = live::record(std::move(sources), rec_dir, m, ro);
   if (!rs.error.empty()) throw std::runtime_error("recording: " + rs.error);
   io::RecordingReader rec(rec_dir);
-  md += fmt::format("## Recording\n\n{} frame sets of 44 x {}x{} raw 12-bit frames in {:.1f} s ({:.1f} MB, HDF5, "
-                    "`omma recording check {}`): {} complete sets, {} frames dropped.\n\n",
-                    rec.frame_sets(), nominal.cameras[0].in.width, nominal.cameras[0].in.height, secs(t), rs.bytes / 1e6,
-                    rec_dir.string(), rec.match().complete_sets, [&] {
-                      int64_t d = 0;
-                      for (const auto& c : rec.match().cameras) d += c.dropped;
-                      return d;
-                    }());
-  js["recording"] = {{"frame_sets", rec.frame_sets()}, {"complete_sets", rec.match().complete_sets}, {"seconds", secs(t)}};
+  md += fmt::format(
+      "## Recording\n\n{} frame sets of 44 x {}x{} raw 12-bit frames in {:.1f} s ({:.1f} MB, HDF5, "
+      "`omma recording check {}`): {} complete sets, {} frames dropped.\n\n",
+      rec.frame_sets(), nominal.cameras[0].in.width, nominal.cameras[0].in.height, secs(t), rs.bytes / 1e6,
+      rec_dir.string(), rec.match().complete_sets, [&] {
+        int64_t d = 0;
+        for (const auto& c : rec.match().cameras) d += c.dropped;
+        return d;
+      }());
+  js["recording"] = {
+      {"frame_sets", rec.frame_sets()}, {"complete_sets", rec.match().complete_sets}, {"seconds", secs(t)}};
 
   // 4. Calibration from the first frames (far field: rotation only), against the true rig.
   t = clock::now();
@@ -136,13 +148,17 @@ void run_giga_demo(const GigaDemoOptions& opts) {
   const calib::RigDiff after = calib::diff_rigs(cal.rig, truth_rig, true);
   save_rig(cal.rig, dir / "rig_calibrated.json");
   md += fmt::format(
-      "## Calibration (`omma calibrate`, far field, from the first frame of every stream)\n\nTrue rig: nominal + {}. Global rotation "
-      "removed (`rig-diff --align`). Orientation error median {:.3f} deg (max {:.3f}), focal {:.3f} %, centre {:.2f} px, "
-      "ray error {:.3f} deg (nominal rig: {:.3f} deg / ray {:.3f} deg); RMS {:.3f} px, {} tracks, {:.1f} s; {} "
+      "## Calibration (`omma calibrate`, far field, from the first frame of every stream)\n\nTrue rig: "
+      "nominal + {}. Global rotation "
+      "removed (`rig-diff --align`). Orientation error median {:.3f} deg (max {:.3f}), focal {:.3f} %, "
+      "centre {:.2f} px, "
+      "ray error {:.3f} deg (nominal rig: {:.3f} deg / ray {:.3f} deg); RMS {:.3f} px, {} tracks, {:.1f} s; "
+      "{} "
       "camera(s) kept nominal for too few matches{}.\n\n",
-      sim::to_string(spec), after.orientation_error_deg.median, after.orientation_error_deg.max, 100 * after.focal_error_rel.median,
-      after.center_error_px.median, after.ray_error_deg.median, before.orientation_error_deg.median, before.ray_error_deg.median, cal.rms_px,
-      cal.tracks, secs(t), cal.uncalibrated_ids.size(),
+      sim::to_string(spec), after.orientation_error_deg.median, after.orientation_error_deg.max,
+      100 * after.focal_error_rel.median, after.center_error_px.median, after.ray_error_deg.median,
+      before.orientation_error_deg.median, before.ray_error_deg.median, cal.rms_px, cal.tracks, secs(t),
+      cal.uncalibrated_ids.size(),
       cal.uncalibrated_ids.empty() ? "" : fmt::format(" (ids {})", fmt::join(cal.uncalibrated_ids, ", ")));
   js["calibration"] = {{"orientation_median_deg", after.orientation_error_deg.median},
                        {"orientation_max_deg", after.orientation_error_deg.max},
@@ -180,13 +196,17 @@ void run_giga_demo(const GigaDemoOptions& opts) {
   write_image(dir / "truth_preview.jpg", truth);
   const double psnr = pano::psnr_db(preview, truth);
   md += fmt::format(
-      "## Panoramas\n\n{} panoramas of {}x{} ({:.1f} MP, mrf, 360 x 100 deg, BigTIFF `pano_XXXXX.tif`), maps {:.1f} s, "
+      "## Panoramas\n\n{} panoramas of {}x{} ({:.1f} MP, mrf, 360 x 100 deg, BigTIFF `pano_XXXXX.tif`), maps "
+      "{:.1f} s, "
       "render {:.2f} s each; memory {:.0f} MB. Against the truth (both at 1800x480): PSNR {:.2f} dB.\n\n"
       "![panorama](pano_preview.jpg)\n\n![truth](truth_preview.jpg)\n\nTotal {:.1f} s.\n",
       sets.size(), size.width, size.height, size.width * double(size.height) / 1e6, renderer.maps_seconds(),
       render_s / sets.size(), renderer.memory().total() / 1e6, psnr, secs(t0));
-  js["panorama"] = {{"width", size.width}, {"height", size.height}, {"render_s", render_s / sets.size()},
-                    {"maps_s", renderer.maps_seconds()}, {"psnr_db_preview", psnr},
+  js["panorama"] = {{"width", size.width},
+                    {"height", size.height},
+                    {"render_s", render_s / sets.size()},
+                    {"maps_s", renderer.maps_seconds()},
+                    {"psnr_db_preview", psnr},
                     {"memory_bytes", renderer.memory().total()}};
   js["seconds"] = secs(t0);
   write_text_atomically(dir / "report.md", md);

@@ -1,28 +1,28 @@
 // omma hw simulate|sweep|throughput|memory|export|import: the bit-accurate hardware model of the
 // panorama pipeline (thesis §5.3-5.5, ch. 6; src/omma/hw, docs/hw-model.md).
-#include <fmt/format.h>
-
 #include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <iostream>
-#include <opencv2/core.hpp>
 #include <stdexcept>
 
+#include <fmt/format.h>
+#include <opencv2/core.hpp>
+
 #include "apps/command.h"
-#include "omma/design/prototype.h"
 #include "omma/core/frames.h"
 #include "omma/core/io.h"
 #include "omma/core/log.h"
 #include "omma/core/progress.h"
 #include "omma/core/rig.h"
+#include "omma/design/prototype.h"
 #include "omma/hw/export.h"
-#include "omma/hw/tables.h"
-#include "omma/isp/photometric.h"
 #include "omma/hw/memory.h"
 #include "omma/hw/pipeline.h"
-#include "omma/hw/width_sweep.h"
+#include "omma/hw/tables.h"
 #include "omma/hw/throughput.h"
+#include "omma/hw/width_sweep.h"
+#include "omma/isp/photometric.h"
 #include "omma/pano/maps.h"
 #include "omma/pano/quality.h"
 #include "omma/pano/stitch.h"
@@ -32,7 +32,9 @@ namespace {
 
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
+double ms_since(Clock::time_point t) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
+}
 
 // --config FILE (JSON object of HwConfig fields) then --set name=value overrides.
 hw::HwConfig load_config(const std::string& path, const std::vector<std::string>& sets) {
@@ -51,9 +53,11 @@ hw::HwConfig load_config(const std::string& path, const std::vector<std::string>
     const auto eq = s.find('=');
     if (eq == std::string::npos) throw std::invalid_argument("--set expects name=value, got '" + s + "'");
     const std::string name = s.substr(0, eq), value = s.substr(eq + 1);
-    if (!j.contains(name)) throw std::invalid_argument(fmt::format("--set: unknown hardware field '{}'", name));
+    if (!j.contains(name))
+      throw std::invalid_argument(fmt::format("--set: unknown hardware field '{}'", name));
     if (j[name].is_boolean()) {
-      if (value != "true" && value != "false") throw std::invalid_argument(fmt::format("--set {}: use true or false", name));
+      if (value != "true" && value != "false")
+        throw std::invalid_argument(fmt::format("--set {}: use true or false", name));
       j[name] = value == "true";
     } else {
       try {
@@ -92,7 +96,8 @@ pano::Method hw_method(const std::string& name) {
 
 Rig rig_for(const std::string& rig_path, const std::string& frames) {
   if (!rig_path.empty()) return design::load_rig_or_builtin(rig_path);
-  if (!frames.empty() && fs::exists(fs::path(frames) / "rig.json")) return load_rig(fs::path(frames) / "rig.json");
+  if (!frames.empty() && fs::exists(fs::path(frames) / "rig.json"))
+    return load_rig(fs::path(frames) / "rig.json");
   throw std::invalid_argument("--rig is required (or a frames folder with rig.json)");
 }
 
@@ -125,14 +130,15 @@ void run_simulate(const SimArgs& a) {
   const Rig rig = rig_for(a.rig, a.frames);
   hw::check_rig(cfg, rig);
   hw::check_grid(cfg, grid);
-  if (a.out.empty() && a.dump_hex.empty() && !a.json) spdlog::warn("hw simulate: no --out given, the panorama is not written");
+  if (a.out.empty() && a.dump_hex.empty() && !a.json)
+    spdlog::warn("hw simulate: no --out given, the panorama is not written");
   const std::vector<cv::Mat> frames = load_frames(a.frames, rig);
   // The rig's photometric model in the vignetting memory (sRGB frames: the power-law approximation,
   // hw/tables.h); the float reference then stitches the frames corrected exactly (isp/photometric.h).
   const bool photometric = !a.no_photometric && has_photometric(rig);
-  const hw::VignettingTables vig =
-      hw::make_vignetting_tables(cfg, rig, photometric ? hw::vignetting_from_rig(rig, hw::kSrgbVignettingExponent)
-                                                       : hw::VignettingModel{});
+  const hw::VignettingTables vig = hw::make_vignetting_tables(
+      cfg, rig,
+      photometric ? hw::vignetting_from_rig(rig, hw::kSrgbVignettingExponent) : hw::VignettingModel{});
   hw::Pipeline pipe(cfg, rig, grid, &vig);
   pipe.load_frames(frames);
   auto t0 = Clock::now();
@@ -169,8 +175,8 @@ void run_simulate(const SimArgs& a) {
     if (a.boundary) hw_pano = pipe.render(method, false).pano;
     j["psnr_vs_float_db"] = pano::psnr_db(hw_pano, ref);
     if (a.boundary) {
-      const cv::Mat fb = pano::boundary_binary(pano::boundary_map(rig, ref_frames, grid),
-                                               cfg.boundary_threshold / 255.0);
+      const cv::Mat fb =
+          pano::boundary_binary(pano::boundary_map(rig, ref_frames, grid), cfg.boundary_threshold / 255.0);
       cv::Mat diff;
       cv::compare(r.boundary, fb, diff, cv::CMP_NE);
       j["boundary_pixels"] = r.stats.boundary_pixels;
@@ -184,8 +190,9 @@ void run_simulate(const SimArgs& a) {
     for (size_t i = 0; i < frames.size(); ++i) {
       std::vector<uint32_t> w;
       for (uint16_t x : hw::frame_to_rgb565(frames[i])) w.push_back(x);
-      write_text_atomically(fs::path(a.dump_hex) / fmt::format("frame_{:02d}.hex", i),
-                            hw::readmemh_text(w, 4, fmt::format("camera {} RGB565, row-major (eq. 5.27)", i)));
+      write_text_atomically(
+          fs::path(a.dump_hex) / fmt::format("frame_{:02d}.hex", i),
+          hw::readmemh_text(w, 4, fmt::format("camera {} RGB565, row-major (eq. 5.27)", i)));
     }
     std::vector<uint32_t> px;
     px.reserve(static_cast<size_t>(pixels));
@@ -194,8 +201,9 @@ void run_simulate(const SimArgs& a) {
         const cv::Vec3b b = r.pano.at<cv::Vec3b>(y, x);
         px.push_back((uint32_t{b[2]} << 16) | (uint32_t{b[1]} << 8) | b[0]);
       }
-    write_text_atomically(fs::path(a.dump_hex) / "expected_rgb888.hex",
-                          hw::readmemh_text(px, 6, "expected output RGB888 (R[23:16] G[15:8] B[7:0]), scan order"));
+    write_text_atomically(
+        fs::path(a.dump_hex) / "expected_rgb888.hex",
+        hw::readmemh_text(px, 6, "expected output RGB888 (R[23:16] G[15:8] B[7:0]), scan order"));
     hw::ExportOptions eo;
     eo.config = cfg;
     eo.grid = grid;
@@ -206,10 +214,11 @@ void run_simulate(const SimArgs& a) {
   if (a.json) {
     print_json(j);
   } else {
-    std::cout << fmt::format("hw {} {}x{}: {} cycles ({:.3f} per pixel) = {:.2f} fps at {} MHz", j["method"].get<std::string>(),
-                             grid.width, grid.height, r.stats.cycles, r.stats.cycles / pixels,
-                             j["fps_at_clock"].get<double>(), a.clock_mhz);
-    if (j.contains("psnr_vs_float_db")) std::cout << fmt::format("; {:.2f} dB against the float stitch", j["psnr_vs_float_db"].get<double>());
+    std::cout << fmt::format("hw {} {}x{}: {} cycles ({:.3f} per pixel) = {:.2f} fps at {} MHz",
+                             j["method"].get<std::string>(), grid.width, grid.height, r.stats.cycles,
+                             r.stats.cycles / pixels, j["fps_at_clock"].get<double>(), a.clock_mhz);
+    if (j.contains("psnr_vs_float_db"))
+      std::cout << fmt::format("; {:.2f} dB against the float stitch", j["psnr_vs_float_db"].get<double>());
     std::cout << "\n";
   }
 }
@@ -260,10 +269,16 @@ void run_sweep_cmd(const SweepArgs& a) {
   write_text_atomically(fs::path(a.out) / "hw_minimal.json", hw::config_to_json(r.minimal).dump(2) + "\n");
   nlohmann::json pts = nlohmann::json::array();
   for (const auto& p : r.points)
-    pts.push_back({{"param", p.param}, {"value", p.value}, {"psnr_db", p.valid ? nlohmann::json(p.psnr_db) : nlohmann::json()}});
-  nlohmann::json j = {{"base_psnr_db", r.base_psnr_db}, {"target_db", a.target}, {"points", pts},
-                      {"minimal", hw::config_to_json(r.minimal)}, {"minimal_psnr_db", r.minimal_psnr_db},
-                      {"minimal_steps", r.minimal_steps}, {"csv", (fs::path(a.out) / "hw_sweep.csv").string()},
+    pts.push_back({{"param", p.param},
+                   {"value", p.value},
+                   {"psnr_db", p.valid ? nlohmann::json(p.psnr_db) : nlohmann::json()}});
+  nlohmann::json j = {{"base_psnr_db", r.base_psnr_db},
+                      {"target_db", a.target},
+                      {"points", pts},
+                      {"minimal", hw::config_to_json(r.minimal)},
+                      {"minimal_psnr_db", r.minimal_psnr_db},
+                      {"minimal_steps", r.minimal_steps},
+                      {"csv", (fs::path(a.out) / "hw_sweep.csv").string()},
                       {"svg", (fs::path(a.out) / "hw_sweep.svg").string()},
                       {"minimal_config", (fs::path(a.out) / "hw_minimal.json").string()}};
   if (a.json) {
@@ -272,7 +287,8 @@ void run_sweep_cmd(const SweepArgs& a) {
   }
   std::cout << fmt::format("base configuration: {:.2f} dB\n", r.base_psnr_db);
   for (const auto& s : r.minimal_steps) std::cout << "  " << s << "\n";
-  std::cout << fmt::format("smallest set: {:.2f} dB: {}\n", r.minimal_psnr_db, hw::config_to_json(r.minimal).dump());
+  std::cout << fmt::format("smallest set: {:.2f} dB: {}\n", r.minimal_psnr_db,
+                           hw::config_to_json(r.minimal).dump());
 }
 
 // ------------------------------------------------------------------------------------ throughput
@@ -293,9 +309,15 @@ void run_throughput(ThArgs a) {
   const hw::ThroughputSummary t = hw::throughput(a.o);
   nlohmann::json blocks = nlohmann::json::array();
   for (const auto& b : t.blocks) blocks.push_back({{"block", b.block}, {"th", b.th}});
-  nlohmann::json j = {{"blocks", blocks}, {"th_sys", t.th_sys}, {"fmin_mhz", t.fmin_mhz},
-                      {"fps_at_clock", t.fps_at_clock}, {"clock_mhz", a.o.clock_mhz}, {"fps", a.o.fps},
-                      {"width", a.o.width}, {"height", a.o.height}, {"cameras", a.o.cameras},
+  nlohmann::json j = {{"blocks", blocks},
+                      {"th_sys", t.th_sys},
+                      {"fmin_mhz", t.fmin_mhz},
+                      {"fps_at_clock", t.fps_at_clock},
+                      {"clock_mhz", a.o.clock_mhz},
+                      {"fps", a.o.fps},
+                      {"width", a.o.width},
+                      {"height", a.o.height},
+                      {"cameras", a.o.cameras},
                       {"pixels_per_frame_at_clock", t.pixels_per_frame_at_clock},
                       {"square_side_at_clock", t.square_side_at_clock}};
   if (!a.rig.empty()) {
@@ -306,11 +328,14 @@ void run_throughput(ThArgs a) {
     PanoGrid g{parse_projection(a.projection), s.width, s.height};
     hw::Pipeline p(cfg, rig, g);
     std::vector<cv::Mat> blank;
-    for (const auto& c : rig.cameras) blank.emplace_back(c.in.height, c.in.width, CV_8UC3, cv::Scalar::all(0));
+    for (const auto& c : rig.cameras)
+      blank.emplace_back(c.in.height, c.in.width, CV_8UC3, cv::Scalar::all(0));
     p.load_frames(blank);
     const hw::PipelineSummary r = p.render(pano::Method::kNearest, false, !a.json);
     const double pixels = double(s.width) * s.height;
-    j["counted"] = {{"rig", rig.name}, {"projection", to_string(g.projection)}, {"cycles", r.stats.cycles},
+    j["counted"] = {{"rig", rig.name},
+                    {"projection", to_string(g.projection)},
+                    {"cycles", r.stats.cycles},
                     {"cycles_per_pixel", r.stats.cycles / pixels},
                     {"fps_at_clock", a.o.clock_mhz * 1e6 / double(r.stats.cycles)},
                     {"fmin_mhz", a.o.fps * double(r.stats.cycles) * 1e-6},
@@ -321,14 +346,15 @@ void run_throughput(ThArgs a) {
     return;
   }
   for (const auto& b : t.blocks) std::cout << fmt::format("  {:<18} Th = {}\n", b.block, b.th);
-  std::cout << fmt::format("Th_sys = {}; F_min = 25 x {} x {} x {} = {:.3f} MHz at {} fps; at {} MHz: {:.2f} fps, "
-                           "{:.0f} pixels per frame ({}x{})\n",
-                           t.th_sys, a.o.width, a.o.height, t.th_sys, t.fmin_mhz, a.o.fps, a.o.clock_mhz, t.fps_at_clock,
-                           t.pixels_per_frame_at_clock, t.square_side_at_clock, t.square_side_at_clock);
+  std::cout << fmt::format(
+      "Th_sys = {}; F_min = 25 x {} x {} x {} = {:.3f} MHz at {} fps; at {} MHz: {:.2f} fps, "
+      "{:.0f} pixels per frame ({}x{})\n",
+      t.th_sys, a.o.width, a.o.height, t.th_sys, t.fmin_mhz, a.o.fps, a.o.clock_mhz, t.fps_at_clock,
+      t.pixels_per_frame_at_clock, t.square_side_at_clock, t.square_side_at_clock);
   if (j.contains("counted"))
     std::cout << fmt::format("counted on {}: {:.3f} cycles per pixel, {:.2f} fps at {} MHz\n", a.rig,
-                             j["counted"]["cycles_per_pixel"].get<double>(), j["counted"]["fps_at_clock"].get<double>(),
-                             a.o.clock_mhz);
+                             j["counted"]["cycles_per_pixel"].get<double>(),
+                             j["counted"]["fps_at_clock"].get<double>(), a.o.clock_mhz);
 }
 
 // ------------------------------------------------------------------------------------ memory
@@ -354,37 +380,57 @@ void run_memory(MemArgs a) {
   if (a.bram36 < 1) throw std::invalid_argument("--bram36 must be positive");
   const hw::MemoryReport r = hw::memory_report(a.o);
   const hw::FpgaPlan plan = hw::plan_fpga(a.o, {a.device, a.bram36});
-  nlohmann::json rows = nlohmann::json::array(), fifos = nlohmann::json::array(), wr = nlohmann::json::array(),
-                 pins = nlohmann::json::array();
+  nlohmann::json rows = nlohmann::json::array(), fifos = nlohmann::json::array(),
+                 wr = nlohmann::json::array(), pins = nlohmann::json::array();
   for (const auto& m : r.rows)
-    rows.push_back({{"block", m.block}, {"type", hw::to_string(m.kind)}, {"count", m.count}, {"words", m.words},
-                    {"bits", m.bits}, {"kbytes", m.kbytes}, {"area_mm2", m.area_mm2}, {"area_estimated", m.area_estimated}});
-  for (const auto& x : r.fifos) fifos.push_back({{"name", x.name}, {"words", x.words}, {"bits", x.bits}, {"clocking", x.clocking}});
-  for (const auto& x : r.wrappers) wr.push_back({{"name", x.name}, {"instances", x.instances}, {"kind", x.kind}, {"kbytes", x.kbytes}});
-  for (const auto& x : r.pins) pins.push_back({{"name", x.name}, {"initial", x.initial}, {"with_io", x.with_io}});
-  nlohmann::json j = {{"table_6_4", rows}, {"total_kbytes", r.total_kbytes}, {"total_area_mm2", r.total_area_mm2},
-                      {"table_6_5", fifos}, {"table_6_8", wr}, {"table_6_3", pins},
-                      {"pins_initial", r.pins_initial}, {"pins_with_io", r.pins_with_io},
+    rows.push_back({{"block", m.block},
+                    {"type", hw::to_string(m.kind)},
+                    {"count", m.count},
+                    {"words", m.words},
+                    {"bits", m.bits},
+                    {"kbytes", m.kbytes},
+                    {"area_mm2", m.area_mm2},
+                    {"area_estimated", m.area_estimated}});
+  for (const auto& x : r.fifos)
+    fifos.push_back({{"name", x.name}, {"words", x.words}, {"bits", x.bits}, {"clocking", x.clocking}});
+  for (const auto& x : r.wrappers)
+    wr.push_back({{"name", x.name}, {"instances", x.instances}, {"kind", x.kind}, {"kbytes", x.kbytes}});
+  for (const auto& x : r.pins)
+    pins.push_back({{"name", x.name}, {"initial", x.initial}, {"with_io", x.with_io}});
+  nlohmann::json j = {{"table_6_4", rows},
+                      {"total_kbytes", r.total_kbytes},
+                      {"total_area_mm2", r.total_area_mm2},
+                      {"table_6_5", fifos},
+                      {"table_6_8", wr},
+                      {"table_6_3", pins},
+                      {"pins_initial", r.pins_initial},
+                      {"pins_with_io", r.pins_with_io},
                       {"frame_memory_bits", r.frame_memory_bits},
-                      {"fpga", {{"device", a.device}, {"bram36", a.bram36}, {"frame_blocks_per_camera", plan.frame_blocks_per_camera},
-                                {"frame_blocks", plan.frame_blocks}, {"table_blocks", plan.table_blocks},
-                                {"total_blocks", plan.total_blocks}, {"utilisation", plan.utilisation}, {"fits", plan.fits},
-                                {"clock_mhz", plan.clock_mhz}}}};
+                      {"fpga",
+                       {{"device", a.device},
+                        {"bram36", a.bram36},
+                        {"frame_blocks_per_camera", plan.frame_blocks_per_camera},
+                        {"frame_blocks", plan.frame_blocks},
+                        {"table_blocks", plan.table_blocks},
+                        {"total_blocks", plan.total_blocks},
+                        {"utilisation", plan.utilisation},
+                        {"fits", plan.fits},
+                        {"clock_mhz", plan.clock_mhz}}}};
   if (a.json) {
     print_json(j);
     return;
   }
   std::cout << "Table 6.4 (ASIC memories):\n";
   for (const auto& m : r.rows)
-    std::cout << fmt::format("  {:<18} {:<16} {:>4} x {:>5} x {:>2} bit = {:>10.3f} KB {:>7.3f} mm2{}\n", m.block,
-                             hw::to_string(m.kind), m.count, m.words, m.bits, m.kbytes, m.area_mm2,
+    std::cout << fmt::format("  {:<18} {:<16} {:>4} x {:>5} x {:>2} bit = {:>10.3f} KB {:>7.3f} mm2{}\n",
+                             m.block, hw::to_string(m.kind), m.count, m.words, m.bits, m.kbytes, m.area_mm2,
                              m.area_estimated ? " (estimate)" : "");
   std::cout << fmt::format("  total {:.3f} KB, {:.3f} mm2\n", r.total_kbytes, r.total_area_mm2);
-  std::cout << fmt::format("frame memories {:.3f} Mbit; pins {} / {} (Table 6.3)\n", r.frame_memory_bits / 1e6,
-                           r.pins_initial, r.pins_with_io);
-  std::cout << fmt::format("FPGA {}: {} + {} = {} of {} 36Kb blocks ({:.1f} %, {}), clock >= {:.2f} MHz\n", a.device,
-                           plan.frame_blocks, plan.table_blocks, plan.total_blocks, a.bram36, 100 * plan.utilisation,
-                           plan.fits ? "fits" : "does NOT fit", plan.clock_mhz);
+  std::cout << fmt::format("frame memories {:.3f} Mbit; pins {} / {} (Table 6.3)\n",
+                           r.frame_memory_bits / 1e6, r.pins_initial, r.pins_with_io);
+  std::cout << fmt::format("FPGA {}: {} + {} = {} of {} 36Kb blocks ({:.1f} %, {}), clock >= {:.2f} MHz\n",
+                           a.device, plan.frame_blocks, plan.table_blocks, plan.total_blocks, a.bram36,
+                           100 * plan.utilisation, plan.fits ? "fits" : "does NOT fit", plan.clock_mhz);
 }
 
 // ------------------------------------------------------------------------------------ export / import
@@ -407,18 +453,28 @@ void run_export(const ExArgs& a) {
   const bool photometric = !a.no_photometric && has_photometric(rig);
   if (photometric) o.vignetting = hw::vignetting_from_rig(rig, exponent);
   const hw::ExportSummary s = hw::export_chip(rig, o, a.dir);
-  nlohmann::json j = {{"dir", a.dir}, {"files", s.files}, {"cameras", rig.cameras.size()},
-                      {"words", {{"reg", s.reg_words}, {"pix_pos", s.pix_pos_words}, {"cam_search", s.cam_search_words},
-                                 {"pix_val", s.pix_val_words}}},
-                      {"angle_registers", {{"theta_min", s.chip.angles.theta_min}, {"k_theta", s.chip.angles.k_theta},
-                                           {"phi_min", s.chip.angles.phi_min}, {"k_phi", s.chip.angles.k_phi}}},
-                      {"vignetting", photometric ? "the rig's photometric model (" + a.memory_encoding + " frame memories)"
-                                                 : std::string("unit tables (no photometric model)")}};
+  nlohmann::json j = {
+      {"dir", a.dir},
+      {"files", s.files},
+      {"cameras", rig.cameras.size()},
+      {"words",
+       {{"reg", s.reg_words},
+        {"pix_pos", s.pix_pos_words},
+        {"cam_search", s.cam_search_words},
+        {"pix_val", s.pix_val_words}}},
+      {"angle_registers",
+       {{"theta_min", s.chip.angles.theta_min},
+        {"k_theta", s.chip.angles.k_theta},
+        {"phi_min", s.chip.angles.phi_min},
+        {"k_phi", s.chip.angles.k_phi}}},
+      {"vignetting", photometric ? "the rig's photometric model (" + a.memory_encoding + " frame memories)"
+                                 : std::string("unit tables (no photometric model)")}};
   if (a.json)
     print_json(j);
   else
-    std::cout << fmt::format("{}: {} files; {} register, {} pix_pos, {} cam_search, {} pix_val words\n", a.dir,
-                             s.files.size(), s.reg_words, s.pix_pos_words, s.cam_search_words, s.pix_val_words);
+    std::cout << fmt::format("{}: {} files; {} register, {} pix_pos, {} cam_search, {} pix_val words\n",
+                             a.dir, s.files.size(), s.reg_words, s.pix_pos_words, s.cam_search_words,
+                             s.pix_val_words);
 }
 
 struct ImArgs {
@@ -432,33 +488,47 @@ void run_import(const ImArgs& a) {
   save_rig(r.rig, a.rig_out);
   const hw::RigDifference b = hw::quantisation_bound(r.config);
   auto diff_json = [](const hw::RigDifference& d) {
-    return nlohmann::json{{"axis_deg", d.axis_deg}, {"position_mm", d.position_mm}, {"focal_px", d.focal_px},
-                          {"centre_px", d.centre_px}, {"k", d.k}, {"aov_deg", d.aov_deg}};
+    return nlohmann::json{{"axis_deg", d.axis_deg},
+                          {"position_mm", d.position_mm},
+                          {"focal_px", d.focal_px},
+                          {"centre_px", d.centre_px},
+                          {"k", d.k},
+                          {"aov_deg", d.aov_deg}};
   };
-  nlohmann::json j = {{"rig", a.rig_out}, {"cameras", r.rig.cameras.size()}, {"method", pano::to_string(r.chip.method)},
-                      {"grid", {{"projection", to_string(r.grid.projection)}, {"width", r.grid.width}, {"height", r.grid.height}}},
-                      {"quantisation_bound", diff_json(b)}};
-  if (!a.compare.empty()) j["difference"] = diff_json(hw::rig_difference(design::load_rig_or_builtin(a.compare), r.rig));
+  nlohmann::json j = {
+      {"rig", a.rig_out},
+      {"cameras", r.rig.cameras.size()},
+      {"method", pano::to_string(r.chip.method)},
+      {"grid",
+       {{"projection", to_string(r.grid.projection)}, {"width", r.grid.width}, {"height", r.grid.height}}},
+      {"quantisation_bound", diff_json(b)}};
+  if (!a.compare.empty())
+    j["difference"] = diff_json(hw::rig_difference(design::load_rig_or_builtin(a.compare), r.rig));
   if (a.json)
     print_json(j);
   else
-    std::cout << fmt::format("{}: {} cameras{}\n", a.rig_out, r.rig.cameras.size(),
-                             a.compare.empty() ? "" : fmt::format("; max difference to {}: {}", a.compare, j["difference"].dump()));
+    std::cout << fmt::format(
+        "{}: {} cameras{}\n", a.rig_out, r.rig.cameras.size(),
+        a.compare.empty() ? ""
+                          : fmt::format("; max difference to {}: {}", a.compare, j["difference"].dump()));
 }
 
 }  // namespace
 
 void add_hw_command(CLI::App& root) {
-  auto* cmd = root.add_subcommand("hw", "Bit-accurate hardware model of the panorama pipeline (thesis §5.3-5.5, ch. 6; "
-                                        "docs/hw-model.md)");
+  auto* cmd =
+      root.add_subcommand("hw",
+                          "Bit-accurate hardware model of the panorama pipeline (thesis §5.3-5.5, ch. 6; "
+                          "docs/hw-model.md)");
   cmd->require_subcommand(1);
   auto add_cfg = [](CLI::App* c, std::string& config, std::vector<std::string>& sets) {
-    c->add_option("--config", config, "Hardware widths: JSON object of HwConfig fields (e.g. an export's config.json)");
+    c->add_option("--config", config,
+                  "Hardware widths: JSON object of HwConfig fields (e.g. an export's config.json)");
     c->add_option("--set", sets, "Override one width, name=value (repeatable), e.g. --set angle_bits=20");
   };
   // Options shared by simulate and sweep: the rig, its frames, the method and the output grid.
-  auto add_scene = [](CLI::App* c, std::string& rig, std::string& frames, std::string& method, std::string& projection,
-                      std::string& size, const char* size_help) {
+  auto add_scene = [](CLI::App* c, std::string& rig, std::string& frames, std::string& method,
+                      std::string& projection, std::string& size, const char* size_help) {
     c->add_option("--rig", rig, "Rig (JSON); default FRAMES/rig.json");
     c->add_option("--frames", frames, "Frames folder (cam_XX.png)")->required();
     c->add_option("--method", method, "Pixel value unit: nn, linear (default) or mrf");
@@ -467,26 +537,31 @@ void add_hw_command(CLI::App& root) {
   };
 
   static SimArgs sa;
-  auto* sim = cmd->add_subcommand("simulate", "Render a panorama with the bit-accurate pipeline; compare with the float "
-                                              "stitch of the same RGB565 frames; count cycles");
+  auto* sim = cmd->add_subcommand("simulate",
+                                  "Render a panorama with the bit-accurate pipeline; compare with the float "
+                                  "stitch of the same RGB565 frames; count cycles");
   add_scene(sim, sa.rig, sa.frames, sa.method, sa.projection, sa.size,
             "Panorama WxH (default 1080x1080 vr180, 1920x512 equirect)");
   sim->add_flag("--boundary", sa.boundary, "Object boundary unit on (§5.4.5): boundary pixels painted green");
   sim->add_option("--out", sa.out, "Panorama image to write (PNG, atomic)");
-  sim->add_option("--clock-mhz", sa.clock_mhz, "Clock for the frame rate the counted cycles give (default 120)");
-  sim->add_option("--dump-hex", sa.dump_hex, "Also write the RTL testbench files: frame_XX.hex, expected_rgb888.hex "
-                                             "and the export files");
+  sim->add_option("--clock-mhz", sa.clock_mhz,
+                  "Clock for the frame rate the counted cycles give (default 120)");
+  sim->add_option("--dump-hex", sa.dump_hex,
+                  "Also write the RTL testbench files: frame_XX.hex, expected_rgb888.hex "
+                  "and the export files");
   sim->add_flag("--no-reference", sa.no_reference, "Skip the float reference (no psnr_vs_float_db)");
-  sim->add_flag("--no-photometric", sa.no_photometric,
-                "Unit vignetting tables even when the rig has a photometric model (by default its model is loaded\n"
-                "into the vignetting memory and the float reference corrects the frames exactly)");
+  sim->add_flag(
+      "--no-photometric", sa.no_photometric,
+      "Unit vignetting tables even when the rig has a photometric model (by default its model is loaded\n"
+      "into the vignetting memory and the float reference corrects the frames exactly)");
   add_cfg(sim, sa.config, sa.sets);
   sim->add_flag("--json", sa.json, "Print one JSON object on stdout");
   sim->callback([] { run_simulate(sa); });
 
   static SweepArgs sw;
-  auto* swp = cmd->add_subcommand("sweep", "PSNR against the float stitch as each width varies; the smallest widths "
-                                           "that keep the target (CSV + SVG)");
+  auto* swp = cmd->add_subcommand("sweep",
+                                  "PSNR against the float stitch as each width varies; the smallest widths "
+                                  "that keep the target (CSV + SVG)");
   add_scene(swp, sw.rig, sw.frames, sw.method, sw.projection, sw.size, "Panorama WxH (default 540x540)");
   swp->add_option("--target", sw.target, "PSNR target in dB (default 45)");
   swp->add_option("--param", sw.params, "Sweep only these widths (repeatable)");
@@ -496,14 +571,18 @@ void add_hw_command(CLI::App& root) {
   swp->callback([] { run_sweep_cmd(sw); });
 
   static ThArgs ta;
-  auto* th = cmd->add_subcommand("throughput", "Per-block initiation intervals, Th_sys, F_min = 25 N M Th_sys (§5.4.3-5.4.4)");
+  auto* th = cmd->add_subcommand(
+      "throughput", "Per-block initiation intervals, Th_sys, F_min = 25 N M Th_sys (§5.4.3-5.4.4)");
   th->add_option("--cameras", ta.o.cameras, "Cameras (default 24)");
-  th->add_option("--contributors", ta.o.max_contributors, "Contributors per direction N_cam_contr (default 4)");
+  th->add_option("--contributors", ta.o.max_contributors,
+                 "Contributors per direction N_cam_contr (default 4)");
   th->add_option("--size", ta.size, "Panorama WxH (default 1080x1080)");
   th->add_option("--fps", ta.o.fps, "Frame rate for F_min (default 25)");
   th->add_option("--clock-mhz", ta.o.clock_mhz, "Clock for the frame rate (default 120)");
-  th->add_option("--table-sets", ta.o.table_sets, "sin/cos table sets in the Cartesian unit: 1 (Th 9) or 3 (Th 3, default)");
-  th->add_flag("--search-per-camera", ta.search_per_camera, "Camera search before unrolling: 1 cycle per camera");
+  th->add_option("--table-sets", ta.o.table_sets,
+                 "sin/cos table sets in the Cartesian unit: 1 (Th 9) or 3 (Th 3, default)");
+  th->add_flag("--search-per-camera", ta.search_per_camera,
+               "Camera search before unrolling: 1 cycle per camera");
   th->add_option("--rig", ta.rig, "Also count the cycles the bit-accurate pipeline takes on this rig");
   th->add_option("--projection", ta.projection, "Grid for --rig (default vr180)");
   th->add_option("--config", ta.config, "Hardware widths for --rig (JSON)");
@@ -511,10 +590,12 @@ void add_hw_command(CLI::App& root) {
   th->callback([] { run_throughput(ta); });
 
   static MemArgs ma;
-  auto* mem = cmd->add_subcommand("memory", "Memories (Tables 6.4, 6.5, 6.8), pins (Table 6.3), FPGA block-RAM plan and clock");
+  auto* mem = cmd->add_subcommand(
+      "memory", "Memories (Tables 6.4, 6.5, 6.8), pins (Table 6.3), FPGA block-RAM plan and clock");
   mem->add_option("--cameras", ma.o.cameras, "Cameras (default 24)");
   mem->add_option("--frame", ma.frame, "Camera frame WxH (default 250x250)");
-  mem->add_option("--bpp", ma.o.bits_per_pixel, "Bits per stored pixel (default 16 = RGB565; 30 = 10-bit RGB)");
+  mem->add_option("--bpp", ma.o.bits_per_pixel,
+                  "Bits per stored pixel (default 16 = RGB565; 30 = 10-bit RGB)");
   mem->add_option("--pano", ma.pano, "Panorama WxH (default 1080x1080)");
   mem->add_option("--fps", ma.o.fps, "Frame rate (default 25)");
   mem->add_option("--th-sys", ma.o.th_sys, "Cycles per panorama pixel (default 4)");
@@ -526,25 +607,30 @@ void add_hw_command(CLI::App& root) {
   mem->callback([] { run_memory(ma); });
 
   static ExArgs ea;
-  auto* ex = cmd->add_subcommand("export", "Write what the chip loads: register map (Table 6.7), word streams (Table 6.6), "
-                                           "$readmemh / .coe ROMs and tables, C header");
+  auto* ex =
+      cmd->add_subcommand("export",
+                          "Write what the chip loads: register map (Table 6.7), word streams (Table 6.6), "
+                          "$readmemh / .coe ROMs and tables, C header");
   ex->add_option("RIG", ea.rig, "Rig (JSON)")->required();
   ex->add_option("DIR", ea.dir, "Output folder")->required();
   ex->add_option("--method", ea.method, "nn, linear (default) or mrf");
   ex->add_option("--projection", ea.projection, "vr180 (default), equirect, equirect-full");
   ex->add_option("--size", ea.size, "Panorama WxH");
   ex->add_flag("--boundary", ea.boundary, "Enable the object boundary unit");
-  ex->add_flag("--no-photometric", ea.no_photometric, "Unit vignetting tables even when the rig has a photometric model");
-  ex->add_option("--memory-encoding", ea.memory_encoding,
-                 "What the frame memories hold: srgb (omma's frames; the vignetting gains are (1/V)^(1/2.2)) or\n"
-                 "linear (the thesis's front end; 1/V)")
+  ex->add_flag("--no-photometric", ea.no_photometric,
+               "Unit vignetting tables even when the rig has a photometric model");
+  ex->add_option(
+        "--memory-encoding", ea.memory_encoding,
+        "What the frame memories hold: srgb (omma's frames; the vignetting gains are (1/V)^(1/2.2)) or\n"
+        "linear (the thesis's front end; 1/V)")
       ->capture_default_str();
   add_cfg(ex, ea.config, ea.sets);
   ex->add_flag("--json", ea.json, "Print one JSON object on stdout");
   ex->callback([] { run_export(ea); });
 
   static ImArgs ia;
-  auto* im = cmd->add_subcommand("import", "Read an export folder back into a rig (within each field's quantisation)");
+  auto* im = cmd->add_subcommand("import",
+                                 "Read an export folder back into a rig (within each field's quantisation)");
   im->add_option("DIR", ia.dir, "Export folder")->required();
   im->add_option("RIG", ia.rig_out, "Rig to write (JSON, atomic)")->required();
   im->add_option("--compare", ia.compare, "Report the largest differences to this rig");

@@ -12,7 +12,8 @@ namespace omma::app {
 
 void print_json(const nlohmann::json& j) {
   nlohmann::json out = j;
-  if (out.is_object() && !out.contains("omma_version")) out["omma_version"] = omma::version();  // who wrote it
+  if (out.is_object() && !out.contains("omma_version"))
+    out["omma_version"] = omma::version();  // who wrote it
   std::cout << out.dump(2) << std::endl;
 }
 
@@ -20,17 +21,26 @@ void set_json_mode(bool on) { omma::set_progress_enabled(!on); }
 
 // Pipeline order: rig files, dome design, simulation, ISP, calibration, panorama, engine.
 static const CommandEntry kCommands[] = {
-    {"rig", add_rig_command},           {"design", add_design_command},
-    {"coverage", add_coverage_command}, {"sweep", add_sweep_command},
-    {"optics", add_optics_command},     {"plan", add_plan_command},
+    {"rig", add_rig_command},
+    {"design", add_design_command},
+    {"coverage", add_coverage_command},
+    {"sweep", add_sweep_command},
+    {"optics", add_optics_command},
+    {"plan", add_plan_command},
     {"simulate", add_simulate_command},
-    {"link", add_link_command},         {"isp", add_isp_command},
-    {"calibrate", add_calibrate_command}, {"rig-diff", add_rig_diff_command},
-    {"pto", add_pto_command},           {"stitch", add_stitch_command},
-    {"eval", add_eval_command},         {"resolution", add_resolution_command},
-    {"render", add_render_command},     {"record", add_record_command},
+    {"link", add_link_command},
+    {"isp", add_isp_command},
+    {"calibrate", add_calibrate_command},
+    {"rig-diff", add_rig_diff_command},
+    {"pto", add_pto_command},
+    {"stitch", add_stitch_command},
+    {"eval", add_eval_command},
+    {"resolution", add_resolution_command},
+    {"render", add_render_command},
+    {"record", add_record_command},
     {"recording", add_recording_command},
-    {"run", add_run_command},           {"bench", add_bench_command},
+    {"run", add_run_command},
+    {"bench", add_bench_command},
     {"hw", add_hw_command},
     {"demo", add_demo_command},
 };
@@ -38,9 +48,10 @@ static const CommandEntry kCommands[] = {
 }  // namespace omma::app
 
 int main(int argc, char** argv) {
-  CLI::App app{"omma: design, calibrate and run compound-eye (multi-camera dome) panoramic cameras.\n"
-               "Conventions: dome axis +z, theta polar from +z, phi azimuth from +x; mm and degrees in\n"
-               "files and options; pixel centres at integer + 0.5. See README.md."};
+  CLI::App app{
+      "omma: design, calibrate and run compound-eye (multi-camera dome) panoramic cameras.\n"
+      "Conventions: dome axis +z, theta polar from +z, phi azimuth from +x; mm and degrees in\n"
+      "files and options; pixel centres at integer + 0.5. See README.md."};
   app.require_subcommand(1);
   bool verbose = false, quiet = false;
   app.add_flag("-v,--verbose", verbose, "More log output (stderr)");

@@ -1,11 +1,12 @@
 // omma optics: resolving angle, illumination and size efficiency (thesis §3.2, eq. 3.12, 5.28-5.29).
+#include "omma/design/optics.h"
+
 #include <iostream>
 #include <memory>
 
 #include <fmt/format.h>
 
 #include "apps/command.h"
-#include "omma/design/optics.h"
 
 namespace omma::app {
 
@@ -26,18 +27,15 @@ void add_optics_command(CLI::App& root) {
   cmd->add_option("--focal", in.focal_length_um, "Pinhole focal length, um")->capture_default_str();
   cmd->add_option("--aperture", in.aperture_um, "Pinhole aperture diameter, um")->capture_default_str();
   cmd->add_option("--pixel-pitch", in.pixel_pitch_um, "Sensor pixel pitch, um")->capture_default_str();
-  cmd->add_option("--source-flux", in.source_flux_lm, "LED source luminous flux, lm")
-      ->capture_default_str();
+  cmd->add_option("--source-flux", in.source_flux_lm, "LED source luminous flux, lm")->capture_default_str();
   cmd->add_option("--source-diameter", in.source_diameter_mm, "LED source output diameter, mm")
       ->capture_default_str();
-  cmd->add_option("--channels", in.channels_small, "Number of small fibre channels")
-      ->capture_default_str();
+  cmd->add_option("--channels", in.channels_small, "Number of small fibre channels")->capture_default_str();
   cmd->add_option("--channel-diameter", in.channel_small_diameter_mm, "Small channel diameter, mm")
       ->capture_default_str();
   cmd->add_option("--top-channels", in.channels_large, "Number of large (top) fibre channels")
       ->capture_default_str();
-  cmd->add_option("--top-channel-diameter", in.channel_large_diameter_mm,
-                  "Large channel diameter, mm")
+  cmd->add_option("--top-channel-diameter", in.channel_large_diameter_mm, "Large channel diameter, mm")
       ->capture_default_str();
   cmd->add_option("--target-area", in.target_area_mm2,
                   "Illuminated area A_r, mm^2 (the thesis uses 1250; a 25 mm hemisphere is 3927)")
@@ -74,8 +72,7 @@ void add_optics_command(CLI::App& root) {
           "F = {:.1f} lm\n"
           "Ideal radius (eq. 5.28) = {:.2f} mm, size efficiency (eq. 5.29) = {:.1f} %\n",
           r.rayleigh_spot_um, r.delta_phi_optics_deg, r.delta_phi_pixel_deg, r.source_area_mm2,
-          r.channel_area_mm2, r.delivered_flux_lm, r.illumination_lm, r.r_ideal_mm,
-          100 * r.size_efficiency);
+          r.channel_area_mm2, r.delivered_flux_lm, r.illumination_lm, r.r_ideal_mm, 100 * r.size_efficiency);
     }
   });
 }

@@ -17,26 +17,40 @@ nlohmann::json plan_json(const design::RecordingPlan& p) {
   nlohmann::json checks = nlohmann::json::array();
   for (const auto& c : p.checks) checks.push_back({{"name", c.name}, {"ok", c.ok}, {"detail", c.detail}});
   const auto& in = p.in;
-  return {{"input",
-           {{"width", in.width}, {"height", in.height}, {"bits", in.bits}, {"fps", in.fps},
-            {"clock_mhz", in.clock_mhz}, {"max_clock_mhz", in.max_clock_mhz}, {"cameras", in.cameras},
-            {"cameras_per_device", in.cameras_per_device}, {"device_bytes", in.device_bytes},
-            {"device_rate_bytes_per_s", in.device_rate}, {"minutes", in.minutes}}},
-          {"camera", {{"bytes_per_s", p.camera_bytes_per_s}, {"mib_per_s", p.camera_mib_per_s}, {"gib", p.camera_gib}}},
-          {"device", {{"bytes_per_s", p.device_bytes_per_s}, {"bytes", p.device_bytes}, {"max_minutes", p.max_minutes}}},
-          {"rig",
-           {{"devices", p.devices}, {"bytes_per_s", p.rig_bytes_per_s}, {"bytes", p.rig_bytes},
-            {"tib", p.rig_bytes / std::pow(2.0, 40)}, {"tb", p.rig_bytes / 1e12}}},
-          {"checks", checks},
-          {"feasible", p.feasible()}};
+  return {
+      {"input",
+       {{"width", in.width},
+        {"height", in.height},
+        {"bits", in.bits},
+        {"fps", in.fps},
+        {"clock_mhz", in.clock_mhz},
+        {"max_clock_mhz", in.max_clock_mhz},
+        {"cameras", in.cameras},
+        {"cameras_per_device", in.cameras_per_device},
+        {"device_bytes", in.device_bytes},
+        {"device_rate_bytes_per_s", in.device_rate},
+        {"minutes", in.minutes}}},
+      {"camera",
+       {{"bytes_per_s", p.camera_bytes_per_s}, {"mib_per_s", p.camera_mib_per_s}, {"gib", p.camera_gib}}},
+      {"device",
+       {{"bytes_per_s", p.device_bytes_per_s}, {"bytes", p.device_bytes}, {"max_minutes", p.max_minutes}}},
+      {"rig",
+       {{"devices", p.devices},
+        {"bytes_per_s", p.rig_bytes_per_s},
+        {"bytes", p.rig_bytes},
+        {"tib", p.rig_bytes / std::pow(2.0, 40)},
+        {"tb", p.rig_bytes / 1e12}}},
+      {"checks", checks},
+      {"feasible", p.feasible()}};
 }
 
 void print_plan(const design::RecordingPlan& p) {
   const auto& in = p.in;
   std::cout << fmt::format(
-      "{} cameras, {}x{} at {:g} fps, {} bit/px, {:g} MHz clock, {} per device ({:.0f} GB, {:.0f} MB/s), {:g} min\n",
-      in.cameras, in.width, in.height, in.fps, in.bits, in.clock_mhz, in.cameras_per_device, in.device_bytes / 1e9,
-      in.device_rate / 1e6, in.minutes);
+      "{} cameras, {}x{} at {:g} fps, {} bit/px, {:g} MHz clock, {} per device ({:.0f} GB, {:.0f} MB/s), "
+      "{:g} min\n",
+      in.cameras, in.width, in.height, in.fps, in.bits, in.clock_mhz, in.cameras_per_device,
+      in.device_bytes / 1e9, in.device_rate / 1e6, in.minutes);
   std::cout << fmt::format("  per camera: {:.3f} MiB/s ({:.2f} MB/s), {:.3f} GiB\n", p.camera_mib_per_s,
                            p.camera_bytes_per_s / 1e6, p.camera_gib);
   std::cout << fmt::format("  per device: {:.3f} MiB/s ({:.2f} MB/s), {:.2f} GB; holds {:.2f} min\n",
@@ -44,7 +58,8 @@ void print_plan(const design::RecordingPlan& p) {
                            p.max_minutes);
   std::cout << fmt::format("  rig: {} devices, {:.3f} GB/s, {:.2f} TiB ({:.2f} TB)\n", p.devices,
                            p.rig_bytes_per_s / 1e9, p.rig_bytes / std::pow(2.0, 40), p.rig_bytes / 1e12);
-  for (const auto& c : p.checks) std::cout << fmt::format("  {:<18} {}  {}\n", c.name, c.ok ? "ok  " : "FAIL", c.detail);
+  for (const auto& c : p.checks)
+    std::cout << fmt::format("  {:<18} {}  {}\n", c.name, c.ok ? "ok  " : "FAIL", c.detail);
 }
 
 void print_table71(const std::vector<design::Table71Check>& rows, const design::RecordingPlan& fives) {
@@ -57,15 +72,16 @@ void print_table71(const std::vector<design::Table71Check>& rows, const design::
       if (!c.ok) notes += (notes.empty() ? "" : ", ") + c.name;
     std::string flag = r.matches ? "matches" : "MISMATCH";
     if (r.fits_bits) flag += fmt::format(" (the printed figures fit {} bit/px)", *r.fits_bits);
-    std::cout << fmt::format("{:>3}  {:>4}x{:<4}  {:>3}  {:>3g}  {:>4g}  {:>3g} | {:8.3f} ({:>3}) {:>5} | {:9.3f} ({:>3}) {:>6} | "
-                             "{} {}\n",
-                             r.row.option, r.row.width, r.row.height, r.row.bits, r.row.clock_mhz, r.row.fps,
-                             r.row.minutes, r.plan.camera_mib_per_s, r.row.bandwidth_mb_s, r.bandwidth,
-                             r.plan.camera_gib, r.row.memory_gb, r.memory, notes.empty() ? "hold" : "fail: " + notes,
-                             flag);
+    std::cout << fmt::format(
+        "{:>3}  {:>4}x{:<4}  {:>3}  {:>3g}  {:>4g}  {:>3g} | {:8.3f} ({:>3}) {:>5} | {:9.3f} ({:>3}) {:>6} | "
+        "{} {}\n",
+        r.row.option, r.row.width, r.row.height, r.row.bits, r.row.clock_mhz, r.row.fps, r.row.minutes,
+        r.plan.camera_mib_per_s, r.row.bandwidth_mb_s, r.bandwidth, r.plan.camera_gib, r.row.memory_gb,
+        r.memory, notes.empty() ? "hold" : "fail: " + notes, flag);
   }
   std::cout << fmt::format(
-      "\"5.2 TB for 44 cameras\" (option 1, 30 min, L6537-6539): 44 x {:.2f} GiB = {:.2f} TiB ({:.2f} TB); 5.2 TiB "
+      "\"5.2 TB for 44 cameras\" (option 1, 30 min, L6537-6539): 44 x {:.2f} GiB = {:.2f} TiB ({:.2f} TB); "
+      "5.2 TiB "
       "is 30 cameras\n",
       fives.camera_gib, fives.rig_bytes / std::pow(2.0, 40), fives.rig_bytes / 1e12);
 }
@@ -82,9 +98,11 @@ void add_plan_command(CLI::App& root) {
   auto o = std::make_shared<Opts>();
   auto* cmd = root.add_subcommand(
       "plan",
-      "Recording planner of the Giga-Eye (thesis Table 7.1): per camera, per storage device and for the rig,\n"
+      "Recording planner of the Giga-Eye (thesis Table 7.1): per camera, per storage device and for the "
+      "rig,\n"
       "the bandwidth, the storage for the duration and the recording time a device holds, and whether the\n"
-      "pixel clock (< 80 MHz over long cables), the device's write rate and its capacity hold. A plan that does\n"
+      "pixel clock (< 80 MHz over long cables), the device's write rate and its capacity hold. A plan that "
+      "does\n"
       "not hold is an error naming the constraint. --table71 recomputes the thesis's table (binary units).");
   cmd->add_option("--row", o->row, "Start from Table 7.1 option 1..8 (other options override its values)")
       ->check(CLI::Range(1, 8));
@@ -93,16 +111,19 @@ void add_plan_command(CLI::App& root) {
   cmd->add_option("--bits", o->in.bits, "Bits per pixel as stored")->capture_default_str();
   cmd->add_option("--fps", o->in.fps, "Frame rate")->capture_default_str();
   cmd->add_option("--clock", o->in.clock_mhz, "Pixel clock, MHz")->capture_default_str();
-  cmd->add_option("--max-clock", o->in.max_clock_mhz, "Highest usable pixel clock (exclusive), MHz")->capture_default_str();
+  cmd->add_option("--max-clock", o->in.max_clock_mhz, "Highest usable pixel clock (exclusive), MHz")
+      ->capture_default_str();
   cmd->add_option("--cameras", o->in.cameras, "Cameras in the rig")->capture_default_str();
-  cmd->add_option("--per-device", o->in.cameras_per_device, "Cameras per storage device")->capture_default_str();
+  cmd->add_option("--per-device", o->in.cameras_per_device, "Cameras per storage device")
+      ->capture_default_str();
   cmd->add_option("--device-size", o->device_size, "Capacity of one device (B, kB, MB, GB, TB, KiB..TiB)")
       ->capture_default_str();
   cmd->add_option("--device-rate", o->device_rate, "Sustained write rate of one device, e.g. 150MB/s")
       ->capture_default_str();
   cmd->add_option("--minutes", o->in.minutes, "Planned recording duration, minutes")->capture_default_str();
   cmd->add_flag("--table71", o->table, "Recompute all 8 rows of Table 7.1 and the text's 5.2 TB");
-  cmd->add_flag("--json", o->json, "Print one JSON object on stdout (the plan, or {rows, five_tb} with --table71)");
+  cmd->add_flag("--json", o->json,
+                "Print one JSON object on stdout (the plan, or {rows, five_tb} with --table71)");
   cmd->callback([o, cmd] {
     set_json_mode(o->json);
     if (o->table) {
@@ -127,7 +148,8 @@ void add_plan_command(CLI::App& root) {
                      {{"cameras", in.cameras},
                       {"tib", fives.rig_bytes / std::pow(2.0, 40)},
                       {"tb", fives.rig_bytes / 1e12},
-                      {"tib_for_30_cameras", 30 * fives.camera_bytes_per_s * 60 * in.minutes / std::pow(2.0, 40)}}}});
+                      {"tib_for_30_cameras",
+                       30 * fives.camera_bytes_per_s * 60 * in.minutes / std::pow(2.0, 40)}}}});
       } else {
         print_table71(rows, fives);
       }

@@ -70,12 +70,13 @@ void run_record(const RecordArgs& a) {
                 {"mb_per_s", s.mb_per_s()},
                 {"error", s.error.empty() ? nlohmann::json(nullptr) : nlohmann::json(s.error)}});
   } else {
-    std::cout << fmt::format("{}: {} cameras, {} frames ({} dropped by the recorder), {:.1f} MB in {:.2f} s = {:.1f} MB/s\n",
-                             a.out, rig.cameras.size(), frames, dropped, s.bytes / 1e6, s.seconds, s.mb_per_s());
+    std::cout << fmt::format(
+        "{}: {} cameras, {} frames ({} dropped by the recorder), {:.1f} MB in {:.2f} s = {:.1f} MB/s\n",
+        a.out, rig.cameras.size(), frames, dropped, s.bytes / 1e6, s.seconds, s.mb_per_s());
   }
   if (!s.error.empty())
-    throw std::runtime_error("recording stopped: " + s.error + " (what was recorded before is readable: omma recording check " +
-                             a.out + ")");
+    throw std::runtime_error("recording stopped: " + s.error +
+                             " (what was recorded before is readable: omma recording check " + a.out + ")");
 }
 
 void run_check(const std::string& dir, bool json) {
@@ -103,7 +104,8 @@ void run_check(const std::string& dir, bool json) {
                     {"duplicates", st.duplicates},
                     {"missing", st.missing},
                     {"extra", st.extra}});
-    frames += st.frames, dropped += st.dropped, dup += st.duplicates, missing += st.missing, extra += st.extra;
+    frames += st.frames, dropped += st.dropped, dup += st.duplicates, missing += st.missing,
+        extra += st.extra;
     if (!r.meta(c).empty()) span = std::max(span, r.meta(c).back().t_ns / 1e9);
   }
   if (json) {
@@ -123,11 +125,12 @@ void run_check(const std::string& dir, bool json) {
                 {"per_camera", cams}});
   } else {
     std::cout << fmt::format(
-        "{}: {} ({}), {} cameras, {} frames readable, {} frame sets ({} complete, matched within half of 1/{:g} s); "
+        "{}: {} ({}), {} cameras, {} frames readable, {} frame sets ({} complete, matched within half of "
+        "1/{:g} s); "
         "dropped {}, duplicated {}, missing from sets {}, left out {}; last frame at {:.2f} s\n",
         dir, r.manifest().complete ? "complete" : "not closed (the recorder was stopped or killed)",
-        r.manifest().sensor_mode, r.cameras(), frames, r.frame_sets(), m.complete_sets, r.manifest().fps, dropped, dup,
-        missing, extra, span);
+        r.manifest().sensor_mode, r.cameras(), frames, r.frame_sets(), m.complete_sets, r.manifest().fps,
+        dropped, dup, missing, extra, span);
   }
 }
 
@@ -141,18 +144,23 @@ void add_record_command(CLI::App& root) {
       "numbers: one HDF5 stream per camera (cam_XX.h5) and manifest.json in OUT (io/recording.h). Crash\n"
       "safe: flushed every --flush seconds; `omma recording check OUT` reads a killed recording.");
   cmd->add_option("--rig", a.rig, "Rig file or built-in rig")->required();
-  cmd->add_option("--source", a.sources,
-                  "Sources as in `omma run` (16-bit single-channel frames are raw already; others are mosaicked RGGB)")
+  cmd->add_option(
+         "--source", a.sources,
+         "Sources as in `omma run` (16-bit single-channel frames are raw already; others are mosaicked RGGB)")
       ->required();
   cmd->add_option("--out", a.out, "Recording folder (must not exist)")->required();
   cmd->add_option("--duration", a.duration, "Seconds to record");
   cmd->add_option("--frames", a.frames, "Frames per camera to record");
-  cmd->add_option("--fps", a.fps, "Source rate and nominal frame rate (matching period 1/fps)")->capture_default_str();
-  cmd->add_option("--source-fps", a.source_fps,
-                  "Rate of image-sequence, still and simulator sources (default: --fps; 0 = as fast as they go)");
-  cmd->add_option("--sensor-mode", a.sensor_mode, "Sensor mode written to the manifest (default: the rig's name)");
+  cmd->add_option("--fps", a.fps, "Source rate and nominal frame rate (matching period 1/fps)")
+      ->capture_default_str();
+  cmd->add_option(
+      "--source-fps", a.source_fps,
+      "Rate of image-sequence, still and simulator sources (default: --fps; 0 = as fast as they go)");
+  cmd->add_option("--sensor-mode", a.sensor_mode,
+                  "Sensor mode written to the manifest (default: the rig's name)");
   cmd->add_option("--clock", a.clock, "Pixel clock in MHz written to the manifest");
-  cmd->add_option("--queue", a.queue, "Frames queued per camera before frames are dropped")->capture_default_str();
+  cmd->add_option("--queue", a.queue, "Frames queued per camera before frames are dropped")
+      ->capture_default_str();
   cmd->add_option("--flush", a.flush, "Seconds between flushes (at most this much is lost on a crash)")
       ->capture_default_str();
   cmd->add_flag("--json", a.json, "Print one JSON summary on stdout");

@@ -1,17 +1,18 @@
 // omma render: large panoramas (Giga-Eye, 21.6 / 82.3 MP) from a frames folder or a recording, as one
-// process or distributed under mpirun (omma/dist: frame sets as items of a job, or one panorama split by bands).
+// process or distributed under mpirun (omma/dist: frame sets as items of a job, or one panorama split by
+// bands).
 #include <chrono>
 #include <filesystem>
 #include <iostream>
 #include <memory>
 #include <optional>
 
-#include <tbb/global_control.h>
-
 #include <fmt/format.h>
 #include <opencv2/imgcodecs.hpp>
+#include <tbb/global_control.h>
 
 #include "apps/command.h"
+#include "apps/split_render.h"
 #include "omma/core/frames.h"
 #include "omma/core/io.h"
 #include "omma/core/log.h"
@@ -19,13 +20,12 @@
 #include "omma/design/prototype.h"
 #include "omma/dist/comm.h"
 #include "omma/dist/job.h"
-#include "apps/split_render.h"
-#include "omma/render/pano_render.h"
 #include "omma/io/pano_file.h"
 #include "omma/io/recording.h"
 #include "omma/io/tiff_writer.h"
 #include "omma/isp/photometric.h"
 #include "omma/pano/quality.h"
+#include "omma/render/pano_render.h"
 
 namespace omma::app {
 namespace {
@@ -36,7 +36,8 @@ struct RenderArgs {
   std::string demosaic = "hybrid", awb = "grayworld";
   std::string split = "sets", manifest, rank0 = "works";
   int band_rows = 256, repeat = 1, bits = 12, threads = 0, window = 0;
-  bool no_cache = false, stream_maps = false, json = false, raw = false, no_resume = false, no_photometric = false;
+  bool no_cache = false, stream_maps = false, json = false, raw = false, no_resume = false,
+       no_photometric = false;
 };
 
 // "pano_{set}.tif" -> "pano_00012.tif"; a name without {set} gets "_00012" before the extension
@@ -70,11 +71,12 @@ class RenderJob : public dist::Job {
         throw std::invalid_argument(
             fmt::format("--rig has {} cameras, the recording {}", rig_.cameras.size(), rr.cameras.size()));
       for (size_t c = 0; c < rig_.cameras.size(); ++c)
-        if (rig_.cameras[c].in.width != rr.cameras[c].in.width || rig_.cameras[c].in.height != rr.cameras[c].in.height)
-          throw std::invalid_argument(fmt::format("--rig camera {} is {}x{}, the recording's {}x{} (another sensor mode)",
-                                                  rig_.cameras[c].id, rig_.cameras[c].in.width,
-                                                  rig_.cameras[c].in.height, rr.cameras[c].in.width,
-                                                  rr.cameras[c].in.height));
+        if (rig_.cameras[c].in.width != rr.cameras[c].in.width ||
+            rig_.cameras[c].in.height != rr.cameras[c].in.height)
+          throw std::invalid_argument(
+              fmt::format("--rig camera {} is {}x{}, the recording's {}x{} (another sensor mode)",
+                          rig_.cameras[c].id, rig_.cameras[c].in.width, rig_.cameras[c].in.height,
+                          rr.cameras[c].in.width, rr.cameras[c].in.height));
     } else {
       const fs::path rig_path = a_.rig.empty() ? fs::path(a_.input) / "rig.json" : fs::path(a_.rig);
       rig_ = a_.rig.empty() ? load_rig(rig_path) : design::load_rig_or_builtin(a_.rig);
@@ -107,9 +109,18 @@ class RenderJob : public dist::Job {
   nlohmann::json parameters() const override {
     std::error_code ec;
     const fs::path input = fs::weakly_canonical(a_.input, ec);
-    return {{"input", input.string()}, {"rig", a_.rig},          {"size", a_.size},         {"projection", a_.projection},
-            {"method", a_.method},     {"band_rows", a_.band_rows}, {"demosaic", a_.demosaic}, {"awb", a_.awb},
-            {"bits", a_.bits},         {"raw", a_.raw}, {"photometric", !a_.no_photometric},           {"min_weight", o_.min_weight}};
+    return {{"input", input.string()},
+            {"rig", a_.rig},
+            {"size", a_.size},
+            {"projection", a_.projection},
+            {"method", a_.method},
+            {"band_rows", a_.band_rows},
+            {"demosaic", a_.demosaic},
+            {"awb", a_.awb},
+            {"bits", a_.bits},
+            {"raw", a_.raw},
+            {"photometric", !a_.no_photometric},
+            {"min_weight", o_.min_weight}};
   }
   void setup() override { renderer_ = std::make_unique<render::PanoRenderer>(rig_, o_); }
   // Reads and develops frame set i into the renderer (read and develop times).
@@ -124,8 +135,10 @@ class RenderJob : public dist::Job {
       const auto t0 = clock::now();
       std::vector<cv::Mat> frames = a_.raw ? load_raw_frames(a_.input, rig_) : load_frames(a_.input, rig_);
       const auto t1 = clock::now();
-      if (a_.raw) frames = isp::develop_with_model(frames, iso_, gains_);
-      else if (!a_.no_photometric) frames = isp::correct_frames(rig_, frames);
+      if (a_.raw)
+        frames = isp::develop_with_model(frames, iso_, gains_);
+      else if (!a_.no_photometric)
+        frames = isp::correct_frames(rig_, frames);
       renderer_->set_frames(frames);
       t.read = seconds(t0, t1);
       t.develop = seconds(t1, clock::now());
@@ -144,7 +157,9 @@ class RenderJob : public dist::Job {
 
  private:
   using clock = std::chrono::steady_clock;
-  static double seconds(clock::time_point a, clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
+  static double seconds(clock::time_point a, clock::time_point b) {
+    return std::chrono::duration<double>(b - a).count();
+  }
   const RenderArgs& a_;
   render::PanoRenderOptions o_;
   isp::IspOptions iso_;
@@ -229,7 +244,8 @@ void render_repeat(RenderJob& job, const RenderArgs& a, RenderTotals& r) {
 bool render_sets(dist::Comm& comm, RenderJob& job, const RenderArgs& a, dist::Rank0 rank0, RenderTotals& r) {
   const bool root = comm.rank() == 0;
   dist::RunOptions ro;
-  ro.manifest = a.manifest.empty() ? fs::path(a.out).parent_path() / "render-manifest.json" : fs::path(a.manifest);
+  ro.manifest =
+      a.manifest.empty() ? fs::path(a.out).parent_path() / "render-manifest.json" : fs::path(a.manifest);
   ro.resume = !a.no_resume;
   ro.rank0 = rank0;
   ro.progress = !a.json;
@@ -245,22 +261,22 @@ bool render_sets(dist::Comm& comm, RenderJob& job, const RenderArgs& a, dist::Ra
   r.last_out = job.output(job.items() - 1);
   const double work_s = sum.seconds - sum.setup_seconds;
   r.dist_json = {{"split", "sets"},
-               {"ranks", sum.ranks},
-               {"mpi", sum.mpi},
-               {"rank0", dist::rank0_name(sum.rank0)},
-               {"manifest", ro.manifest.string()},
-               {"made", sum.made},
-               {"reused", sum.reused},
-               {"setup_seconds", sum.setup_seconds},
-               {"work_seconds", work_s},
-               {"frame_sets_per_s", work_s > 0 ? sum.made / work_s : 0},
-               {"seconds_per_stage",
-                {{"read", sum.totals.read},
-                 {"develop", sum.totals.develop},
-                 {"render", sum.totals.render},
-                 {"write", sum.totals.write},
-                 {"checksum", sum.checksum_seconds}}},
-               {"cpu_seconds", sum.cpu_seconds}};
+                 {"ranks", sum.ranks},
+                 {"mpi", sum.mpi},
+                 {"rank0", dist::rank0_name(sum.rank0)},
+                 {"manifest", ro.manifest.string()},
+                 {"made", sum.made},
+                 {"reused", sum.reused},
+                 {"setup_seconds", sum.setup_seconds},
+                 {"work_seconds", work_s},
+                 {"frame_sets_per_s", work_s > 0 ? sum.made / work_s : 0},
+                 {"seconds_per_stage",
+                  {{"read", sum.totals.read},
+                   {"develop", sum.totals.develop},
+                   {"render", sum.totals.render},
+                   {"write", sum.totals.write},
+                   {"checksum", sum.checksum_seconds}}},
+                 {"cpu_seconds", sum.cpu_seconds}};
   return true;
 }
 
@@ -321,14 +337,14 @@ bool render_tiles(dist::Comm& comm, RenderJob& job, const RenderArgs& a, dist::R
   }
   if (!root) return false;
   r.dist_json = {{"split", "tiles"},
-               {"ranks", comm.size()},
-               {"mpi", comm.is_mpi()},
-               {"rank0", dist::rank0_name(comm.size() == 1 ? dist::Rank0::kWorks : rank0)},
-               {"bands", job.renderer().bands()},
-               {"bands_per_rank", per_rank},
-               {"max_bands_held", max_held},
-               {"load_seconds", load_wall},
-               {"split_seconds", wall}};
+                 {"ranks", comm.size()},
+                 {"mpi", comm.is_mpi()},
+                 {"rank0", dist::rank0_name(comm.size() == 1 ? dist::Rank0::kWorks : rank0)},
+                 {"bands", job.renderer().bands()},
+                 {"bands_per_rank", per_rank},
+                 {"max_bands_held", max_held},
+                 {"load_seconds", load_wall},
+                 {"split_seconds", wall}};
   return true;
 }
 
@@ -338,7 +354,8 @@ void report_render(const dist::Comm& comm, RenderJob& job, const RenderArgs& a, 
   nlohmann::json q = nullptr;
   if (!truth.empty()) {
     const std::string ext = r.last_out.extension().string();
-    const cv::Mat pano = (ext == ".tif" || ext == ".tiff") ? io::read_tiff_rows(r.last_out) : read_image(r.last_out, cv::IMREAD_COLOR);
+    const cv::Mat pano = (ext == ".tif" || ext == ".tiff") ? io::read_tiff_rows(r.last_out)
+                                                           : read_image(r.last_out, cv::IMREAD_COLOR);
     q = {{"psnr_db", pano::psnr_db(pano, truth)}, {"ssim", pano::ssim(pano, truth)}};
   }
   render::PanoRenderer& renderer = job.renderer();
@@ -372,18 +389,21 @@ void report_render(const dist::Comm& comm, RenderJob& job, const RenderArgs& a, 
                 {"seconds", total}});
   } else {
     std::cout << fmt::format(
-        "{}: {} panorama(s) {}x{} ({:.1f} MP, {}) from {}{}; maps {:.2f} s ({} of {} bands from the cache); render "
+        "{}: {} panorama(s) {}x{} ({:.1f} MP, {}) from {}{}; maps {:.2f} s ({} of {} bands from the cache); "
+        "render "
         "{:.3f} s per panorama ({:.2f}/s); memory {:.0f} MB (store {:.0f}, maps {:.0f}, band {:.0f})\n",
-        r.last_out.string(), r.rendered, size.width, size.height, size.width * double(size.height) / 1e6, a.method,
-        a.input, r.reused > 0 ? fmt::format(" ({} more verified from an earlier run)", r.reused) : "",
+        r.last_out.string(), r.rendered, size.width, size.height, size.width * double(size.height) / 1e6,
+        a.method, a.input,
+        r.reused > 0 ? fmt::format(" ({} more verified from an earlier run)", r.reused) : "",
         renderer.maps_seconds(), renderer.maps_from_cache(), renderer.bands(), per, per > 0 ? 1 / per : 0,
         mem.total() / 1e6, mem.store_bytes / 1e6, mem.maps_bytes / 1e6, mem.band_bytes / 1e6);
     if (!r.dist_json.is_null() && comm.size() > 1)
-      std::cout << fmt::format("  {} ranks, split by {}{}\n", comm.size(), a.split,
-                               a.split == "sets" ? ", manifest " + r.dist_json["manifest"].get<std::string>() : "");
+      std::cout << fmt::format(
+          "  {} ranks, split by {}{}\n", comm.size(), a.split,
+          a.split == "sets" ? ", manifest " + r.dist_json["manifest"].get<std::string>() : "");
     if (!q.is_null())
-      std::cout << fmt::format("  against {}: PSNR {:.2f} dB, SSIM {:.4f}\n", a.truth, q["psnr_db"].get<double>(),
-                               q["ssim"].get<double>());
+      std::cout << fmt::format("  against {}: PSNR {:.2f} dB, SSIM {:.4f}\n", a.truth,
+                               q["psnr_db"].get<double>(), q["ssim"].get<double>());
   }
 }
 
@@ -415,7 +435,8 @@ void render(dist::Comm& comm, const RenderArgs& a) {
   } else {
     if (!render_tiles(comm, job, a, s.rank0, r)) return;
   }
-  report_render(comm, job, a, s.size, truth, r, std::chrono::duration<double>(clock::now() - t_start).count());
+  report_render(comm, job, a, s.size, truth, r,
+                std::chrono::duration<double>(clock::now() - t_start).count());
 }
 
 void run_render(const RenderArgs& a) {
@@ -448,43 +469,58 @@ void add_render_command(CLI::App& root) {
   auto* cmd = root.add_subcommand(
       "render",
       "Render large panoramas (Giga-Eye: 9000x2400 = 21.6 MP, 17700x4650 = 82.3 MP over 360x100 deg) from a\n"
-      "frames folder (cam_XX.png, rig.json) or a recording (omma record: raw frame sets, developed by the ISP),\n"
+      "frames folder (cam_XX.png, rig.json) or a recording (omma record: raw frame sets, developed by the "
+      "ISP),\n"
       "band by band from cached maps. .tif/.tiff outputs are BigTIFF (any size, memory = one band); other\n"
       "formats hold the whole image. Methods: the engine's, or hq (offline: every tap in double precision).\n"
-      "On a cluster: mpirun -np K omma render REC --out DIR/pano_{set}.tif hands the frame sets out to the K\n"
-      "ranks as they ask; each output is written atomically and listed in a manifest, and a rerun makes only\n"
+      "On a cluster: mpirun -np K omma render REC --out DIR/pano_{set}.tif hands the frame sets out to the "
+      "K\n"
+      "ranks as they ask; each output is written atomically and listed in a manifest, and a rerun makes "
+      "only\n"
       "what is missing. --split tiles splits each panorama by bands across the ranks instead.");
   cmd->add_option("INPUT", a.input, "Frames folder or recording folder")->required();
-  cmd->add_option("--rig", a.rig, "Rig file or built-in rig (default: INPUT/rig.json or the recording's rig)");
-  cmd->add_option("--out", a.out, "Output image; with several frame sets a pattern with {set}, e.g. pano_{set}.tif")
+  cmd->add_option("--rig", a.rig,
+                  "Rig file or built-in rig (default: INPUT/rig.json or the recording's rig)");
+  cmd->add_option("--out", a.out,
+                  "Output image; with several frame sets a pattern with {set}, e.g. pano_{set}.tif")
       ->required();
   cmd->add_option("--size", a.size, "Panorama size WxH")->capture_default_str();
-  cmd->add_option("--projection", a.projection, "equirect-100 | equirect | equirect-full | vr180")->capture_default_str();
-  cmd->add_option("--method", a.method, "nn | linear | gaussian | mrf | mrf-spherical | sad | hq")->capture_default_str();
+  cmd->add_option("--projection", a.projection, "equirect-100 | equirect | equirect-full | vr180")
+      ->capture_default_str();
+  cmd->add_option("--method", a.method, "nn | linear | gaussian | mrf | mrf-spherical | sad | hq")
+      ->capture_default_str();
   cmd->add_option("--sets", a.sets, "Frame sets of a recording: I or A:B (A..B-1); default: all");
   cmd->add_option("--band-rows", a.band_rows, "Rows per band map")->capture_default_str();
-  cmd->add_flag("--stream-maps", a.stream_maps, "Keep one band map in memory at a time (loaded from the cache)");
+  cmd->add_flag("--stream-maps", a.stream_maps,
+                "Keep one band map in memory at a time (loaded from the cache)");
   cmd->add_flag("--no-cache", a.no_cache, "Do not read or write the map cache");
-  cmd->add_flag("--no-photometric", a.no_photometric,
-                "Ignore the rig's photometric model (by default cameras with one are developed with its vignetting\n"
-                "and colour gains instead of the white balance; developed frames are corrected)");
+  cmd->add_flag(
+      "--no-photometric", a.no_photometric,
+      "Ignore the rig's photometric model (by default cameras with one are developed with its vignetting\n"
+      "and colour gains instead of the white balance; developed frames are corrected)");
   cmd->add_flag("--raw", a.raw, "Frames folder: develop cam_XX_raw.png with the ISP instead of cam_XX.png");
-  cmd->add_option("--bits", a.bits, "Bit depth of the raw frames of a frames folder (--raw)")->capture_default_str();
+  cmd->add_option("--bits", a.bits, "Bit depth of the raw frames of a frames folder (--raw)")
+      ->capture_default_str();
   cmd->add_option("--demosaic", a.demosaic, "ISP demosaicing of raw frames")->capture_default_str();
   cmd->add_option("--awb", a.awb, "ISP white balance of raw frames")->capture_default_str();
   cmd->add_option("--truth", a.truth, "Ground-truth panorama of the same size: report PSNR and SSIM");
-  cmd->add_option("--repeat", a.repeat, "Render each frame set N times (speed measurement)")->capture_default_str();
-  cmd->add_option("--split", a.split,
-                  "Under mpirun: sets (each rank renders whole frame sets, handed out as it asks) or tiles (all\n"
-                  "ranks render one panorama at a time, split by bands; rank 0 writes the .tif)")
+  cmd->add_option("--repeat", a.repeat, "Render each frame set N times (speed measurement)")
       ->capture_default_str();
-  cmd->add_option("--manifest", a.manifest,
-                  "Manifest of the outputs (size, checksum, rank, seconds per stage); default: render-manifest.json\n"
-                  "beside the outputs. A rerun skips the outputs it lists that still verify");
+  cmd->add_option(
+         "--split", a.split,
+         "Under mpirun: sets (each rank renders whole frame sets, handed out as it asks) or tiles (all\n"
+         "ranks render one panorama at a time, split by bands; rank 0 writes the .tif)")
+      ->capture_default_str();
+  cmd->add_option(
+      "--manifest", a.manifest,
+      "Manifest of the outputs (size, checksum, rank, seconds per stage); default: render-manifest.json\n"
+      "beside the outputs. A rerun skips the outputs it lists that still verify");
   cmd->add_flag("--no-resume", a.no_resume, "Make every output again, even those an earlier run verified");
-  cmd->add_option("--rank0", a.rank0, "Under mpirun: rank 0 works (renders too) or serves (only hands out work)")
+  cmd->add_option("--rank0", a.rank0,
+                  "Under mpirun: rank 0 works (renders too) or serves (only hands out work)")
       ->capture_default_str();
-  cmd->add_option("--window", a.window, "--split tiles: bands rank 0 may hold waiting for their turn (0: 2 x ranks)")
+  cmd->add_option("--window", a.window,
+                  "--split tiles: bands rank 0 may hold waiting for their turn (0: 2 x ranks)")
       ->capture_default_str();
   cmd->add_option("--threads", a.threads, "Threads per process (0: all cores)")->capture_default_str();
   cmd->add_flag("--json", a.json, "Print one JSON summary on stdout");

@@ -31,11 +31,15 @@ struct ResolutionArgs {
 
 nlohmann::json reading_json(const sim::UsafReading* r) {
   if (!r) return nullptr;
-  return {{"group", r->element.group},         {"element", r->element.element},
-          {"lp_per_mm", r->element.lp_per_mm}, {"bar_mm", r->element.bar_mm},
-          {"bar_deg", r->bar_deg},             {"line_pair_deg", 2 * r->bar_deg},
+  return {{"group", r->element.group},
+          {"element", r->element.element},
+          {"lp_per_mm", r->element.lp_per_mm},
+          {"bar_mm", r->element.bar_mm},
+          {"bar_deg", r->bar_deg},
+          {"line_pair_deg", 2 * r->bar_deg},
           {"bar_deg_from_centre", r->bar_deg_centre},
-          {"contrast_x", r->contrast_x},       {"contrast_y", r->contrast_y}};
+          {"contrast_x", r->contrast_x},
+          {"contrast_y", r->contrast_y}};
 }
 
 void run_resolution(const ResolutionArgs& a) {
@@ -75,8 +79,12 @@ void run_resolution(const ResolutionArgs& a) {
   if (a.json) {
     nlohmann::json elements = nlohmann::json::array();
     for (const auto& r : m.readings)
-      elements.push_back({{"group", r.element.group}, {"element", r.element.element}, {"bar_deg", r.bar_deg},
-                          {"contrast_x", r.contrast_x}, {"contrast_y", r.contrast_y}, {"resolved", r.resolved}});
+      elements.push_back({{"group", r.element.group},
+                          {"element", r.element.element},
+                          {"bar_deg", r.bar_deg},
+                          {"contrast_x", r.contrast_x},
+                          {"contrast_y", r.contrast_y},
+                          {"resolved", r.resolved}});
     print_json({{"method", pano::to_string(method)},
                 {"distance_mm", a.distance},
                 {"min_contrast", a.contrast},
@@ -91,21 +99,23 @@ void run_resolution(const ResolutionArgs& a) {
                 {"ms", ms}});
     return;
   }
-  std::cout << fmt::format("USAF 1951 chart at {} mm, {} cameras, {} stitch on vr180 {}x{} (contrast >= {}):\n",
-                           a.distance, rig.cameras.size(), pano::to_string(method), size.width, size.height,
-                           a.contrast);
+  std::cout << fmt::format(
+      "USAF 1951 chart at {} mm, {} cameras, {} stitch on vr180 {}x{} (contrast >= {}):\n", a.distance,
+      rig.cameras.size(), pano::to_string(method), size.width, size.height, a.contrast);
   for (const auto& r : m.readings)
-    std::cout << fmt::format("  group {:2d} element {}: {:6.3f} lp/mm, bar {:.3f} deg, contrast x {:5.2f} y {:5.2f} {}\n",
-                             r.element.group, r.element.element, r.element.lp_per_mm, r.bar_deg, r.contrast_x,
-                             r.contrast_y, r.resolved ? "resolved" : "-");
+    std::cout << fmt::format(
+        "  group {:2d} element {}: {:6.3f} lp/mm, bar {:.3f} deg, contrast x {:5.2f} y {:5.2f} {}\n",
+        r.element.group, r.element.element, r.element.lp_per_mm, r.bar_deg, r.contrast_x, r.contrast_y,
+        r.resolved ? "resolved" : "-");
   if (const auto* l = m.strict_limit())
     std::cout << fmt::format("every element down to group {} element {} is resolved\n", l->element.group,
                              l->element.element);
   if (const auto* l = m.limit())
-    std::cout << fmt::format("smallest resolved: group {} element {} -> angular resolution {:.2f} deg per bar "
-                             "as seen by its camera ({:.2f} deg from the dome centre, the thesis's convention); "
-                             "thesis: group 1 element 2, 0.5 deg\n",
-                             l->element.group, l->element.element, l->bar_deg, l->bar_deg_centre);
+    std::cout << fmt::format(
+        "smallest resolved: group {} element {} -> angular resolution {:.2f} deg per bar "
+        "as seen by its camera ({:.2f} deg from the dome centre, the thesis's convention); "
+        "thesis: group 1 element 2, 0.5 deg\n",
+        l->element.group, l->element.element, l->bar_deg, l->bar_deg_centre);
   else
     std::cout << "no element resolved\n";
   if (const auto* l = mt.limit())
@@ -123,13 +133,16 @@ void add_resolution_command(CLI::App& root) {
       "stitch, and find the smallest element whose bars keep a modulation >= --contrast in both\n"
       "directions (and every coarser one); its bar angle is the angular resolution.");
   cmd->add_option("--rig", a.rig, "Rig file (default: the thesis 24-camera prototype)");
-  cmd->add_option("--distance", a.distance, "Chart distance from the dome centre along +z, mm")->capture_default_str();
+  cmd->add_option("--distance", a.distance, "Chart distance from the dome centre along +z, mm")
+      ->capture_default_str();
   cmd->add_option("--method", a.method, "Stitching method: nn|linear|gaussian|mrf|mrf-spherical|sad")
       ->capture_default_str();
   cmd->add_option("--size", a.size, "vr180 panorama size WxH")->capture_default_str();
-  cmd->add_option("--contrast", a.contrast, "Minimum modulation (Igap - Ibar) / (Igap + Ibar) to count as resolved")
+  cmd->add_option("--contrast", a.contrast,
+                  "Minimum modulation (Igap - Ibar) / (Igap + Ibar) to count as resolved")
       ->capture_default_str();
-  cmd->add_option("--supersample", a.supersample, "N x N rays per camera pixel (optical blur)")->capture_default_str();
+  cmd->add_option("--supersample", a.supersample, "N x N rays per camera pixel (optical blur)")
+      ->capture_default_str();
   cmd->add_option("--seed", a.seed, "Simulation seed")->capture_default_str();
   cmd->add_flag("--ideal", a.ideal, "Ideal cameras (no vignetting, gains, noise, quantisation)");
   cmd->add_option("--out", a.out, "Also write the frames folder here, with pano.png");

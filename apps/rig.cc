@@ -1,11 +1,13 @@
 // omma rig check RIG: load and validate a rig file, print a summary.
+#include "omma/core/rig.h"
+
 #include <cmath>
 #include <iostream>
+
 #include <fmt/format.h>
 
 #include "apps/command.h"
 #include "omma/design/prototype.h"
-#include "omma/core/rig.h"
 
 namespace omma::app {
 
@@ -26,13 +28,18 @@ void add_rig_command(CLI::App& root) {
       max_aov = std::max(max_aov, rad2deg(c.in.aov));
     }
     if (json) {
-      print_json({{"name", rig.name}, {"cameras", rig.cameras.size()},
-                  {"radius_mm", rig.dome.radius_mm}, {"sphere", rig.dome.sphere},
-                  {"aov_deg_min", min_aov}, {"aov_deg_max", max_aov}, {"valid", true}});
+      print_json({{"name", rig.name},
+                  {"cameras", rig.cameras.size()},
+                  {"radius_mm", rig.dome.radius_mm},
+                  {"sphere", rig.dome.sphere},
+                  {"aov_deg_min", min_aov},
+                  {"aov_deg_max", max_aov},
+                  {"valid", true}});
     } else {
-      std::cout << fmt::format("{}: valid rig '{}', {} cameras on a {} of radius {} mm, AOV {:.1f}-{:.1f} deg\n",
-                               path, rig.name, rig.cameras.size(), rig.dome.sphere ? "sphere" : "hemisphere",
-                               rig.dome.radius_mm, min_aov, max_aov);
+      std::cout << fmt::format(
+          "{}: valid rig '{}', {} cameras on a {} of radius {} mm, AOV {:.1f}-{:.1f} deg\n", path, rig.name,
+          rig.cameras.size(), rig.dome.sphere ? "sphere" : "hemisphere", rig.dome.radius_mm, min_aov,
+          max_aov);
     }
   });
 }

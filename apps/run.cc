@@ -1,17 +1,18 @@
 // omma run: the live panoramic video engine (thesis §5.3-5.4).
+#include <unistd.h>
+
 #include <csignal>
 #include <cstdio>
 #include <iostream>
-#include <unistd.h>
 
 #include <fmt/format.h>
 #include <opencv2/core/utility.hpp>
 
 #include "apps/command.h"
-#include "omma/design/prototype.h"
 #include "omma/core/grid.h"
 #include "omma/core/progress.h"
 #include "omma/core/rig.h"
+#include "omma/design/prototype.h"
 #include "omma/live/engine.h"
 
 namespace omma::app {
@@ -33,7 +34,8 @@ void parse_fps_range(const std::string& text, double* lo, double* hi) {
     }
   } catch (const std::exception&) {
   }
-  throw std::invalid_argument("--sim-fps '" + text + "': expected MIN-MAX or one rate, frames/s (e.g. 44-56)");
+  throw std::invalid_argument("--sim-fps '" + text +
+                              "': expected MIN-MAX or one rate, frames/s (e.g. 44-56)");
 }
 }  // namespace
 
@@ -47,14 +49,16 @@ void add_run_command(CLI::App& root) {
       "checker; free-running cameras at 44-56 fps, a loop pre-rendered at start-up), link:FILE or FILE.bin "
       "(raw sensor link), a pattern with {id} (two-digit camera id).\n"
       "Sinks: FILE.mp4|mkv|avi, png:DIR or DIR/, cam:ID:SINK (one camera passed through), "
-      "http:PORT (live view on 127.0.0.1: / 360-degree viewer, /stream.mjpg MJPEG, /frame.jpg, /stats.json).\n"
+      "http:PORT (live view on 127.0.0.1: / 360-degree viewer, /stream.mjpg MJPEG, /frame.jpg, "
+      "/stats.json).\n"
       "Latency = mean age of a panorama's camera frames when it is rendered (docs/guide/live.md).\n"
       "A camera that ends or fails is dropped and the map recompiled without it. Ctrl-C or SIGTERM stops "
       "cleanly and leaves playable videos.");
   struct Opts {
     std::string rig, method = "linear", projection = "vr180", size = "1080x1080", cache, sim_fps = "44-56";
     std::vector<std::string> sources, sinks;
-    double duration = 0, fps = 30, source_fps = 30, first_timeout = 10, min_weight = render::MapOptions{}.min_weight;
+    double duration = 0, fps = 30, source_fps = 30, first_timeout = 10,
+           min_weight = render::MapOptions{}.min_weight;
     double sim_jitter = live::SimCameraOptions{}.jitter_ms, sim_loop = live::SimCameraOptions{}.loop_s;
     long frames = 0;
     int threads = 0, camera_threads = live::EngineOptions{}.max_camera_threads,
@@ -65,8 +69,11 @@ void add_run_command(CLI::App& root) {
   cmd->add_option("--rig", o.rig, "Rig file (JSON)")->required();
   cmd->add_option("--source", o.sources, "Camera sources (see above)")->required();
   cmd->add_option("--sink", o.sinks, "Outputs (see above); none: render and measure only");
-  cmd->add_option("--method", o.method, "Blending: nn, linear, gaussian, mrf, mrf-spherical, sad (per-frame weights, own kernel); default linear");
-  cmd->add_option("--projection", o.projection, "Panorama projection: vr180, equirect, equirect-full (default vr180)");
+  cmd->add_option("--method", o.method,
+                  "Blending: nn, linear, gaussian, mrf, mrf-spherical, sad (per-frame weights, own kernel); "
+                  "default linear");
+  cmd->add_option("--projection", o.projection,
+                  "Panorama projection: vr180, equirect, equirect-full (default vr180)");
   cmd->add_option("--size", o.size, "Panorama size WxH, pixels (default 1080x1080)");
   cmd->add_option("--min-weight", o.min_weight,
                   "Drop taps lighter than this fraction of a pixel's weight, renormalising the others "
@@ -74,22 +81,27 @@ void add_run_command(CLI::App& root) {
       ->check(CLI::Range(0.0, 0.49));
   cmd->add_option("--duration", o.duration, "Stop after S seconds (default: when every source has ended)")
       ->check(CLI::Range(0.0, 1e7));
-  cmd->add_option("--frames", o.frames, "Stop after N panoramas (default: no limit)")->check(CLI::Range(0, INT32_MAX));
-  cmd->add_option("--fps", o.fps, "Panorama rate, frames/s (0: whenever a camera has a new frame; default 30)")
+  cmd->add_option("--frames", o.frames, "Stop after N panoramas (default: no limit)")
+      ->check(CLI::Range(0, INT32_MAX));
+  cmd->add_option("--fps", o.fps,
+                  "Panorama rate, frames/s (0: whenever a camera has a new frame; default 30)")
       ->check(CLI::Range(0.0, 1e6));
-  cmd->add_option("--source-fps", o.source_fps,
-                  "Rate of image sequences, stills and pano: sources, frames/s (0: as fast as possible; default 30)")
+  cmd->add_option(
+         "--source-fps", o.source_fps,
+         "Rate of image sequences, stills and pano: sources, frames/s (0: as fast as possible; default 30)")
       ->check(CLI::Range(0.0, 1e6));
   cmd->add_option("--first-frame-timeout", o.first_timeout,
                   "A camera without a first frame after this many seconds is dropped (default 10)")
       ->check(CLI::Range(1e-3, 1e6));
-  cmd->add_flag("--depth", o.depth,
-                "Depth-adaptive rendering: the scene's depth estimated from the overlaps every\n"
-                "panorama on a coarse grid (sphere sweep, ZNCC, semi-global, temporal), each pixel's taps moved\n"
-                "to where the cameras see its surface point (not with sad)");
-  cmd->add_option("--sim-fps", o.sim_fps,
-                  "sim: sources: the cameras' rates, frames/s, MIN-MAX (each camera draws its own) or one value "
-                  "(default 44-56, the thesis's sensors)");
+  cmd->add_flag(
+      "--depth", o.depth,
+      "Depth-adaptive rendering: the scene's depth estimated from the overlaps every\n"
+      "panorama on a coarse grid (sphere sweep, ZNCC, semi-global, temporal), each pixel's taps moved\n"
+      "to where the cameras see its surface point (not with sad)");
+  cmd->add_option(
+      "--sim-fps", o.sim_fps,
+      "sim: sources: the cameras' rates, frames/s, MIN-MAX (each camera draws its own) or one value "
+      "(default 44-56, the thesis's sensors)");
   cmd->add_option("--sim-jitter", o.sim_jitter,
                   "sim: sources: standard deviation of each frame's capture instant, ms (default 0.5)")
       ->check(CLI::Range(0.0, 1000.0));
@@ -120,7 +132,9 @@ void add_run_command(CLI::App& root) {
     const Size2 size = parse_size(o.size);
     eo.map.grid = PanoGrid{parse_projection(o.projection), size.width, size.height};
     eo.map.min_weight = o.min_weight;
-    eo.cache_dir = o.no_cache ? std::filesystem::path() : (o.cache.empty() ? render::default_cache_dir() : std::filesystem::path(o.cache));
+    eo.cache_dir = o.no_cache
+                       ? std::filesystem::path()
+                       : (o.cache.empty() ? render::default_cache_dir() : std::filesystem::path(o.cache));
     eo.duration_s = o.duration;
     eo.max_frames = o.frames;
     eo.fps = o.fps;
@@ -155,7 +169,8 @@ void add_run_command(CLI::App& root) {
     eo.on_progress = [show, tty](const nlohmann::json& j) {
       if (!show) return;
       const std::string line = fmt::format(
-          "omma run: {} frames  {:.1f} fps  latency {:.1f} ms  cameras live {} at {:.1f}-{:.1f} fps  dropped frames {}",
+          "omma run: {} frames  {:.1f} fps  latency {:.1f} ms  cameras live {} at {:.1f}-{:.1f} fps  dropped "
+          "frames {}",
           j["frames"].get<long>(), j["fps"].get<double>(), j["latency_ms"].get<double>(),
           j["cameras_live"].get<long>(), j["window"]["camera_fps_min"].get<double>(),
           j["window"]["camera_fps_max"].get<double>(), j["dropped_frames"].get<long>());

@@ -1,4 +1,6 @@
 // omma simulate: render every camera of a rig looking at a scene, plus the ground-truth panorama.
+#include "omma/sim/simulate.h"
+
 #include <chrono>
 #include <filesystem>
 #include <iostream>
@@ -11,7 +13,6 @@
 #include "omma/core/io.h"
 #include "omma/core/rig.h"
 #include "omma/design/prototype.h"
-#include "omma/sim/simulate.h"
 
 namespace omma::app {
 namespace {
@@ -37,7 +38,8 @@ void run_simulate(const SimulateArgs& a) {
   o.truth_grid = PanoGrid{parse_projection(a.projection), ts.width, ts.height};
   o.truth_supersample = a.truth_supersample;
   if (a.truth_supersample < 0 || a.truth_supersample > 16)
-    throw std::invalid_argument(fmt::format("--truth-supersample must be 0 (auto) or 1..16, got {}", a.truth_supersample));
+    throw std::invalid_argument(
+        fmt::format("--truth-supersample must be 0 (auto) or 1..16, got {}", a.truth_supersample));
   o.perturb = sim::parse_perturb(a.perturb);
   o.effects = a.ideal ? sim::CameraEffects::ideal(a.supersample) : sim::CameraEffects{};
   o.effects.supersample = a.supersample;
@@ -54,7 +56,8 @@ void run_simulate(const SimulateArgs& a) {
   }
   o.pose.translation_mm = Vec3(0, 0, a.dome_z);
   o.progress = !a.json;
-  if (a.shots < 1 || a.shots > 1000) throw std::invalid_argument(fmt::format("--shots must be 1..1000, got {}", a.shots));
+  if (a.shots < 1 || a.shots > 1000)
+    throw std::invalid_argument(fmt::format("--shots must be 1..1000, got {}", a.shots));
   o.shots = a.shots;
   if (fs::exists(a.out) && !fs::is_directory(a.out))
     throw IoError(fmt::format("--out '{}' exists and is not a folder", a.out));
@@ -62,34 +65,38 @@ void run_simulate(const SimulateArgs& a) {
   if (rig.cameras.empty()) throw RigError(fmt::format("rig '{}' has no cameras", a.rig));
   const std::unique_ptr<sim::Scene> scene = sim::make_scene(a.scene);
   const sim::SimulateSummary res = sim::simulate(rig, *scene, o);
-  if (a.shots > 1) sim::write_shots_folder(a.out, res, o, *scene);
-  else sim::write_frames_folder(a.out, res, o, *scene);
-  const double total_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  if (a.shots > 1)
+    sim::write_shots_folder(a.out, res, o, *scene);
+  else
+    sim::write_frames_folder(a.out, res, o, *scene);
+  const double total_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   if (a.json) {
-    nlohmann::json j = {{"out", a.out},
-                        {"scene", scene->spec()},
-                        {"cameras", rig.cameras.size()},
-                        {"camera_width", rig.cameras[0].in.width},
-                        {"camera_height", rig.cameras[0].in.height},
-                        {"truth", o.truth ? nlohmann::json{{"projection", a.projection},
-                                                           {"width", ts.width},
-                                                           {"height", ts.height}}
-                                          : nlohmann::json(nullptr)},
-                        {"raw", a.raw},
-                        {"seed", a.seed},
-                        {"shots", a.shots},
-                        {"perturbed", o.perturb.any()},
-                        {"cameras_ms", res.cameras_ms},
-                        {"truth_ms", res.truth_ms},
-                        {"ms", total_ms}};
+    nlohmann::json j = {
+        {"out", a.out},
+        {"scene", scene->spec()},
+        {"cameras", rig.cameras.size()},
+        {"camera_width", rig.cameras[0].in.width},
+        {"camera_height", rig.cameras[0].in.height},
+        {"truth",
+         o.truth ? nlohmann::json{{"projection", a.projection}, {"width", ts.width}, {"height", ts.height}}
+                 : nlohmann::json(nullptr)},
+        {"raw", a.raw},
+        {"seed", a.seed},
+        {"shots", a.shots},
+        {"perturbed", o.perturb.any()},
+        {"cameras_ms", res.cameras_ms},
+        {"truth_ms", res.truth_ms},
+        {"ms", total_ms}};
     print_json(j);
   } else {
-    std::cout << fmt::format("{}: {} cameras ({}x{}){}{}{} of scene '{}' in {:.0f} ms\n", a.out, rig.cameras.size(),
-                             rig.cameras[0].in.width, rig.cameras[0].in.height,
-                             a.shots > 1 ? fmt::format(", {} shots (shot_00 .. shot_{:02d})", a.shots, a.shots - 1) : "",
-                             a.raw ? " + raw Bayer" : "",
-                             o.truth ? fmt::format(" + {} {}x{} truth", a.projection, ts.width, ts.height) : "",
-                             scene->spec(), total_ms);
+    std::cout << fmt::format(
+        "{}: {} cameras ({}x{}){}{}{} of scene '{}' in {:.0f} ms\n", a.out, rig.cameras.size(),
+        rig.cameras[0].in.width, rig.cameras[0].in.height,
+        a.shots > 1 ? fmt::format(", {} shots (shot_00 .. shot_{:02d})", a.shots, a.shots - 1) : "",
+        a.raw ? " + raw Bayer" : "",
+        o.truth ? fmt::format(" + {} {}x{} truth", a.projection, ts.width, ts.height) : "", scene->spec(),
+        total_ms);
   }
 }
 
@@ -103,18 +110,23 @@ void add_simulate_command(CLI::App& root) {
       "from the dome centre (ground truth). Writes the frames folder OUT: cam_XX.png (8-bit sRGB),\n"
       "cam_XX_raw.png (--raw: 16-bit RGGB Bayer, 10-bit values), truth.png, rig.json (nominal),\n"
       "rig_true.json (rendered, with --perturb errors), sim.json (what was simulated).");
-  cmd->add_option("--rig", a.rig,
-                  "Rig file (JSON, omma-rig) or built-in rig (thesis-24, gigaeye-44, gigaeye-44-skip1, ...); default: "
-                  "thesis-24");
-  cmd->add_option("--scene", a.scene,
-                  "Scene: photo:PATH (far-field 360x180 equirect photo), colon (procedural tube), "
-                  "usaf[:DIST_MM] (USAF 1951 chart, default 25 mm ahead), checker[:RADIUS_MM] (textured sphere, "
-                  "default 100 mm), tube[:DIAMETER_MM] (the thesis's textured calibration tube, default 35 mm), "
-                  "flat[:LEVEL] (uniformly lit white target, for flat-field photometric calibration)")
+  cmd->add_option(
+      "--rig", a.rig,
+      "Rig file (JSON, omma-rig) or built-in rig (thesis-24, gigaeye-44, gigaeye-44-skip1, ...); default: "
+      "thesis-24");
+  cmd->add_option(
+         "--scene", a.scene,
+         "Scene: photo:PATH (far-field 360x180 equirect photo), colon (procedural tube), "
+         "usaf[:DIST_MM] (USAF 1951 chart, default 25 mm ahead), checker[:RADIUS_MM] (textured sphere, "
+         "default 100 mm), tube[:DIAMETER_MM] (the thesis's textured calibration tube, default 35 mm), "
+         "flat[:LEVEL] (uniformly lit white target, for flat-field photometric calibration)")
       ->required();
   cmd->add_option("--out", a.out, "Output frames folder (created; all or nothing)")->required();
-  cmd->add_option("--truth-size", a.truth_size, "Ground-truth panorama size WxH (pixels)")->capture_default_str();
-  cmd->add_option("--projection", a.projection, "Ground-truth grid: equirect (360x90 deg) | vr180 | equirect-full | equirect-100 (360x100 deg)")
+  cmd->add_option("--truth-size", a.truth_size, "Ground-truth panorama size WxH (pixels)")
+      ->capture_default_str();
+  cmd->add_option(
+         "--projection", a.projection,
+         "Ground-truth grid: equirect (360x90 deg) | vr180 | equirect-full | equirect-100 (360x100 deg)")
       ->capture_default_str();
   cmd->add_flag("--no-truth", a.no_truth, "Do not render truth.png");
   cmd->add_flag("--raw", a.raw, "Also write 16-bit RGGB Bayer raw frames cam_XX_raw.png");
@@ -124,8 +136,9 @@ void add_simulate_command(CLI::App& root) {
                   "relative, pixels, unitless, mm; exact magnitudes, random directions)");
   cmd->add_option("--supersample", a.supersample, "N: N x N rays per camera pixel (optical blur), 1..16")
       ->capture_default_str();
-  cmd->add_option("--truth-supersample", a.truth_supersample,
-                  "N x N rays per truth pixel, 1..16; 0 = auto: rays at most 0.09 deg apart (2 for vr180 1080x1080)")
+  cmd->add_option(
+         "--truth-supersample", a.truth_supersample,
+         "N x N rays per truth pixel, 1..16; 0 = auto: rays at most 0.09 deg apart (2 for vr180 1080x1080)")
       ->capture_default_str();
   cmd->add_option("--vignetting", a.vignetting, "Vignetting strength s in [0,1]: V = 1 - s (1 - cos^4 angle)")
       ->capture_default_str();
@@ -136,14 +149,16 @@ void add_simulate_command(CLI::App& root) {
   cmd->add_option("--read-noise", a.read_noise, "Read noise sigma in quantiser steps (DN); 0 = none")
       ->capture_default_str();
   cmd->add_option("--bits", a.bits, "Quantiser bits 8..16, 0 = none")->capture_default_str();
-  cmd->add_option("--exposure", a.exposure, "Scale of the scene radiance before the sensor")->capture_default_str();
+  cmd->add_option("--exposure", a.exposure, "Scale of the scene radiance before the sensor")
+      ->capture_default_str();
   cmd->add_flag("--ideal", a.ideal,
                 "Ideal cameras: no vignetting, gains, noise or quantisation (--supersample still applies)");
   cmd->add_option("--dome-z", a.dome_z, "Move the dome along the scene z axis by this many mm")
       ->capture_default_str();
-  cmd->add_option("--shots", a.shots,
-                  "Exposures of the (static) scene, 1..1000: the same rig and colour gains, fresh sensor noise per "
-                  "shot; with N > 1, OUT holds one frames folder per shot: OUT/shot_00 .. OUT/shot_<N-1>")
+  cmd->add_option(
+         "--shots", a.shots,
+         "Exposures of the (static) scene, 1..1000: the same rig and colour gains, fresh sensor noise per "
+         "shot; with N > 1, OUT holds one frames folder per shot: OUT/shot_00 .. OUT/shot_<N-1>")
       ->capture_default_str();
   cmd->add_flag("--json", a.json, "Print one JSON summary on stdout");
   cmd->callback([] { run_simulate(a); });

@@ -11,8 +11,8 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-#include "omma/io/tiff_writer.h"
 #include "omma/dist/worker_thread.h"
+#include "omma/io/tiff_writer.h"
 
 namespace omma::dist {
 namespace fs = std::filesystem;
@@ -43,7 +43,10 @@ std::string encode(const BandResult* r) {
   json h = nullptr;
   size_t bytes = 0;
   if (r) {
-    h = {{"band", r->band}, {"seconds", r->seconds}, {"error", r->error}, {"rows", r->pixels.rows},
+    h = {{"band", r->band},
+         {"seconds", r->seconds},
+         {"error", r->error},
+         {"rows", r->pixels.rows},
          {"cols", r->pixels.cols}};
     bytes = r->error.empty() ? r->pixels.total() * r->pixels.elemSize() : 0;
   }
@@ -85,13 +88,14 @@ std::string open_output(const Comm& comm, const render::PanoRenderer& renderer, 
     std::string ext = path.extension().string();
     for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
     if (ext != ".tif" && ext != ".tiff")
-      throw std::invalid_argument("--split tiles writes one BigTIFF: the output must end in .tif or .tiff, not '" +
-                                  path.filename().string() + "'");
+      throw std::invalid_argument(
+          "--split tiles writes one BigTIFF: the output must end in .tif or .tiff, not '" +
+          path.filename().string() + "'");
     const int nb = renderer.bands(), size = comm.size();
     const int workers = size - (mode == Rank0::kServes ? 1 : 0);
     if (workers > nb)
-      throw std::invalid_argument(fmt::format("{} ranks for {} bands: start at most {}, or use smaller bands", size, nb,
-                                              nb + (mode == Rank0::kServes ? 1 : 0)));
+      throw std::invalid_argument(fmt::format("{} ranks for {} bands: start at most {}, or use smaller bands",
+                                              size, nb, nb + (mode == Rank0::kServes ? 1 : 0)));
     const auto& g = renderer.options().grid;
     writer.emplace(path, g.width, g.height);
   } catch (const std::exception& e) {
@@ -119,7 +123,12 @@ class BandWriter {
  public:
   BandWriter(const render::PanoRenderer& renderer, io::BigTiffWriter& writer, int window, int ranks,
              SplitSummary& sum)
-      : renderer_(renderer), writer_(writer), nb_(renderer.bands()), window_(window), ranks_(ranks), sum_(sum) {}
+      : renderer_(renderer),
+        writer_(writer),
+        nb_(renderer.bands()),
+        window_(window),
+        ranks_(ranks),
+        sum_(sum) {}
   // The band to hand out: -1 stop; -2 wait for the writer.
   int next_band() {
     if (!failure_.empty() || next_hand_ >= nb_) return -1;
@@ -129,8 +138,8 @@ class BandWriter {
   void accept(BandResult&& r, int from) {
     if (!r.error.empty()) {
       if (failure_.empty())
-        failure_ = fmt::format("{}band {} (rows {}..): {}", ranks_ > 1 ? fmt::format("rank {}, ", from) : "", r.band,
-                               renderer_.band(r.band).y, r.error);
+        failure_ = fmt::format("{}band {} (rows {}..): {}", ranks_ > 1 ? fmt::format("rank {}, ", from) : "",
+                               r.band, renderer_.band(r.band).y, r.error);
       return;
     }
     ++sum_.bands_per_rank[from];
@@ -139,7 +148,8 @@ class BandWriter {
     sum_.max_held = std::max(sum_.max_held, static_cast<int>(held_.size()));
     const auto tw = Clock::now();
     try {
-      for (auto it = held_.find(next_write_); it != held_.end() && failure_.empty(); it = held_.find(next_write_)) {
+      for (auto it = held_.find(next_write_); it != held_.end() && failure_.empty();
+           it = held_.find(next_write_)) {
         writer_.write_rows(it->second);
         held_.erase(it);
         ++next_write_;
@@ -181,7 +191,7 @@ void serve(Comm& comm, Rank0 mode, const std::function<BandResult(int64_t)>& ren
   std::optional<WorkerThread<BandResult>> local;
   bool local_done = mode != Rank0::kWorks;
   if (!local_done) local.emplace(render_one);
-  std::deque<int> waiting;     // ranks that asked for a band while the window was full
+  std::deque<int> waiting;       // ranks that asked for a band while the window was full
   int remote = comm.size() - 1;  // ranks not yet told to stop
   for (;;) {
     if (local && !local_done && !local->busy()) {

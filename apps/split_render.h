@@ -27,18 +27,18 @@
 namespace omma::dist {
 
 struct SplitOptions {
-  int window = 0;                // bands rank 0 may hold; 0: 2 x ranks
-  Rank0 rank0 = Rank0::kWorks;   // rank 0 renders bands too (on a second thread) or only writes
+  int window = 0;               // bands rank 0 may hold; 0: 2 x ranks
+  Rank0 rank0 = Rank0::kWorks;  // rank 0 renders bands too (on a second thread) or only writes
   bool IsValid(std::string* why = nullptr) const;
 };
 
 struct SplitSummary {
   int bands = 0;
-  double seconds = 0;                 // wall time, rank 0
-  double render_seconds = 0;          // summed over the ranks
-  double write_seconds = 0;           // rank 0's TIFF writing
-  int max_held = 0;                   // most bands rank 0 held at once (waiting for their turn)
-  std::vector<int> bands_per_rank;    // rank 0 only
+  double seconds = 0;               // wall time, rank 0
+  double render_seconds = 0;        // summed over the ranks
+  double write_seconds = 0;         // rank 0's TIFF writing
+  int max_held = 0;                 // most bands rank 0 held at once (waiting for their turn)
+  std::vector<int> bands_per_rank;  // rank 0 only
 };
 
 // Every rank calls it with the same renderer options and frames set. Writes `path` (.tif or .tiff:

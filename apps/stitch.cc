@@ -3,29 +3,28 @@
 // inter-camera PSNR (eq. 4.19-4.21).
 #include "omma/pano/stitch.h"
 
-#include <fmt/format.h>
-
 #include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <iostream>
 #include <stdexcept>
 
+#include <fmt/format.h>
 #include <tbb/parallel_for.h>
 
 #include "apps/command.h"
-#include "omma/design/prototype.h"
 #include "omma/core/frames.h"
 #include "omma/core/grid.h"
 #include "omma/core/io.h"
 #include "omma/core/log.h"
-#include "omma/io/metadata.h"
 #include "omma/core/rig.h"
+#include "omma/design/prototype.h"
+#include "omma/io/metadata.h"
 #include "omma/isp/isp.h"
 #include "omma/isp/photometric.h"
 #include "omma/pano/maps.h"
-#include "omma/pano/surface.h"
 #include "omma/pano/plane_sweep.h"
+#include "omma/pano/surface.h"
 
 namespace omma::app {
 namespace {
@@ -62,7 +61,8 @@ pano::PlaneSweepOptions parse_sweep(const std::string& text) {
   size_t start = 0;
   while (start <= text.size()) {
     const size_t comma = text.find(',', start);
-    const std::string part = text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+    const std::string part =
+        text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
     try {
       size_t used = 0;
       v.push_back(std::stod(part, &used));
@@ -73,11 +73,13 @@ pano::PlaneSweepOptions parse_sweep(const std::string& text) {
     if (comma == std::string::npos) break;
     start = comma + 1;
   }
-  if (v.size() > 3) throw std::invalid_argument("--depth estimate:NEAR,FAR,STEPS takes at most three numbers");
+  if (v.size() > 3)
+    throw std::invalid_argument("--depth estimate:NEAR,FAR,STEPS takes at most three numbers");
   if (v.size() > 0) so.near_mm = v[0];
   if (v.size() > 1) so.far_mm = v[1];
   if (v.size() > 2) {
-    if (v[2] != std::floor(v[2])) throw std::invalid_argument("--depth estimate: STEPS must be a whole number");
+    if (v[2] != std::floor(v[2]))
+      throw std::invalid_argument("--depth estimate: STEPS must be a whole number");
     so.steps = static_cast<int>(v[2]);
   }
   std::string why;
@@ -112,21 +114,31 @@ DepthChoice choose_depth(const std::string& spec, const Rig& rig, const std::vec
     // A range that excludes the scene piles the confident estimates up at one of its ends.
     // (at infinity the far end is the scene's own place: only a finite FAR can exclude it)
     if (e.confident > 0 && (e.at_near > 0.5 || (std::isfinite(so.far_mm) && e.at_far > 0.5)))
-      throw std::invalid_argument(fmt::format(
-          "--depth {}: the sweep range {}..{} mm excludes the scene: {:.0f} % of the confident directions lie at "
-          "its {} end (widen NEAR,FAR)",
-          spec, so.near_mm, so.far_mm, 100 * std::max(e.at_near, e.at_far), e.at_near > e.at_far ? "near" : "far"));
+      throw std::invalid_argument(
+          fmt::format("--depth {}: the sweep range {}..{} mm excludes the scene: {:.0f} % of the confident "
+                      "directions lie at "
+                      "its {} end (widen NEAR,FAR)",
+                      spec, so.near_mm, so.far_mm, 100 * std::max(e.at_near, e.at_far),
+                      e.at_near > e.at_far ? "near" : "far"));
     if (e.confident == 0)
-      spdlog::warn("--depth estimate: no direction could be measured; the prior distance {:.1f} mm is used everywhere",
-               e.prior_mm);
+      spdlog::warn(
+          "--depth estimate: no direction could be measured; the prior distance {:.1f} mm is used everywhere",
+          e.prior_mm);
     d.depth = e.depth;
-    d.info = {{"mode", "estimate"}, {"near_mm", so.near_mm}, {"far_mm", so.far_mm}, {"steps", so.steps},
-              {"coarse", {sweep.coarse_grid().width, sweep.coarse_grid().height}}, {"prior_mm", e.prior_mm},
-              {"confident_fraction", double(e.confident) / sweep.coarse_grid().width / sweep.coarse_grid().height},
-              {"at_near", e.at_near}, {"at_far", e.at_far}, {"mean_confidence", cv::mean(e.confidence)[0]}};
+    d.info = {
+        {"mode", "estimate"},
+        {"near_mm", so.near_mm},
+        {"far_mm", so.far_mm},
+        {"steps", so.steps},
+        {"coarse", {sweep.coarse_grid().width, sweep.coarse_grid().height}},
+        {"prior_mm", e.prior_mm},
+        {"confident_fraction", double(e.confident) / sweep.coarse_grid().width / sweep.coarse_grid().height},
+        {"at_near", e.at_near},
+        {"at_far", e.at_far},
+        {"mean_confidence", cv::mean(e.confidence)[0]}};
   } else {
-    throw std::invalid_argument("--depth must be inf, sphere:R, truth:FILE or estimate[:NEAR,FAR,STEPS], got '" +
-                                spec + "'");
+    throw std::invalid_argument(
+        "--depth must be inf, sphere:R, truth:FILE or estimate[:NEAR,FAR,STEPS], got '" + spec + "'");
   }
   return d;
 }
@@ -175,12 +187,14 @@ void run_stitch(const StitchArgs& a) {
   if (!a.depth_out.empty()) {
     const std::filesystem::path p(a.depth_out);
     if (p.extension() == ".tiff" || p.extension() == ".tif")
-      throw std::invalid_argument("--depth-out names the picture (e.g. depth.png); the data go beside it as .tiff");
+      throw std::invalid_argument(
+          "--depth-out names the picture (e.g. depth.png); the data go beside it as .tiff");
     depth_data = std::filesystem::path(p).replace_extension(".tiff");
   }
   const auto td = std::chrono::steady_clock::now();
   const DepthChoice depth = choose_depth(a.depth, rig, frames, grid);
-  const double depth_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - td).count();
+  const double depth_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - td).count();
 
   pano::StitchOptions opt;
   opt.method = method;
@@ -273,18 +287,20 @@ void add_stitch_command(CLI::App& root) {
       "(the seam band, usable as `omma eval --mask`), dark gray = seen by none");
   cmd->add_option("--coverage", a.coverage,
                   "Write the coverage map: number of cameras per direction (8-bit gray)");
-  cmd->add_option("--depth", a.depth,
-                  "Projection surface D(w), the distance at which each direction meets the scene:\n"
-                  "  inf                   the scene at infinity (the thesis's model, eq. 2.3-2.5)\n"
-                  "  sphere:R              a fixed stitching distance: a sphere of R mm around the dome centre\n"
-                  "  truth:FILE            a depth file of the panorama's size (the simulator's truth_depth.tiff:\n"
-                  "                        32-bit float mm, or 16-bit in 1/100 mm)\n"
-                  "  estimate[:NEAR,FAR,STEPS]  estimated from the cameras' overlaps by a sphere sweep (ZNCC,\n"
-                  "                        semi-global smoothing); default 8,inf,96 (mm, mm, candidates)")
+  cmd->add_option(
+         "--depth", a.depth,
+         "Projection surface D(w), the distance at which each direction meets the scene:\n"
+         "  inf                   the scene at infinity (the thesis's model, eq. 2.3-2.5)\n"
+         "  sphere:R              a fixed stitching distance: a sphere of R mm around the dome centre\n"
+         "  truth:FILE            a depth file of the panorama's size (the simulator's truth_depth.tiff:\n"
+         "                        32-bit float mm, or 16-bit in 1/100 mm)\n"
+         "  estimate[:NEAR,FAR,STEPS]  estimated from the cameras' overlaps by a sphere sweep (ZNCC,\n"
+         "                        semi-global smoothing); default 8,inf,96 (mm, mm, candidates)")
       ->capture_default_str();
-  cmd->add_option("--depth-out", a.depth_out,
-                  "Write the depth used as a colour picture with a legend (this name, e.g. depth.png) and as\n"
-                  "data beside it (same name, .tiff: 32-bit float mm, inf = infinity)");
+  cmd->add_option(
+      "--depth-out", a.depth_out,
+      "Write the depth used as a colour picture with a legend (this name, e.g. depth.png) and as\n"
+      "data beside it (same name, .tiff: 32-bit float mm, inf = infinity)");
   cmd->add_flag("--raw", a.raw,
                 "Read the raw Bayer frames DIR/cam_XX_raw.png (16-bit RGGB, 10-bit values) and develop each\n"
                 "with the ISP (demosaic, white balance, optional flat field) before stitching");
@@ -295,11 +311,13 @@ void add_stitch_command(CLI::App& root) {
   cmd->add_option("--flat", a.flat, "With --raw: flat-field raw frame for vignetting correction");
   cmd->add_flag("--linear-output", a.linear_output,
                 "With --raw: keep the 8 most significant linear bits (the thesis hardware) instead of sRGB");
-  cmd->add_flag("--no-photometric", a.no_photometric,
-                "Ignore the rig's photometric model (vignetting and colour gains, applied by default when the rig\n"
-                "has one: frames in linear light divided by gain x falloff; with --raw it replaces --awb)");
-  cmd->add_flag("--json", a.json,
-                "Print one JSON object {method, width, height, ms, depth, depth_ms, inter_camera_psnr_db} on stdout");
+  cmd->add_flag(
+      "--no-photometric", a.no_photometric,
+      "Ignore the rig's photometric model (vignetting and colour gains, applied by default when the rig\n"
+      "has one: frames in linear light divided by gain x falloff; with --raw it replaces --awb)");
+  cmd->add_flag(
+      "--json", a.json,
+      "Print one JSON object {method, width, height, ms, depth, depth_ms, inter_camera_psnr_db} on stdout");
   cmd->callback([] { run_stitch(a); });
 }
 

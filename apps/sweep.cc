@@ -46,8 +46,7 @@ void add_sweep_command(CLI::App& root) {
   cmd->callback([o] {
     set_json_mode(o->json);
     const auto& p = o->p;
-    if (!(p.aov_min_deg > 0 && p.aov_max_deg < 180 && p.aov_min_deg <= p.aov_max_deg &&
-          p.aov_step_deg > 0))
+    if (!(p.aov_min_deg > 0 && p.aov_max_deg < 180 && p.aov_min_deg <= p.aov_max_deg && p.aov_step_deg > 0))
       throw std::invalid_argument("the AOV range must lie in (0, 180) degrees with a positive step");
     if (!(p.ratio_min > 1 && p.ratio_min <= p.ratio_max && p.ratio_step > 0))
       throw std::invalid_argument("the R_vir / R_phy range must be > 1 with a positive step");
@@ -59,8 +58,7 @@ void add_sweep_command(CLI::App& root) {
       if (!(rv > p.r_phys_mm)) throw std::invalid_argument("every --r-virtual must exceed --r-phys");
     const auto t0 = std::chrono::steady_clock::now();
     const auto rows = design::run_sweep(p);
-    const double seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     const std::filesystem::path dir = o->out_dir;
     std::filesystem::create_directories(dir);
     const auto csv = dir / "sweep.csv", aov = dir / "cameras_vs_aov.svg",
@@ -68,15 +66,15 @@ void add_sweep_command(CLI::App& root) {
     write_text_atomically(csv, design::sweep_csv(rows));
     write_text_atomically(aov, design::sweep_aov_svg(rows, p));
     write_text_atomically(ratio, design::sweep_ratio_svg(rows, p));
-    spdlog::info("sweep of {} designs in {:.1f} s: wrote {}, {}, {}", rows.size(), seconds,
-                 csv.string(), aov.string(), ratio.string());
+    spdlog::info("sweep of {} designs in {:.1f} s: wrote {}, {}, {}", rows.size(), seconds, csv.string(),
+                 aov.string(), ratio.string());
     if (o->json) {
       print_json({{"rows", rows.size()},
                   {"seconds", seconds},
                   {"files", {csv.string(), aov.string(), ratio.string()}}});
     } else {
-      std::cout << fmt::format("{} designs in {:.1f} s -> {}, {}, {}\n", rows.size(), seconds,
-                               csv.string(), aov.string(), ratio.string());
+      std::cout << fmt::format("{} designs in {:.1f} s -> {}, {}, {}\n", rows.size(), seconds, csv.string(),
+                               aov.string(), ratio.string());
     }
   });
 }

@@ -58,7 +58,8 @@ calib::CalibrationOptions tube_options() {
 void BM_GeometricTube8Shots(benchmark::State& state) {
   const Fixture& f = fixture();
   for (auto _ : state)
-    benchmark::DoNotOptimize(calib::calibrate_rig(f.nominal, calib::average_frame_sets(f.shots), tube_options()));
+    benchmark::DoNotOptimize(
+        calib::calibrate_rig(f.nominal, calib::average_frame_sets(f.shots), tube_options()));
 }
 BENCHMARK(BM_GeometricTube8Shots)->Iterations(1)->Unit(benchmark::kSecond)->UseRealTime();
 

@@ -4,10 +4,10 @@
 #include <benchmark/benchmark.h>
 
 #include "omma/core/grid.h"
+#include "omma/design/count_sweep.h"
 #include "omma/design/coverage.h"
 #include "omma/design/placement.h"
 #include "omma/design/prototype.h"
-#include "omma/design/count_sweep.h"
 
 namespace omma::design {
 namespace {

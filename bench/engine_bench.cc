@@ -2,13 +2,13 @@
 // cv::remap (peer A), cv::detail::MultiBandBlender (peer B) and the memcpy bandwidth bound, on the
 // thesis prototype rig with random-texture frames, at 1080x1080 vr180 and 1920x512 equirect.
 // `omma bench --json` runs the same workloads (omma/bench/bench.h) and prints fps.
-#include <benchmark/benchmark.h>
-
 #include <map>
 #include <memory>
 
-#include "omma/design/prototype.h"
+#include <benchmark/benchmark.h>
+
 #include "omma/bench/bench.h"
+#include "omma/design/prototype.h"
 #include "omma/testing/synthetic.h"
 
 namespace {
@@ -91,7 +91,8 @@ void BM_FrameStoreSet(benchmark::State& state) {
     store.set(c, frames()[c]);
     c = (c + 1) % int(frames().size());
   }
-  state.counters["frames_per_s"] = benchmark::Counter(double(state.iterations()), benchmark::Counter::kIsRate);
+  state.counters["frames_per_s"] =
+      benchmark::Counter(double(state.iterations()), benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_FrameStoreSet)->Unit(benchmark::kMicrosecond);
 

@@ -82,10 +82,12 @@ int main(int argc, char** argv) {
     for (int threads : {1, 2}) {
       size_t bytes = 0;
       const double s = encode(raws, fmt, threads, &bytes);
-      std::printf("{\"codec\": \"ffv1\", \"pix_fmt\": \"%s\", \"threads\": %d, \"frames\": %zu, \"input_mb_per_s\": %.1f, "
-                  "\"ratio_vs_16bit\": %.3f, \"ratio_vs_12bit_packed\": %.3f}\n",
-                  fmt == AV_PIX_FMT_GRAY12LE ? "gray12le" : "gbrap12le", threads, raws.size(), raw_bytes / 1e6 / s,
-                  raw_bytes / bytes, raw_bytes * 0.75 / bytes);
+      std::printf(
+          "{\"codec\": \"ffv1\", \"pix_fmt\": \"%s\", \"threads\": %d, \"frames\": %zu, \"input_mb_per_s\": "
+          "%.1f, "
+          "\"ratio_vs_16bit\": %.3f, \"ratio_vs_12bit_packed\": %.3f}\n",
+          fmt == AV_PIX_FMT_GRAY12LE ? "gray12le" : "gbrap12le", threads, raws.size(), raw_bytes / 1e6 / s,
+          raw_bytes / bytes, raw_bytes * 0.75 / bytes);
     }
   return 0;
 }

@@ -52,7 +52,11 @@ void BM_PeerFloatStitch1080(benchmark::State& state) {
   for (auto _ : state) benchmark::DoNotOptimize(pano::stitch(f.rig, f.frames, opt));
   state.SetItemsProcessed(state.iterations() * f.grid.width * f.grid.height);
 }
-BENCHMARK(BM_PeerFloatStitch1080)->DenseRange(0, 2)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
+BENCHMARK(BM_PeerFloatStitch1080)
+    ->DenseRange(0, 2)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->MinTime(2.0);
 
 }  // namespace
 

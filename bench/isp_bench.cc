@@ -3,13 +3,13 @@
 // OpenCV's cvtColor bilinear Bayer conversion (16-bit in, no white balance) on the same frames,
 // also over the frames with oneTBB, in the same run. The target is >= 100 sets/s on 2 cores.
 // Also: the plain reference path, and the sensor-link decoder (one 250x250 frame).
-#include <benchmark/benchmark.h>
-#include <tbb/parallel_for.h>
-
 #include <filesystem>
+#include <vector>
+
+#include <benchmark/benchmark.h>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
-#include <vector>
+#include <tbb/parallel_for.h>
 
 #include "omma/isp/isp.h"
 

@@ -2,7 +2,6 @@
 // cv::remap of one 250x250 camera onto the same output size (a lower bound for any renderer that
 // samples each output pixel once). Scene: 15-camera test rig, 250 px cameras, vr180 540x540.
 #include <benchmark/benchmark.h>
-
 #include <opencv2/imgproc.hpp>
 
 #include "omma/core/progress.h"

@@ -9,7 +9,8 @@ namespace {
 
 omma::RigCamera bench_camera() {
   omma::RigCamera c;
-  c.frame = omma::frame_looking_at(omma::direction_from_spherical(omma::deg2rad(50), 0.3), -omma::Vec3::UnitZ());
+  c.frame =
+      omma::frame_looking_at(omma::direction_from_spherical(omma::deg2rad(50), 0.3), -omma::Vec3::UnitZ());
   c.position_mm = 5 * c.frame.t;
   c.in.aov = omma::deg2rad(64);
   c.in.fu = c.in.fv = omma::Intrinsics::focal_for_aov(250, c.in.aov);
@@ -29,10 +30,16 @@ void BM_RenderCamera250(benchmark::State& state) {
   e.supersample = static_cast<int>(state.range(1));
   const auto cam = bench_camera();
   for (auto _ : state) benchmark::DoNotOptimize(omma::sim::render_camera(s, cam, {}, e).image.data);
-  state.counters["rays/s"] = benchmark::Counter(250.0 * 250 * e.supersample * e.supersample * state.iterations(),
-                                                benchmark::Counter::kIsRate);
+  state.counters["rays/s"] = benchmark::Counter(
+      250.0 * 250 * e.supersample * e.supersample * state.iterations(), benchmark::Counter::kIsRate);
 }
-BENCHMARK(BM_RenderCamera250)->Args({0, 3})->Args({1, 1})->Args({1, 2})->Args({1, 3})->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_RenderCamera250)
+    ->Args({0, 3})
+    ->Args({1, 1})
+    ->Args({1, 2})
+    ->Args({1, 3})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 void BM_Truth1080(benchmark::State& state) {
   const auto& s = scene(static_cast<int>(state.range(0)));

@@ -24,7 +24,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   std::vector<uint8_t> store(store_bytes <= (size_t(64) << 20) ? store_bytes : 0, 7);
   long long pixels = 0, taps_read = 0, bytes_sum = 0;
   m->visit([&](int col, int row, int n, const omma::render::MapTap* taps) {
-    if (col < 0 || col >= m->width || row < 0 || row >= m->height || n < 0 || n > omma::render::kMaxTaps) abort();
+    if (col < 0 || col >= m->width || row < 0 || row >= m->height || n < 0 || n > omma::render::kMaxTaps)
+      abort();
     int weights = 0;
     for (int i = 0; i < n; ++i) {
       if (taps[i].offset + 16 > store_bytes) abort();

@@ -2,8 +2,8 @@
 // valid rig or throw PtoError / RigError, without a crash, undefined behaviour or a hang. Image
 // names resolve against a folder that does not exist, so no image is read. Build and run with
 // fuzz/run.sh.
-#include <cstddef>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <cstdlib>
 #include <string>

@@ -30,7 +30,7 @@ int main() {
   omma::pano::stitch(rig, images, stitch).convertTo(pano, CV_8UC3, 255.0);
 
   const double db = omma::pano::psnr_db(pano, frames.truth);
-  std::printf("omma %s: %zu cameras, %dx%d vr180 panorama, %.2f dB against the truth\n", omma::version().c_str(),
-              rig.cameras.size(), pano.cols, pano.rows, db);
+  std::printf("omma %s: %zu cameras, %dx%d vr180 panorama, %.2f dB against the truth\n",
+              omma::version().c_str(), rig.cameras.size(), pano.cols, pano.rows, db);
   return db > 25 ? 0 : 1;
 }

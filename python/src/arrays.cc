@@ -31,19 +31,24 @@ cv::Mat mat_from_array(const py::handle& obj, const std::string& what, const Ima
   allow(spec.allow_u16, "uint16");
   allow(spec.allow_f32, "float32 in [0, 1]");
   int depth = -1;
-  if (spec.allow_u8 && a.dtype().is(py::dtype::of<uint8_t>())) depth = CV_8U;
-  else if (spec.allow_u16 && a.dtype().is(py::dtype::of<uint16_t>())) depth = CV_16U;
-  else if (spec.allow_f32 && a.dtype().is(py::dtype::of<float>())) depth = CV_32F;
+  if (spec.allow_u8 && a.dtype().is(py::dtype::of<uint8_t>()))
+    depth = CV_8U;
+  else if (spec.allow_u16 && a.dtype().is(py::dtype::of<uint16_t>()))
+    depth = CV_16U;
+  else if (spec.allow_f32 && a.dtype().is(py::dtype::of<float>()))
+    depth = CV_32F;
   if (depth < 0)
     throw py::type_error(fmt::format("{} has dtype {}; expected {}", what, dtype_text(a), allowed));
   const int channels = a.ndim() == 2 ? 1 : a.ndim() == 3 ? int(a.shape(2)) : 0;
-  const bool ok_channels = channels == 3 || (channels == 1 && spec.allow_gray) || (channels == 4 && spec.allow_bgra);
+  const bool ok_channels =
+      channels == 3 || (channels == 1 && spec.allow_gray) || (channels == 4 && spec.allow_bgra);
   if (!ok_channels)
     throw py::value_error(fmt::format("{} has shape {}; expected (H, W, 3){}{}", what, shape_text(a),
                                       spec.allow_gray ? ", (H, W, 1) or (H, W)" : "",
                                       spec.allow_bgra ? " or (H, W, 4)" : ""));
   const py::ssize_t rows = a.shape(0), cols = a.shape(1), item = a.itemsize();
-  if (rows <= 0 || cols <= 0) throw py::value_error(fmt::format("{} is empty: shape {}", what, shape_text(a)));
+  if (rows <= 0 || cols <= 0)
+    throw py::value_error(fmt::format("{} is empty: shape {}", what, shape_text(a)));
   const py::ssize_t ch_stride = a.ndim() == 3 ? a.strides(2) : item;
   const py::ssize_t row_stride = a.strides(0);
   // Pixels side by side within a row, rows at a positive stride that holds a whole row.
@@ -86,27 +91,30 @@ std::vector<cv::Mat> frames_from_python(const py::handle& frames, const Rig& rig
   if (py::isinstance<py::array>(frames)) {
     const auto a = py::reinterpret_borrow<py::array>(frames);
     if (a.ndim() != 3 && a.ndim() != 4)
-      throw py::value_error(fmt::format("frames has shape {}; expected (N, H, W, C) or (N, H, W), or a list of "
-                                        "(H, W, C) arrays, one per camera",
-                                        shape_text(a)));
+      throw py::value_error(
+          fmt::format("frames has shape {}; expected (N, H, W, C) or (N, H, W), or a list of "
+                      "(H, W, C) arrays, one per camera",
+                      shape_text(a)));
     for (py::ssize_t i = 0; i < a.shape(0); ++i) items.push_back(a[py::int_(i)]);
   } else if (py::isinstance<py::list>(frames) || py::isinstance<py::tuple>(frames)) {
     for (const auto& f : frames) items.push_back(py::reinterpret_borrow<py::object>(f));
   } else {
-    throw py::type_error(fmt::format("frames must be a list of numpy arrays (one per camera) or one array of "
-                                     "shape (N, H, W, C), got {}",
-                                     py::str(frames.get_type().attr("__name__")).cast<std::string>()));
+    throw py::type_error(
+        fmt::format("frames must be a list of numpy arrays (one per camera) or one array of "
+                    "shape (N, H, W, C), got {}",
+                    py::str(frames.get_type().attr("__name__")).cast<std::string>()));
   }
   if (items.size() != n)
-    throw py::value_error(fmt::format("expected {} frames (one per rig camera, in rig order), got {}", n, items.size()));
+    throw py::value_error(
+        fmt::format("expected {} frames (one per rig camera, in rig order), got {}", n, items.size()));
   std::vector<cv::Mat> out;
   out.reserve(n);
   for (size_t c = 0; c < n; ++c) {
     cv::Mat m = mat_from_array(items[c], fmt::format("frames[{}]", c), spec);
     const auto& in = rig.cameras[c].in;
     if (m.cols != in.width || m.rows != in.height)
-      throw py::value_error(fmt::format("frames[{}] is {}x{} (W x H) but camera id {} is {}x{}", c, m.cols, m.rows,
-                                        rig.cameras[c].id, in.width, in.height));
+      throw py::value_error(fmt::format("frames[{}] is {}x{} (W x H) but camera id {} is {}x{}", c, m.cols,
+                                        m.rows, rig.cameras[c].id, in.width, in.height));
     out.push_back(m);
   }
   if (keep) *keep = std::move(items);
@@ -125,8 +133,8 @@ cv::Size size_from_python(const py::handle& size, const std::string& what) {
     } catch (const py::cast_error&) {
     }
   }
-  throw py::value_error(fmt::format("{} must be (width, height) with positive integers or \"WxH\", got {}", what,
-                                    py::repr(size).cast<std::string>()));
+  throw py::value_error(fmt::format("{} must be (width, height) with positive integers or \"WxH\", got {}",
+                                    what, py::repr(size).cast<std::string>()));
 }
 
 }  // namespace omma::py

@@ -24,7 +24,9 @@ PanoGrid grid_from(const std::string& projection, const py::object& size) {
   return PanoGrid{parse_projection(projection), s.width, s.height};
 }
 
-py::object number_or_none(double x) { return std::isfinite(x) ? py::object(py::float_(x)) : py::object(py::none()); }
+py::object number_or_none(double x) {
+  return std::isfinite(x) ? py::object(py::float_(x)) : py::object(py::none());
+}
 
 // An image argument for the quality functions (uint8, uint16 or float32; gray or BGR).
 cv::Mat image_arg(const py::handle& a, const char* what) { return mat_from_array(a, what); }
@@ -36,7 +38,8 @@ cv::Mat mask_arg(const py::object& a, cv::Size size) {
   cv::Mat m = mat_from_array(a, "mask", spec);
   if (m.channels() != 1) throw py::value_error("mask must be uint8 of shape (H, W): non-zero inside");
   if (m.size() != size)
-    throw py::value_error(fmt::format("mask is {}x{}, the image {}x{}", m.cols, m.rows, size.width, size.height));
+    throw py::value_error(
+        fmt::format("mask is {}x{}, the image {}x{}", m.cols, m.rows, size.width, size.height));
   return m;
 }
 
@@ -63,8 +66,10 @@ void add_pano(py::module_& m) {
       py::arg("rig"), py::arg("frames"), py::arg("method") = "mrf", py::arg("projection") = "vr180",
       py::arg("size") = py::make_tuple(1080, 1080), py::arg("progress") = false,
       "The reference panorama (thesis §2.4.2, ch. 4), as `omma stitch`: float32 (H, W, 3) BGR in [0, 1].\n"
-      "frames: one image per rig camera (list, or an (N, H, W, C) array), uint8/uint16/float32, BGR or gray.\n"
-      "method: nn | linear | gaussian | mrf | mrf-spherical | sad; projection: vr180 | equirect | equirect-full.");
+      "frames: one image per rig camera (list, or an (N, H, W, C) array), uint8/uint16/float32, BGR or "
+      "gray.\n"
+      "method: nn | linear | gaussian | mrf | mrf-spherical | sad; projection: vr180 | equirect | "
+      "equirect-full.");
   m.attr("METHODS") = [] {
     std::vector<std::string> names;
     for (auto meth : pano::all_methods()) names.push_back(pano::to_string(meth));
@@ -99,7 +104,8 @@ void add_pano(py::module_& m) {
       },
       py::arg("pano"), py::arg("truth"), py::arg("seam") = py::none(),
       "PSNR (dB), mean SSIM and the PSNR over the seam band (mask from seam_mask()), as `omma eval`.\n"
-      "Images: uint8/uint16/float32 in [0, 1], compared at full scale. None where a figure is infinite/absent.");
+      "Images: uint8/uint16/float32 in [0, 1], compared at full scale. None where a figure is "
+      "infinite/absent.");
   m.def(
       "psnr",
       [](const py::object& a, const py::object& b, const py::object& mask) {
@@ -108,14 +114,21 @@ void add_pano(py::module_& m) {
       },
       py::arg("a"), py::arg("b"), py::arg("mask") = py::none(), "PSNR in dB (inf for identical images).");
   m.def(
-      "ssim", [](const py::object& a, const py::object& b) { return pano::ssim(image_arg(a, "a"), image_arg(b, "b")); },
+      "ssim",
+      [](const py::object& a, const py::object& b) {
+        return pano::ssim(image_arg(a, "a"), image_arg(b, "b"));
+      },
       py::arg("a"), py::arg("b"), "Mean SSIM (11x11 Gaussian window, sigma 1.5).");
 
   m.def(
-      "to_u8", [](const py::object& a) { return array_from_mat(to_u8(mat_from_array(a, "image", {false, false, true, true, false}))); },
+      "to_u8",
+      [](const py::object& a) {
+        return array_from_mat(to_u8(mat_from_array(a, "image", {false, false, true, true, false})));
+      },
       py::arg("image"), "float32 [0, 1] -> uint8 (rounded, saturated).");
   m.def(
-      "read_image", [](const std::filesystem::path& path) { return array_from_mat(read_image(path)); }, py::arg("path"),
+      "read_image", [](const std::filesystem::path& path) { return array_from_mat(read_image(path)); },
+      py::arg("path"),
       "Reads an image as stored (BGR, 8 or 16 bit); IoError naming the path if missing or unreadable.");
   m.def(
       "write_image",
@@ -125,7 +138,8 @@ void add_pano(py::module_& m) {
         spec.allow_bgra = true;
         const cv::Mat m = mat_from_array(image, "image", spec);
         if (projection.is_none()) return write_image(path, m);
-        io::write_panorama(path, m, PanoGrid{parse_projection(projection.cast<std::string>()), m.cols, m.rows});
+        io::write_panorama(path, m,
+                           PanoGrid{parse_projection(projection.cast<std::string>()), m.cols, m.rows});
       },
       py::arg("path"), py::arg("image"), py::arg("projection") = py::none(),
       "Writes an image atomically (format from the extension). With a projection (vr180, equirect,\n"
@@ -145,12 +159,14 @@ void add_pano(py::module_& m) {
         for (auto& f : load_frames(dir, rig)) out.append(array_from_mat(f));
         return out;
       },
-      py::arg("dir"), py::arg("rig"), "The frames folder's DIR/cam_XX.png of every camera of the rig, in rig order.");
+      py::arg("dir"), py::arg("rig"),
+      "The frames folder's DIR/cam_XX.png of every camera of the rig, in rig order.");
 
   using calib::CalibrationOptions;
-  py::class_<CalibrationOptions>(m, "CalibrationOptions",
-                                 "Options of calibrate() (omma/calib/calibrate.h); calibrate() takes these fields as "
-                                 "keyword arguments.")
+  py::class_<CalibrationOptions>(
+      m, "CalibrationOptions",
+      "Options of calibrate() (omma/calib/calibrate.h); calibrate() takes these fields as "
+      "keyword arguments.")
       .def(py::init<>())
       .def_property(
           "scene", [](const CalibrationOptions& o) { return calib::to_string(o.scene); },
@@ -175,7 +191,8 @@ void add_pano(py::module_& m) {
       .def_readwrite("threads", &CalibrationOptions::threads)
       .def_property(
           "upsample", [](const CalibrationOptions& o) { return o.features.upsample; },
-          [](CalibrationOptions& o, int v) { o.features.upsample = v; }, "SIFT on frames upsampled this much (1 = off)")
+          [](CalibrationOptions& o, int v) { o.features.upsample = v; },
+          "SIFT on frames upsampled this much (1 = off)")
       .def_property(
           "max_features", [](const CalibrationOptions& o) { return o.features.max_features; },
           [](CalibrationOptions& o, int v) { o.features.max_features = v; }, "SIFT features per camera");
@@ -218,9 +235,12 @@ void add_pano(py::module_& m) {
         return d;
       },
       py::arg("rig"), py::arg("frames"),
-      "Calibrates `rig` from one set of frames (thesis §3.6, as `omma calibrate`): SIFT, matching, RANSAC, Ceres\n"
-      "bundle adjustment. Keyword arguments set CalibrationOptions fields (scene='far'|'near'|'auto', threads,\n"
-      "estimate_focal, share_focal, radial_terms, ...). Returns a dict: 'rig' (the calibrated Rig), 'rms_px',\n"
+      "Calibrates `rig` from one set of frames (thesis §3.6, as `omma calibrate`): SIFT, matching, RANSAC, "
+      "Ceres\n"
+      "bundle adjustment. Keyword arguments set CalibrationOptions fields (scene='far'|'near'|'auto', "
+      "threads,\n"
+      "estimate_focal, share_focal, radial_terms, ...). Returns a dict: 'rig' (the calibrated Rig), "
+      "'rms_px',\n"
       "'initial_rms_px', counts, 'per_camera', 'warnings'.");
 }
 

@@ -27,26 +27,30 @@ void add_rig(py::module_& m) {
   py::class_<Rig>(m, "Rig",
                   "A dome of cameras (omma/core/rig.h): JSON in millimetres and degrees. Build one with "
                   "Rig.load, Rig.from_json, Rig.from_dict, design() or thesis_prototype_rig().")
-      .def_static("load", &load_rig, py::arg("path"), "Loads and validates a rig file (RigError naming the field at fault).")
+      .def_static("load", &load_rig, py::arg("path"),
+                  "Loads and validates a rig file (RigError naming the field at fault).")
       .def_static(
           "from_json", [](const std::string& text) { return rig_from_json(nlohmann::json::parse(text)); },
           py::arg("text"), "Parses and validates rig JSON text.")
       .def_static(
           "from_dict", [](const py::dict& d) { return rig_from_json(from_python(d)); }, py::arg("d"),
           "Builds and validates a rig from the dict of its JSON (as to_dict() gives).")
-      .def("to_dict", [](const Rig& r) { return to_python(rig_to_json(r)); }, "The rig's JSON as a dict.")
       .def(
-          "to_json", [](const Rig& r, int indent) { return rig_to_json(r).dump(indent); }, py::arg("indent") = 2,
-          "The rig's JSON text (what save() writes).")
-      .def("save", [](const Rig& r, const std::filesystem::path& path) { save_rig(r, path); }, py::arg("path"),
-           "Writes the rig file atomically (temporary file, then rename).")
+          "to_dict", [](const Rig& r) { return to_python(rig_to_json(r)); }, "The rig's JSON as a dict.")
+      .def(
+          "to_json", [](const Rig& r, int indent) { return rig_to_json(r).dump(indent); },
+          py::arg("indent") = 2, "The rig's JSON text (what save() writes).")
+      .def(
+          "save", [](const Rig& r, const std::filesystem::path& path) { save_rig(r, path); }, py::arg("path"),
+          "Writes the rig file atomically (temporary file, then rename).")
       .def("validate", &Rig::validate, "Raises RigError if anything is inconsistent.")
       .def_property_readonly("name", [](const Rig& r) { return r.name; })
-      .def_property_readonly("camera_ids", [](const Rig& r) {
-        std::vector<int> ids;
-        for (const auto& c : r.cameras) ids.push_back(c.id);
-        return ids;
-      })
+      .def_property_readonly("camera_ids",
+                             [](const Rig& r) {
+                               std::vector<int> ids;
+                               for (const auto& c : r.cameras) ids.push_back(c.id);
+                               return ids;
+                             })
       .def_property_readonly(
           "camera_sizes",
           [](const Rig& r) {
@@ -57,7 +61,8 @@ void add_rig(py::module_& m) {
           "(width, height) of every camera, in rig order.")
       .def("__len__", [](const Rig& r) { return r.cameras.size(); })
       .def("__repr__", [](const Rig& r) {
-        return fmt::format("<omma.Rig '{}': {} cameras{}>", r.name, r.cameras.size(), r.dome.sphere ? ", sphere" : "");
+        return fmt::format("<omma.Rig '{}': {} cameras{}>", r.name, r.cameras.size(),
+                           r.dome.sphere ? ", sphere" : "");
       });
 
   m.def("load_rig", &load_rig, py::arg("path"), "Rig.load(path).");

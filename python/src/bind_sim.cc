@@ -29,9 +29,10 @@ py::list frame_list(const Simulation& s, cv::Mat sim::CameraFrame::*field) {
 }  // namespace
 
 void add_sim(py::module_& m) {
-  py::class_<sim::CameraEffects>(m, "CameraEffects",
-                                 "Sensor effects of the simulator (omma/sim/render.h); simulate() takes its fields "
-                                 "as keyword arguments.")
+  py::class_<sim::CameraEffects>(
+      m, "CameraEffects",
+      "Sensor effects of the simulator (omma/sim/render.h); simulate() takes its fields "
+      "as keyword arguments.")
       .def(py::init<>())
       .def_readwrite("supersample", &sim::CameraEffects::supersample)
       .def_readwrite("exposure", &sim::CameraEffects::exposure)
@@ -56,18 +57,23 @@ void add_sim(py::module_& m) {
           "truth", [](const Simulation& s) { return array_from_mat(s.result.truth); },
           "Ideal panorama seen from the dome centre, uint8 (H, W, 3) sRGB (None with truth=False).")
       .def_property_readonly("nominal_rig", [](const Simulation& s) { return s.result.nominal; })
-      .def_property_readonly("true_rig", [](const Simulation& s) { return s.result.true_rig; },
-                             "The rig the frames were rendered with (perturbed if perturb was given).")
-      .def_property_readonly("summary", [](const Simulation& s) {
-        return to_python(sim::simulation_summary(s.result, s.options, *s.scene));
-      }, "What was simulated (the content of sim.json).")
+      .def_property_readonly(
+          "true_rig", [](const Simulation& s) { return s.result.true_rig; },
+          "The rig the frames were rendered with (perturbed if perturb was given).")
+      .def_property_readonly(
+          "summary",
+          [](const Simulation& s) {
+            return to_python(sim::simulation_summary(s.result, s.options, *s.scene));
+          },
+          "What was simulated (the content of sim.json).")
       .def(
           "save",
           [](const Simulation& s, const std::filesystem::path& dir) {
             py::gil_scoped_release release;
             sim::write_frames_folder(dir, s.result, s.options, *s.scene);
           },
-          py::arg("dir"), "Writes the frames folder (cam_XX.png, truth.png, rig.json, ...) as `omma simulate --out`.");
+          py::arg("dir"),
+          "Writes the frames folder (cam_XX.png, truth.png, rig.json, ...) as `omma simulate --out`.");
 
   m.def(
       "simulate",
@@ -103,11 +109,13 @@ void add_sim(py::module_& m) {
       },
       py::arg("rig"), py::arg("scene") = "colon", py::arg("projection") = "vr180",
       py::arg("size") = py::make_tuple(1080, 1080), py::arg("seed") = 1, py::arg("ideal") = false,
-      py::arg("supersample") = 3, py::arg("truth") = true, py::arg("truth_supersample") = 0, py::arg("raw") = false,
-      py::arg("perturb") = "", py::arg("dome_z_mm") = 0.0, py::arg("progress") = false,
+      py::arg("supersample") = 3, py::arg("truth") = true, py::arg("truth_supersample") = 0,
+      py::arg("raw") = false, py::arg("perturb") = "", py::arg("dome_z_mm") = 0.0,
+      py::arg("progress") = false,
       "Renders every camera of `rig` looking at `scene` and the ground-truth panorama (as `omma simulate`).\n"
       "scene: 'colon', 'photo:PATH', 'usaf[:MM]', 'checker[:MM]', or an equirectangular 360x180 photo as an\n"
-      "array (BGR uint8/uint16/float32). projection/size: the truth's grid. ideal: no vignetting, gains, noise\n"
+      "array (BGR uint8/uint16/float32). projection/size: the truth's grid. ideal: no vignetting, gains, "
+      "noise\n"
       "or quantisation. Further keyword arguments set CameraEffects fields (vignetting, color_gain,\n"
       "full_scale_electrons, read_noise_dn, bits, exposure). perturb: e.g. 'orient=0.5,focal=0.02'.");
 }

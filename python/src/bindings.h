@@ -12,11 +12,11 @@ namespace omma::py {
 
 namespace py = pybind11;
 
-void add_errors(py::module_& m);   // omma.Error and its subclasses, C++ exception translation
-void add_rig(py::module_& m);      // Rig, load_rig, thesis_prototype_rig, design, rig_diff
-void add_sim(py::module_& m);      // SimulateOptions, simulate, Simulation
-void add_pano(py::module_& m);     // stitch, evaluate, images, frames folders, calibrate
-void add_engine(py::module_& m);   // Engine
+void add_errors(py::module_& m);  // omma.Error and its subclasses, C++ exception translation
+void add_rig(py::module_& m);     // Rig, load_rig, thesis_prototype_rig, design, rig_diff
+void add_sim(py::module_& m);     // SimulateOptions, simulate, Simulation
+void add_pano(py::module_& m);    // stitch, evaluate, images, frames folders, calibrate
+void add_engine(py::module_& m);  // Engine
 
 // JSON <-> Python objects (through Python's json module: exact for what rigs and summaries hold).
 py::object to_python(const nlohmann::json& j);

@@ -5,18 +5,16 @@
 
 #include "bindings.h"
 #include "omma/core/io.h"
-#include "omma/core/version.h"
 #include "omma/core/log.h"
 #include "omma/core/progress.h"
 #include "omma/core/rig.h"
+#include "omma/core/version.h"
 #include "omma/live/sinks.h"
 #include "omma/sim/scene.h"
 
 namespace omma::py {
 
-py::object to_python(const nlohmann::json& j) {
-  return py::module_::import("json").attr("loads")(j.dump());
-}
+py::object to_python(const nlohmann::json& j) { return py::module_::import("json").attr("loads")(j.dump()); }
 
 nlohmann::json from_python(const py::handle& obj) {
   const std::string text = py::module_::import("json").attr("dumps")(obj).cast<std::string>();
@@ -32,7 +30,8 @@ void set_fields(py::object options, const py::kwargs& kwargs, const std::string&
         const std::string a = py::str(attr);
         if (a[0] != '_') valid += (valid.empty() ? "" : ", ") + a;
       }
-      throw py::type_error(fmt::format("{}() got an unexpected keyword argument '{}' (options: {})", function, name, valid));
+      throw py::type_error(
+          fmt::format("{}() got an unexpected keyword argument '{}' (options: {})", function, name, valid));
     }
     options.attr(name.c_str()) = value;
   }
@@ -41,14 +40,16 @@ void set_fields(py::object options, const py::kwargs& kwargs, const std::string&
 void add_errors(py::module_& m) {
   // omma.Error is the base of every omma error; the subclasses also derive from the built-in
   // exception a Python caller would expect (a bad rig is a ValueError, a missing file an OSError).
-  static PyObject* error = PyErr_NewExceptionWithDoc("omma.Error", "Base class of omma's errors.", nullptr, nullptr);
+  static PyObject* error =
+      PyErr_NewExceptionWithDoc("omma.Error", "Base class of omma's errors.", nullptr, nullptr);
   auto make = [&](const char* name, PyObject* builtin, const char* doc) {
     PyObject* bases = PyTuple_Pack(2, error, builtin);
     PyObject* type = PyErr_NewExceptionWithDoc(name, doc, bases, nullptr);
     Py_DECREF(bases);
     return type;
   };
-  static PyObject* rig_error = make("omma.RigError", PyExc_ValueError, "An invalid rig (file, JSON or camera).");
+  static PyObject* rig_error =
+      make("omma.RigError", PyExc_ValueError, "An invalid rig (file, JSON or camera).");
   static PyObject* io_error = make("omma.IoError", PyExc_OSError, "A file that cannot be read or written.");
   static PyObject* scene_error = make("omma.SceneError", PyExc_ValueError, "An unknown or unreadable scene.");
   static PyObject* sink_error = make("omma.SinkError", PyExc_OSError, "An output that cannot be written.");
@@ -80,7 +81,8 @@ void add_errors(py::module_& m) {
 }  // namespace omma::py
 
 PYBIND11_MODULE(_omma, m) {
-  m.doc() = "omma: compound-eye camera toolkit (rigs, design, simulator, stitcher, real-time engine, calibration)";
+  m.doc() =
+      "omma: compound-eye camera toolkit (rigs, design, simulator, stitcher, real-time engine, calibration)";
   m.attr("__version__") = omma::version();
   omma::init_logging(false, false);  // "[info] ..." on stderr, as the command line
   omma::py::add_errors(m);
@@ -93,7 +95,7 @@ PYBIND11_MODULE(_omma, m) {
       [](const std::string& level) {
         if (level != "quiet" && level != "info" && level != "debug")
           throw std::invalid_argument("verbosity must be quiet, info or debug (got '" + level + "')");
-        spdlog::set_level(level == "debug" ? spdlog::level::debug
+        spdlog::set_level(level == "debug"   ? spdlog::level::debug
                           : level == "quiet" ? spdlog::level::warn
                                              : spdlog::level::info);
         omma::set_progress_enabled(level != "quiet");

@@ -4,8 +4,8 @@
 
 #include <gtest/gtest.h>
 
-#include "omma/testing/test_scenes.h"
 #include "omma/core/frames.h"
+#include "omma/testing/test_scenes.h"
 #include "tests/cli/cli_util.h"
 
 namespace omma::test {
@@ -16,12 +16,14 @@ namespace fs = std::filesystem;
 // DIR/sim/{cam_XX.png, rig.json (nominal), rig_true.json (perturbed)}.
 fs::path make_far_field_case(const std::string& photo) {
   const fs::path dir = temp_dir("calib");
-  const RunResult d = run_omma("design --method max-volume --cam-size 1x1x2 --out " + (dir / "proto.json").string());
+  const RunResult d =
+      run_omma("design --method max-volume --cam-size 1x1x2 --out " + (dir / "proto.json").string());
   EXPECT_EQ(d.exit_code, 0) << d.err;
-  const RunResult s = run_omma("simulate --rig " + (dir / "proto.json").string() + " --scene photo:" + data_dir() + "/" +
-                               photo + " --out " + (dir / "sim").string() +
-                               " --perturb orient=2,focal=0.03,center=5,k1=0.05 --projection equirect"
-                               " --truth-size 360x90 --supersample 2 --json");
+  const RunResult s =
+      run_omma("simulate --rig " + (dir / "proto.json").string() + " --scene photo:" + data_dir() + "/" +
+               photo + " --out " + (dir / "sim").string() +
+               " --perturb orient=2,focal=0.03,center=5,k1=0.05 --projection equirect"
+               " --truth-size 360x90 --supersample 2 --json");
   EXPECT_EQ(s.exit_code, 0) << s.err;
   return dir;
 }
@@ -48,9 +50,10 @@ TEST(CalibCli, CalibrateThenRigDiffMeetsTargets) {
                                (dir / "sim/rig_true.json").string() + " --align --json");
   ASSERT_EQ(d.exit_code, 0) << d.err;
   const auto dj = d.json();
-  std::printf("calibrated vs true: orientation median %.4f deg max %.4f, focal median %.5f, centre median %.3f px\n",
-              dj["orientation_error_deg"]["median"].get<double>(), dj["orientation_error_deg"]["max"].get<double>(),
-              dj["focal_error_rel"]["median"].get<double>(), dj["center_error_px"]["median"].get<double>());
+  std::printf(
+      "calibrated vs true: orientation median %.4f deg max %.4f, focal median %.5f, centre median %.3f px\n",
+      dj["orientation_error_deg"]["median"].get<double>(), dj["orientation_error_deg"]["max"].get<double>(),
+      dj["focal_error_rel"]["median"].get<double>(), dj["center_error_px"]["median"].get<double>());
   EXPECT_LT(dj["orientation_error_deg"]["median"].get<double>(), 0.1);
   EXPECT_LT(dj["focal_error_rel"]["median"].get<double>(), 0.005);
   const RunResult n = run_omma("rig-diff " + (dir / "sim/rig.json").string() + " " +
@@ -59,8 +62,9 @@ TEST(CalibCli, CalibrateThenRigDiffMeetsTargets) {
   EXPECT_GT(n.json()["orientation_error_deg"]["median"].get<double>(), 0.5);  // the nominal rig is off
   // The calibrated rig feeds the stitcher unchanged: nn panorama vs the truth.
   auto pano_psnr = [&](const std::string& rig) {
-    const RunResult st = run_omma("stitch --rig " + rig + " --frames " + (dir / "sim").string() +
-                                  " --method nn --projection equirect --size 360x90 --out " + (dir / "p.png").string());
+    const RunResult st =
+        run_omma("stitch --rig " + rig + " --frames " + (dir / "sim").string() +
+                 " --method nn --projection equirect --size 360x90 --out " + (dir / "p.png").string());
     EXPECT_EQ(st.exit_code, 0) << st.err;
     const RunResult ev = run_omma("eval --pano " + (dir / "p.png").string() + " --truth " +
                                   (dir / "sim/truth.png").string() + " --json");
@@ -82,7 +86,8 @@ TEST(CalibCli, TexturelessFramesFailWithoutOutput) {
   save_rig(nominal, dir / "rig.json");
   fs::create_directories(dir / "frames");
   for (const auto& c : nominal.cameras)
-    cv::imwrite((dir / "frames" / frame_filename(c.id)).string(), cv::Mat(250, 250, CV_8UC3, cv::Scalar(80, 90, 100)));
+    cv::imwrite((dir / "frames" / frame_filename(c.id)).string(),
+                cv::Mat(250, 250, CV_8UC3, cv::Scalar(80, 90, 100)));
   const RunResult r = run_omma("calibrate --rig " + (dir / "rig.json").string() + " --frames " +
                                (dir / "frames").string() + " --out " + (dir / "cal.json").string());
   EXPECT_EQ(r.exit_code, 1);
@@ -102,26 +107,31 @@ TEST(CalibCli, PtoExportImportRoundTripAndBadInput) {
   const fs::path dir = temp_dir("calib-pto");
   const Rig truth = testing::perturb(testing::test_dome(), {}, 3);
   save_rig(truth, dir / "rig.json");
-  const RunResult e = run_omma("pto export " + (dir / "rig.json").string() + " " + (dir / "rig.pto").string() + " --json");
+  const RunResult e =
+      run_omma("pto export " + (dir / "rig.json").string() + " " + (dir / "rig.pto").string() + " --json");
   ASSERT_EQ(e.exit_code, 0) << e.err;
   EXPECT_LT(e.json()["lens_fit_max_px"].get<double>(), 1e-6);
-  const RunResult i = run_omma("pto import " + (dir / "rig.pto").string() + " " + (dir / "back.json").string() + " --json");
+  const RunResult i =
+      run_omma("pto import " + (dir / "rig.pto").string() + " " + (dir / "back.json").string() + " --json");
   ASSERT_EQ(i.exit_code, 0) << i.err;
   EXPECT_EQ(i.json()["cameras"], 24);
-  const RunResult d = run_omma("rig-diff " + (dir / "back.json").string() + " " + (dir / "rig.json").string() + " --json");
+  const RunResult d =
+      run_omma("rig-diff " + (dir / "back.json").string() + " " + (dir / "rig.json").string() + " --json");
   ASSERT_EQ(d.exit_code, 0) << d.err;
   EXPECT_LT(d.json()["orientation_error_deg"]["max"].get<double>(), 1e-6);
   EXPECT_LT(d.json()["focal_error_rel"]["max"].get<double>(), 1e-9);
   EXPECT_LT(d.json()["center_error_px"]["max"].get<double>(), 1e-9);
   // Unsupported lens type.
   std::ofstream(dir / "fish.pto") << "p f2 w100 h50 v360\ni w250 h250 f2 v180 y0 p0 r0 n\"cam_00.png\"\n";
-  const RunResult f = run_omma("pto import " + (dir / "fish.pto").string() + " " + (dir / "fish.json").string());
+  const RunResult f =
+      run_omma("pto import " + (dir / "fish.pto").string() + " " + (dir / "fish.json").string());
   EXPECT_EQ(f.exit_code, 1);
   EXPECT_NE(f.err.find("lens type f2"), std::string::npos) << f.err;
   EXPECT_FALSE(fs::exists(dir / "fish.json"));
   // Missing images and no size: nothing can be imported.
   std::ofstream(dir / "nosize.pto") << "i f0 v60 y0 p0 r0 n\"missing.png\"\n";
-  const RunResult s = run_omma("pto import " + (dir / "nosize.pto").string() + " " + (dir / "nosize.json").string());
+  const RunResult s =
+      run_omma("pto import " + (dir / "nosize.pto").string() + " " + (dir / "nosize.json").string());
   EXPECT_EQ(s.exit_code, 1);
   EXPECT_NE(s.err.find("missing"), std::string::npos) << s.err;
   EXPECT_FALSE(fs::exists(dir / "nosize.json"));
@@ -129,7 +139,8 @@ TEST(CalibCli, PtoExportImportRoundTripAndBadInput) {
   Rig small = truth;
   small.cameras.resize(3);
   save_rig(small, dir / "small.json");
-  const RunResult x = run_omma("rig-diff " + (dir / "small.json").string() + " " + (dir / "rig.json").string());
+  const RunResult x =
+      run_omma("rig-diff " + (dir / "small.json").string() + " " + (dir / "rig.json").string());
   EXPECT_EQ(x.exit_code, 1);
   fs::remove_all(dir);
 }

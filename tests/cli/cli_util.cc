@@ -1,11 +1,12 @@
 #include "tests/cli/cli_util.h"
 
-#include <gtest/gtest.h>
+#include <sys/wait.h>
 
 #include <fstream>
 #include <random>
 #include <sstream>
-#include <sys/wait.h>
+
+#include <gtest/gtest.h>
 
 #include "omma/testing/test_scenes.h"
 
@@ -20,8 +21,8 @@ RunResult run_omma(const std::string& args, int timeout_s) {
 
 RunResult run_command(const std::string& command, int timeout_s) {
   const fs::path dir = temp_dir("run");
-  const std::string cmd = "timeout " + std::to_string(timeout_s) + " " + command + " >" + (dir / "out").string() +
-                          " 2>" + (dir / "err").string() + " </dev/null";
+  const std::string cmd = "timeout " + std::to_string(timeout_s) + " " + command + " >" +
+                          (dir / "out").string() + " 2>" + (dir / "err").string() + " </dev/null";
   const int status = std::system(cmd.c_str());
   RunResult r;
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
@@ -45,8 +46,7 @@ fs::path louvre_frames_folder(const std::string& tag) {
   const Rig rig = testing::small_rig(64);
   const cv::Mat tex = testing::photo_texture(data_dir() + "/louvre.jpg", 360);
   const PanoGrid grid{Projection::kVr180, 128, 128};
-  testing::write_frames_folder(dir, rig, testing::render_frames(rig, tex),
-                                     testing::render_truth(grid, tex));
+  testing::write_frames_folder(dir, rig, testing::render_frames(rig, tex), testing::render_truth(grid, tex));
   return dir;
 }
 

@@ -10,8 +10,8 @@ namespace omma::test {
 
 struct RunResult {
   int exit_code = -1;
-  std::string out;  // stdout
-  std::string err;  // stderr
+  std::string out;              // stdout
+  std::string err;              // stderr
   nlohmann::json json() const;  // parses `out` as exactly one JSON object (throws otherwise)
 };
 

@@ -26,7 +26,8 @@ TEST(DemoCli, SmallDemoMeasuresEveryMethod) {
     EXPECT_GT(m["ssim"].get<double>(), 0.6) << name;
   }
   // Linear blending averages noise away: never worse than nearest neighbour by more than 0.2 dB.
-  EXPECT_GT(j["methods"]["linear"]["psnr_db"].get<double>(), j["methods"]["nn"]["psnr_db"].get<double>() - 0.2);
+  EXPECT_GT(j["methods"]["linear"]["psnr_db"].get<double>(),
+            j["methods"]["nn"]["psnr_db"].get<double>() - 0.2);
   const double inter = j["inter_camera_psnr_db"].get<double>();
   EXPECT_GT(inter, 18.0);
   EXPECT_LT(inter, 40.0);

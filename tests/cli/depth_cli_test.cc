@@ -1,9 +1,9 @@
 // CLI tests for the projection surface (pano/surface.h): `omma stitch --depth ... --depth-out`, the
 // simulator's true depth, `omma eval --depth`, and bad input.
-#include <gtest/gtest.h>
-
 #include <filesystem>
 #include <limits>
+
+#include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 
 #include "omma/testing/test_scenes.h"
@@ -12,7 +12,6 @@
 namespace omma::test {
 namespace {
 namespace fs = std::filesystem;
-
 
 std::string stitch(const fs::path& d, const std::string& depth, const fs::path& out) {
   return "stitch --rig " + (d / "rig.json").string() + " --frames " + d.string() +
@@ -37,12 +36,13 @@ TEST(DepthCli, DepthModesAndDepthOut) {
   EXPECT_EQ(picture.cols, 360);  // colour map widened for the legend
   EXPECT_GT(picture.rows, 128);  // legend strip
   // truth:FILE reads the data back; sphere:R; inf.
-  for (const std::string& mode : {"truth:" + (d / "depth.tiff").string(), std::string("sphere:1000"), std::string("inf")}) {
+  for (const std::string& mode :
+       {"truth:" + (d / "depth.tiff").string(), std::string("sphere:1000"), std::string("inf")}) {
     const RunResult s = run_omma(stitch(d, mode, d / "p.png") + " --json");
     ASSERT_EQ(s.exit_code, 0) << mode << ": " << s.err;
   }
-  const RunResult e = run_omma("eval --pano " + (d / "p_est.png").string() + " --truth " + (d / "truth.png").string() +
-                               " --json");
+  const RunResult e = run_omma("eval --pano " + (d / "p_est.png").string() + " --truth " +
+                               (d / "truth.png").string() + " --json");
   ASSERT_EQ(e.exit_code, 0) << e.err;
   EXPECT_GT(e.json().at("psnr_db").get<double>(), 33.0);  // measured 35.4 dB (inf: 35.5 dB)
 }
@@ -79,7 +79,8 @@ TEST(DepthCli, BadInput) {
 // dome centre every direction is 50 mm away.
 TEST(DepthCli, SimulatorWritesTrueDepth) {
   const fs::path d = temp_dir("depth-sim") / "sim";
-  const RunResult r = run_omma("simulate --scene checker:50 --truth-size 64x64 --supersample 1 --out " + d.string());
+  const RunResult r =
+      run_omma("simulate --scene checker:50 --truth-size 64x64 --supersample 1 --out " + d.string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const cv::Mat depth = cv::imread((d / "truth_depth.tiff").string(), cv::IMREAD_UNCHANGED);
   ASSERT_EQ(depth.type(), CV_32FC1);
@@ -88,13 +89,14 @@ TEST(DepthCli, SimulatorWritesTrueDepth) {
   cv::minMaxLoc(depth, &lo, &hi);
   EXPECT_NEAR(lo, 50.0, 1e-3);
   EXPECT_NEAR(hi, 50.0, 1e-3);
-  const RunResult s = run_omma("stitch --rig " + (d / "rig.json").string() + " --frames " + d.string() +
-                               " --size 64x64 --depth truth:" + (d / "truth_depth.tiff").string() + " --out " +
-                               (d / "p.png").string() + " --depth-out " + (d / "used.png").string());
+  const RunResult s =
+      run_omma("stitch --rig " + (d / "rig.json").string() + " --frames " + d.string() +
+               " --size 64x64 --depth truth:" + (d / "truth_depth.tiff").string() + " --out " +
+               (d / "p.png").string() + " --depth-out " + (d / "used.png").string());
   ASSERT_EQ(s.exit_code, 0) << s.err;
-  const RunResult e = run_omma("eval --pano " + (d / "p.png").string() + " --truth " + (d / "truth.png").string() +
-                               " --truth-depth " + (d / "truth_depth.tiff").string() + " --depth " +
-                               (d / "used.tiff").string() + " --json");
+  const RunResult e = run_omma(
+      "eval --pano " + (d / "p.png").string() + " --truth " + (d / "truth.png").string() + " --truth-depth " +
+      (d / "truth_depth.tiff").string() + " --depth " + (d / "used.tiff").string() + " --json");
   ASSERT_EQ(e.exit_code, 0) << e.err;
   EXPECT_LT(e.json().at("depth").at("median_rel").get<double>(), 1e-6);
 }

@@ -14,8 +14,8 @@ namespace fs = std::filesystem;
 
 TEST(DesignCli, MaxVolumeReproducesThePrototype) {
   const auto dir = temp_dir("design");
-  const RunResult r = run_omma("design --method max-volume --cam-size 1x1x2 --json --out " +
-                               (dir / "rig.json").string());
+  const RunResult r =
+      run_omma("design --method max-volume --cam-size 1x1x2 --json --out " + (dir / "rig.json").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto j = r.json();
   EXPECT_EQ(j.size(), 5u);  // exactly {method, cameras, layers, r_virtual_mm, omma_version}
@@ -72,8 +72,8 @@ TEST(CoverageCli, PrototypeStatisticsAndMap) {
                                " --distance 18 --step 0.5 --json --map " + (dir / "map.png").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto j = r.json();
-  for (const char* key : {"distance_mm", "covered_fraction", "min_cameras", "max_cameras",
-                          "mean_cameras", "r_virtual_mm"})
+  for (const char* key :
+       {"distance_mm", "covered_fraction", "min_cameras", "max_cameras", "mean_cameras", "r_virtual_mm"})
     EXPECT_TRUE(j.contains(key)) << key;
   EXPECT_DOUBLE_EQ(j["distance_mm"].get<double>(), 18.0);
   EXPECT_DOUBLE_EQ(j["covered_fraction"].get<double>(), 1.0);
@@ -86,7 +86,8 @@ TEST(CoverageCli, PrototypeStatisticsAndMap) {
   EXPECT_EQ(map.cols, 1440);
   EXPECT_GT(map.rows, 360);  // 1440 x 360 map plus the legend
   // Closer than R_vir there are gaps (black pixels in the map).
-  const auto near = run_omma("coverage " + (dir / "rig.json").string() + " --distance 8 --step 0.5 --json").json();
+  const auto near =
+      run_omma("coverage " + (dir / "rig.json").string() + " --distance 8 --step 0.5 --json").json();
   EXPECT_LT(near["covered_fraction"].get<double>(), 0.9);
   EXPECT_EQ(near["min_cameras"], 0);
   fs::remove_all(dir);
@@ -95,15 +96,13 @@ TEST(CoverageCli, PrototypeStatisticsAndMap) {
 TEST(CoverageCli, BadRigFilesAndOptionsFail) {
   const auto dir = temp_dir("coverage-bad");
   std::ofstream(dir / "notjson.json") << "{ this is not json";
-  std::ofstream(dir / "badframe.json")
-      << R"({"format": "omma-rig", "version": 1, "dome": {"radius_mm": 5},
+  std::ofstream(dir / "badframe.json") << R"({"format": "omma-rig", "version": 1, "dome": {"radius_mm": 5},
             "cameras": [{"id": 0, "t": [0,0,1], "u": [0,1,0], "v": [0,1,0], "position_mm": [0,0,5],
               "intrinsics": {"width": 250, "height": 250, "fu": 200, "fv": 200, "cu": 125,
                              "cv": 125, "k": [0,0,0,0,0], "aov_deg": 64}}]})";
   const std::string map = " --map " + (dir / "map.png").string();
   for (const std::string& args :
-       {(dir / "missing.json").string(), (dir / "notjson.json").string(),
-        (dir / "badframe.json").string()}) {
+       {(dir / "missing.json").string(), (dir / "notjson.json").string(), (dir / "badframe.json").string()}) {
     const RunResult r = run_omma("coverage " + args + map + " --json");
     EXPECT_EQ(r.exit_code, 1) << args;
     EXPECT_NE(r.err.find("omma: error:"), std::string::npos) << r.err;

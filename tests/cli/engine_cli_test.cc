@@ -35,7 +35,9 @@ fs::path write_rig(const fs::path& dir, int size = 120) {
   return p;
 }
 
-cv::Vec3b camera_colour(int id) { return cv::Vec3b(uchar(20 + 9 * id), uchar(240 - 7 * id), uchar(60 + (id % 5) * 40)); }
+cv::Vec3b camera_colour(int id) {
+  return cv::Vec3b(uchar(20 + 9 * id), uchar(240 - 7 * id), uchar(60 + (id % 5) * 40));
+}
 
 // DIR/cam_XX/000.png ... one solid-colour image sequence per camera; frame `bad_frame` of
 // `bad_camera` is not an image.
@@ -59,10 +61,11 @@ std::string lake() { return data_dir() + "/lake.jpg"; }
 TEST(EngineCli, RunWritesVideoPngSequencePassthroughAndJsonSummary) {
   const auto dir = temp_dir("engine-run");
   const auto rig = write_rig(dir);
-  const RunResult r = run_omma("run --rig " + rig.string() + " --source pano:" + lake() + "@30 --size 200x200" +
-                               " --method linear --sink " + (dir / "pano.mp4").string() + " --sink png:" +
-                               (dir / "png").string() + " --sink cam:4:" + (dir / "cam4.avi").string() +
-                               " --frames 20 --fps 15 --no-cache --json", 60);
+  const RunResult r = run_omma(
+      "run --rig " + rig.string() + " --source pano:" + lake() + "@30 --size 200x200" +
+          " --method linear --sink " + (dir / "pano.mp4").string() + " --sink png:" + (dir / "png").string() +
+          " --sink cam:4:" + (dir / "cam4.avi").string() + " --frames 20 --fps 15 --no-cache --json",
+      60);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto j = r.json();
   const long frames = j["frames"];
@@ -102,9 +105,11 @@ TEST(EngineCli, FailingCameraIsDroppedAndItsRegionFilledFromNeighbours) {
   // Camera 5 fails at its 11th frame (about 0.33 s in): after the first panorama even when a loaded
   // machine delays some camera's first frame.
   write_sequences(dir / "seq", 64, 12, /*bad_camera=*/5, /*bad_frame=*/10);
-  const RunResult r = run_omma("run --rig " + rig.string() + " --source '" + (dir / "seq").string() +
-                               "/cam_{id}' --loop --method nn --size 160x160 --duration 2 --fps 20 --no-cache" +
-                               " --sink png:" + (dir / "out").string() + " --json", 60);
+  const RunResult r =
+      run_omma("run --rig " + rig.string() + " --source '" + (dir / "seq").string() +
+                   "/cam_{id}' --loop --method nn --size 160x160 --duration 2 --fps 20 --no-cache" +
+                   " --sink png:" + (dir / "out").string() + " --json",
+               60);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto j = r.json();
   ASSERT_EQ(j["dropped_cameras"].size(), 1u) << r.out;
@@ -146,14 +151,16 @@ TEST(EngineCli, VideoFilePerCameraAndFramesFolderSources) {
   const auto dir = temp_dir("engine-video");
   const auto rig = write_rig(dir, 64);
   for (int id = 0; id < 24; ++id) {
-    cv::VideoWriter w((dir / ("cam_" + std::string(id < 10 ? "0" : "") + std::to_string(id) + ".avi")).string(),
-                      cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 20, cv::Size(64, 64));
+    cv::VideoWriter w(
+        (dir / ("cam_" + std::string(id < 10 ? "0" : "") + std::to_string(id) + ".avi")).string(),
+        cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 20, cv::Size(64, 64));
     ASSERT_TRUE(w.isOpened());
     for (int f = 0; f < 10; ++f) w.write(cv::Mat(64, 64, CV_8UC3, cv::Scalar(camera_colour(id))));
   }
-  RunResult r = run_omma("run --rig " + rig.string() + " --source '" + (dir / "cam_{id}.avi").string() +
-                         "' --method nn --size 96x96 --fps 20 --no-cache --sink png:" + (dir / "out").string() +
-                         " --json", 60);
+  RunResult r = run_omma(
+      "run --rig " + rig.string() + " --source '" + (dir / "cam_{id}.avi").string() +
+          "' --method nn --size 96x96 --fps 20 --no-cache --sink png:" + (dir / "out").string() + " --json",
+      60);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   auto j = r.json();
   EXPECT_GE(j["frames"].get<long>(), 3);
@@ -165,7 +172,8 @@ TEST(EngineCli, VideoFilePerCameraAndFramesFolderSources) {
   for (int y = 0; y < last.rows; y += 4)
     for (int x = 0; x < last.cols; x += 4)
       for (int id = 0; id < 24; ++id)
-        if (cv::norm(cv::Vec3i(last.at<cv::Vec3b>(y, x)) - cv::Vec3i(camera_colour(id)), cv::NORM_INF) <= 8) seen.insert(id);
+        if (cv::norm(cv::Vec3i(last.at<cv::Vec3b>(y, x)) - cv::Vec3i(camera_colour(id)), cv::NORM_INF) <= 8)
+          seen.insert(id);
   EXPECT_GE(seen.size(), 18u);
   // A frames folder (cam_XX.png) as still cameras.
   fs::create_directories(dir / "frames");
@@ -173,7 +181,8 @@ TEST(EngineCli, VideoFilePerCameraAndFramesFolderSources) {
     cv::imwrite((dir / "frames" / ((id < 10 ? "cam_0" : "cam_") + std::to_string(id) + ".png")).string(),
                 cv::Mat(64, 64, CV_8UC3, cv::Scalar(camera_colour(id))));
   r = run_omma("run --rig " + rig.string() + " --source frames:" + (dir / "frames").string() +
-               " --size 96x96 --frames 5 --no-cache --json", 60);
+                   " --size 96x96 --frames 5 --no-cache --json",
+               60);
   EXPECT_EQ(r.exit_code, 0) << r.err;
   if (r.exit_code == 0) {
     EXPECT_EQ(r.json()["frames"], 5);
@@ -186,18 +195,21 @@ TEST(EngineCli, BadInputGivesClearErrorsAndLeavesNoOutput) {
   const auto rig = write_rig(dir, 64);
   const std::string base = "run --rig " + rig.string() + " --size 96x96 --no-cache --duration 3 ";
   // A source that cannot be opened.
-  RunResult r = run_omma(base + "--source '" + (dir / "none").string() + "/cam_{id}.mp4' --sink " +
-                         (dir / "a.mp4").string(), 30);
+  RunResult r = run_omma(
+      base + "--source '" + (dir / "none").string() + "/cam_{id}.mp4' --sink " + (dir / "a.mp4").string(),
+      30);
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("no such file"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir / "a.mp4"));
   // Frames of the wrong size (100x100 for a 64x64 rig): clear error, no video left behind.
   write_sequences(dir / "seq", 100, 2);
-  r = run_omma(base + "--source '" + (dir / "seq").string() + "/cam_{id}' --sink " + (dir / "b.mkv").string(), 30);
+  r = run_omma(base + "--source '" + (dir / "seq").string() + "/cam_{id}' --sink " + (dir / "b.mkv").string(),
+               30);
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("100x100"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir / "b.mkv"));
-  for (const auto& e : fs::directory_iterator(dir)) EXPECT_EQ(e.path().string().find("partial"), std::string::npos);
+  for (const auto& e : fs::directory_iterator(dir))
+    EXPECT_EQ(e.path().string().find("partial"), std::string::npos);
   // A port in use.
   const int sock = ::socket(AF_INET, SOCK_STREAM, 0);
   sockaddr_in addr{};
@@ -230,8 +242,8 @@ TEST(EngineCli, BadInputGivesClearErrorsAndLeavesNoOutput) {
 // Starts `PREFIX omma ARGS` in the background (stdout, stderr to DIR/out, DIR/err); its pid is omma's
 // (the shell execs it).
 pid_t spawn_omma(const std::string& args, const fs::path& dir, const std::string& prefix = "") {
-  const std::string cmd = "exec " + prefix + " " OMMA_BINARY " " + args + " >" + (dir / "out").string() + " 2>" +
-                          (dir / "err").string() + " </dev/null";
+  const std::string cmd = "exec " + prefix + " " OMMA_BINARY " " + args + " >" + (dir / "out").string() +
+                          " 2>" + (dir / "err").string() + " </dev/null";
   const char* argv[] = {"/bin/sh", "-c", cmd.c_str(), nullptr};
   pid_t pid = -1;
   if (posix_spawn(&pid, "/bin/sh", nullptr, nullptr, const_cast<char**>(argv), environ) != 0) return -1;
@@ -268,7 +280,8 @@ TEST(EngineCli, SourcesFasterThanTheRendererOnlyOverwriteTheirFrames) {
     cv::imwrite((dir / "frames" / ((id < 10 ? "cam_0" : "cam_") + std::to_string(id) + ".png")).string(),
                 cv::Mat(64, 64, CV_8UC3, cv::Scalar(camera_colour(id))));
   const RunResult r = run_omma("run --rig " + rig.string() + " --source frames:" + (dir / "frames").string() +
-                               " --source-fps 0 --fps 0 --duration 2 --size 96x96 --no-cache --json", 30);
+                                   " --source-fps 0 --fps 0 --duration 2 --size 96x96 --no-cache --json",
+                               30);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto j = r.json();
   EXPECT_LT(j["seconds"].get<double>(), 4.0);  // stopped on time (a 4 s run took 351 s before the fix)
@@ -283,10 +296,10 @@ TEST(EngineCli, SourcesFasterThanTheRendererOnlyOverwriteTheirFrames) {
 TEST(EngineCli, CameraThreadsTheSystemRefusesAreSharedNotFatal) {
   const auto dir = temp_dir("engine-threads");
   const auto rig = write_rig(dir, 64);
-  const std::string args = "run --rig " + rig.string() + " --source pano:" + lake() +
-                           " --size 96x96 --frames 5 --no-cache --json";
-  pid_t pid = spawn_omma(args, dir, "prlimit --stack=" + std::to_string(64 << 20) + " --as=" +
-                                         std::to_string(1200L << 20));
+  const std::string args =
+      "run --rig " + rig.string() + " --source pano:" + lake() + " --size 96x96 --frames 5 --no-cache --json";
+  pid_t pid = spawn_omma(
+      args, dir, "prlimit --stack=" + std::to_string(64 << 20) + " --as=" + std::to_string(1200L << 20));
   RunResult r = wait_omma(pid, dir);
   ASSERT_NE(r.exit_code, 134) << r.err;  // std::terminate before the fix
   nlohmann::json j;
@@ -320,8 +333,8 @@ TEST(EngineCli, InterruptedRecordingLeavesAPlayableVideoOrNothing) {
   const auto rig = write_rig(dir, 64);
   const fs::path video = dir / "rec.mp4", partial = dir / ".rec.partial.mp4";
   const std::string args = "run --rig " + rig.string() + " --source pano:" + lake() +
-                           " --size 96x96 --fps 20 --no-cache --json --sink " + video.string() + " --sink png:" +
-                           (dir / "png").string();
+                           " --size 96x96 --fps 20 --no-cache --json --sink " + video.string() +
+                           " --sink png:" + (dir / "png").string();
   auto wait_for_partial = [&] {  // (each run starts with an empty png folder)
     for (int i = 0; i < 300 && !fs::exists(dir / "png" / "frame_000003.png"); ++i)
       std::this_thread::sleep_for(std::chrono::milliseconds(50));
@@ -399,14 +412,16 @@ TEST(EngineCli, LiveViewIsA360ViewerInHeadlessChromium) {
   const auto rig = write_rig(dir);
   const int port = 19000 + (::getpid() % 900);
   // The scene turns at 20 deg/s: the image changes as frames arrive.
-  const pid_t pid = spawn_omma("run --rig " + rig.string() + " --source pano:" + lake() +
-                                   "@20 --size 400x400 --no-cache --duration 90 --sink http:" + std::to_string(port) +
-                                   " --json",
-                               dir);
-  for (int i = 0; i < 200 && !port_open(port); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(100));
-  const std::string cmd = "timeout 80 node " + std::string(OMMA_SOURCE_DIR) + "/tests/cli/live_viewer.cjs http://127.0.0.1:" +
-                          std::to_string(port) + "/ " + dir.string() + " " + web + " >" + (dir / "viewer.json").string() +
-                          " 2>" + (dir / "viewer.err").string();
+  const pid_t pid = spawn_omma(
+      "run --rig " + rig.string() + " --source pano:" + lake() +
+          "@20 --size 400x400 --no-cache --duration 90 --sink http:" + std::to_string(port) + " --json",
+      dir);
+  for (int i = 0; i < 200 && !port_open(port); ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  const std::string cmd = "timeout 80 node " + std::string(OMMA_SOURCE_DIR) +
+                          "/tests/cli/live_viewer.cjs http://127.0.0.1:" + std::to_string(port) + "/ " +
+                          dir.string() + " " + web + " >" + (dir / "viewer.json").string() + " 2>" +
+                          (dir / "viewer.err").string();
   const int rc = std::system(cmd.c_str());
   ::kill(pid, SIGTERM);
   const RunResult run = wait_omma(pid, dir);
@@ -420,18 +435,21 @@ TEST(EngineCli, LiveViewIsA360ViewerInHeadlessChromium) {
     // The viewer's area (480x336 above the stats line), without its zoom and full-screen buttons.
     return img.empty() ? img : cv::Mat(img(cv::Rect(40, 0, 440, 330)));
   };
-  auto differ = [](const cv::Mat& a, const cv::Mat& b) { return cv::norm(a, b, cv::NORM_L1) / double(a.total()); };
-  const cv::Mat loaded = shot("loaded"), later = shot("later"), paused = shot("paused"), paused2 = shot("paused2"),
-                dragged = shot("dragged");
+  auto differ = [](const cv::Mat& a, const cv::Mat& b) {
+    return cv::norm(a, b, cv::NORM_L1) / double(a.total());
+  };
+  const cv::Mat loaded = shot("loaded"), later = shot("later"), paused = shot("paused"),
+                paused2 = shot("paused2"), dragged = shot("dragged");
   ASSERT_FALSE(loaded.empty() || later.empty() || paused.empty() || paused2.empty() || dragged.empty());
   // Not blank: the lake fills the view (the page is #111 around it).
   cv::Scalar mean, sd;
   cv::meanStdDev(loaded, mean, sd);
-  std::printf("  viewer: mean %.1f, sd %.1f; new frames change %.1f per pixel; paused %.2f; the drag %.1f "
-              "(yaw %.1f -> %.1f deg)\n",
-              (mean[0] + mean[1] + mean[2]) / 3, (sd[0] + sd[1] + sd[2]) / 3, differ(loaded, later),
-              differ(paused, paused2), differ(paused2, dragged), v["paused"]["yaw"].get<double>(),
-              v["dragged"]["yaw"].get<double>());
+  std::printf(
+      "  viewer: mean %.1f, sd %.1f; new frames change %.1f per pixel; paused %.2f; the drag %.1f "
+      "(yaw %.1f -> %.1f deg)\n",
+      (mean[0] + mean[1] + mean[2]) / 3, (sd[0] + sd[1] + sd[2]) / 3, differ(loaded, later),
+      differ(paused, paused2), differ(paused2, dragged), v["paused"]["yaw"].get<double>(),
+      v["dragged"]["yaw"].get<double>());
   EXPECT_GT((mean[0] + mean[1] + mean[2]) / 3, 50.0);
   EXPECT_GT((sd[0] + sd[1] + sd[2]) / 3, 15.0);
   // Frames arrive and change the image.
@@ -453,9 +471,9 @@ TEST(EngineCli, BenchJsonListsOursAndThePeers) {
   const auto j = r.json();
   std::map<std::string, double> fps;
   for (const auto& e : j["results"]) fps[e["name"]] = e["fps"];
-  for (const char* name : {"omma-nn-216x216", "omma-linear-216x216", "omma-linear-216x216-1thread",
-                           "opencv-remap-216x216", "opencv-multiband-216x216", "memcpy-bound-216x216",
-                           "omma-linear-384x102", "opencv-remap-384x102"}) {
+  for (const char* name :
+       {"omma-nn-216x216", "omma-linear-216x216", "omma-linear-216x216-1thread", "opencv-remap-216x216",
+        "opencv-multiband-216x216", "memcpy-bound-216x216", "omma-linear-384x102", "opencv-remap-384x102"}) {
     ASSERT_TRUE(fps.count(name)) << name;
     EXPECT_GT(fps[name], 1.0) << name;
   }
@@ -465,9 +483,10 @@ TEST(EngineCli, BenchJsonListsOursAndThePeers) {
   for (const auto& q : j["ratios"])
     if (q["name"] == "omma-linear-216x216") {
       found_ratio = true;
-      EXPECT_NEAR(q["vs_opencv_remap"].get<double>(), fps["omma-linear-216x216"] / fps["opencv-remap-216x216"], 1e-9);
-      EXPECT_NEAR(q["memcpy_bound_over_ours"].get<double>(), fps["memcpy-bound-216x216"] / fps["omma-linear-216x216"],
-                  1e-9);
+      EXPECT_NEAR(q["vs_opencv_remap"].get<double>(),
+                  fps["omma-linear-216x216"] / fps["opencv-remap-216x216"], 1e-9);
+      EXPECT_NEAR(q["memcpy_bound_over_ours"].get<double>(),
+                  fps["memcpy-bound-216x216"] / fps["omma-linear-216x216"], 1e-9);
     }
   EXPECT_TRUE(found_ratio);
   for (const auto& e : j["results"]) {

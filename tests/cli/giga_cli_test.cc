@@ -21,8 +21,9 @@ class GigaSim : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     dir_ = new fs::path(temp_dir("giga-sim"));
-    const auto s = run_omma("simulate --rig gigaeye-44-skip5 --scene photo:" + lake() + " --out " + frames() +
-                            " --projection equirect-100 --truth-size 720x200 --raw --bits 12 --supersample 2 --json");
+    const auto s =
+        run_omma("simulate --rig gigaeye-44-skip5 --scene photo:" + lake() + " --out " + frames() +
+                 " --projection equirect-100 --truth-size 720x200 --raw --bits 12 --supersample 2 --json");
     ASSERT_EQ(s.exit_code, 0) << s.err;
     ASSERT_EQ(s.json()["cameras"], 44);
   }
@@ -57,7 +58,8 @@ TEST(GigaPlanCli, Table71AndConstraints) {
   const auto full = run_omma("plan --row 2 --minutes 20");
   EXPECT_EQ(full.exit_code, 1);
   EXPECT_NE(full.err.find("device-capacity"), std::string::npos) << full.err;
-  for (const char* args : {"plan --device-size 12parsecs", "plan --bits 0", "plan --per-device 50", "plan --fps -1"}) {
+  for (const char* args :
+       {"plan --device-size 12parsecs", "plan --bits 0", "plan --per-device 50", "plan --fps -1"}) {
     const auto r = run_omma(args);
     EXPECT_EQ(r.exit_code, 1) << args;
     EXPECT_NE(r.err.find("omma: error:"), std::string::npos) << args << r.err;
@@ -65,8 +67,9 @@ TEST(GigaPlanCli, Table71AndConstraints) {
 }
 
 TEST(GigaCoverageCli, FourDistancesAndThePolarBand) {
-  const auto r = run_omma("coverage gigaeye-44 --distance 500 --distance 1000 --distance 5000 --distance inf "
-                          "--polar-max 100 --step 1 --json");
+  const auto r = run_omma(
+      "coverage gigaeye-44 --distance 500 --distance 1000 --distance 5000 --distance inf "
+      "--polar-max 100 --step 1 --json");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto j = r.json();
   ASSERT_EQ(j["distances"].size(), 4u);
@@ -95,8 +98,8 @@ TEST_F(GigaSim, RenderAgainstTruth) {
   int k = 0;
   for (const char* method : {"linear", "hq"}) {
     const auto r = run_omma("render " + frames() + " --size 720x200 --method " + method + " --out " +
-                            (dir / (std::string(method) + ".tif")).string() + " --truth " + frames() + "/truth.png" +
-                            " --band-rows 64 --no-cache --json");
+                            (dir / (std::string(method) + ".tif")).string() + " --truth " + frames() +
+                            "/truth.png" + " --band-rows 64 --no-cache --json");
     ASSERT_EQ(r.exit_code, 0) << r.err;
     const auto j = r.json();
     EXPECT_EQ(j["bands"], 4);
@@ -107,8 +110,9 @@ TEST_F(GigaSim, RenderAgainstTruth) {
   EXPECT_GT(psnr[0], 25.0);
   EXPECT_NEAR(psnr[1], psnr[0], 0.5);
   // The 12-bit raw frames through the ISP give a panorama of the same scene.
-  const auto raw = run_omma("render " + frames() + " --raw --size 720x200 --out " + (dir / "raw.png").string() +
-                            " --truth " + frames() + "/truth.png --no-cache --json");
+  const auto raw =
+      run_omma("render " + frames() + " --raw --size 720x200 --out " + (dir / "raw.png").string() +
+               " --truth " + frames() + "/truth.png --no-cache --json");
   ASSERT_EQ(raw.exit_code, 0) << raw.err;
   EXPECT_GT(raw.json()["quality"]["psnr_db"].get<double>(), 20.0);
   fs::remove_all(dir);
@@ -118,8 +122,8 @@ TEST_F(GigaSim, RecordCheckRenderAndSurviveSigkill) {
   const auto dir = temp_dir("giga-record");
   const std::string rec = (dir / "rec").string();
   // The simulated frames as stills (frames:DIR), two frame sets.
-  const auto r = run_omma("record --rig gigaeye-44-skip5 --source frames:" + frames() + " --fps 4 --frames 2 --out " + rec +
-                          " --json");
+  const auto r = run_omma("record --rig gigaeye-44-skip5 --source frames:" + frames() +
+                          " --fps 4 --frames 2 --out " + rec + " --json");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto c = run_omma("recording check " + rec + " --json");
   ASSERT_EQ(c.exit_code, 0) << c.err;
@@ -138,7 +142,8 @@ TEST_F(GigaSim, RecordCheckRenderAndSurviveSigkill) {
   const std::string killed = (dir / "killed").string();
   const std::string pidfile = (dir / "pid").string();
   ASSERT_EQ(std::system(("sh -c '" OMMA_BINARY " record --rig gigaeye-44-skip5 --source frames:" + frames() +
-                         " --fps 10 --duration 60 --out " + killed + " >/dev/null 2>&1 & echo $! > " + pidfile + "'")
+                         " --fps 10 --duration 60 --out " + killed + " >/dev/null 2>&1 & echo $! > " +
+                         pidfile + "'")
                             .c_str()),
             0);
   std::this_thread::sleep_for(std::chrono::seconds(5));
@@ -169,9 +174,10 @@ TEST_F(GigaSim, FullDiskAndBadRecordings) {
   // stream may grow to 5000 KiB: the recorder stops after about 7 of its 280 kB frames (HDF5 starts
   // writing frames 1.3 MB into the file; the recorder keeps two frames and 1 MiB in reserve).
   const std::string err = (dir / "err").string();
-  const int status = std::system(("sh -c 'ulimit -f 5000; " OMMA_BINARY " record --rig gigaeye-44-skip5 --source frames:" +
-                                  frames() + " --fps 20 --frames 12 --out " + rec + " >/dev/null 2>" + err + "'")
-                                     .c_str());
+  const int status = std::system(
+      ("sh -c 'ulimit -f 5000; " OMMA_BINARY " record --rig gigaeye-44-skip5 --source frames:" + frames() +
+       " --fps 20 --frames 12 --out " + rec + " >/dev/null 2>" + err + "'")
+          .c_str());
   EXPECT_NE(status, 0);
   const std::string msg = [&] {
     std::ifstream f(err);
@@ -194,7 +200,8 @@ TEST_F(GigaSim, FullDiskAndBadRecordings) {
   fs::remove(fs::path(rec) / "cam_05.h5");
   bad = run_omma("recording check " + rec);
   EXPECT_NE(bad.err.find("is missing"), std::string::npos) << bad.err;
-  bad = run_omma("render " + rec + " --rig gigaeye-44-skip2 --size 360x100 --out " + (dir / "x.tif").string());
+  bad =
+      run_omma("render " + rec + " --rig gigaeye-44-skip2 --size 360x100 --out " + (dir / "x.tif").string());
   EXPECT_EQ(bad.exit_code, 1);
   EXPECT_FALSE(fs::exists(dir / "x.tif"));
   fs::remove_all(dir);

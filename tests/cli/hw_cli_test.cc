@@ -1,9 +1,9 @@
 // CLI tests for `omma hw simulate|sweep|throughput|memory|export|import` (the bit-accurate
 // hardware model, src/omma/hw).
-#include <gtest/gtest.h>
-
 #include <filesystem>
 #include <fstream>
+
+#include <gtest/gtest.h>
 
 #include "omma/design/prototype.h"
 #include "omma/testing/test_scenes.h"
@@ -62,7 +62,8 @@ TEST(HwCli, ThroughputAndMemoryReproduceTheThesis) {
 TEST(HwCli, ExportImportRoundTrip) {
   const fs::path d = temp_dir("hw_export");
   const fs::path rig = d / "rig.json", out = d / "chip", back = d / "back.json";
-  RunResult r = run_omma("design --method max-volume --aov 64 --r-phys 5 --cam-size 1x1x2 --out " + rig.string());
+  RunResult r =
+      run_omma("design --method max-volume --aov 64 --r-phys 5 --cam-size 1x1x2 --out " + rig.string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   r = run_omma("hw export " + rig.string() + " " + out.string() + " --method mrf --json");
   ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -85,7 +86,9 @@ TEST(HwCli, ExportImportRoundTrip) {
 TEST(HwCli, BadWidthsAreRejected) {
   const fs::path d = temp_dir("hw_bad");
   const fs::path rig = d / "rig.json";
-  ASSERT_EQ(run_omma("design --method max-volume --aov 64 --r-phys 5 --cam-size 1x1x2 --out " + rig.string()).exit_code, 0);
+  ASSERT_EQ(run_omma("design --method max-volume --aov 64 --r-phys 5 --cam-size 1x1x2 --out " + rig.string())
+                .exit_code,
+            0);
   RunResult r = run_omma("hw export " + rig.string() + " " + (d / "x").string() + " --set angle_bits=40");
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("angle_bits"), std::string::npos) << r.err;
@@ -95,7 +98,8 @@ TEST(HwCli, BadWidthsAreRejected) {
   r = run_omma("hw export " + rig.string() + " " + (d / "x").string() + " --set frame_addr_bits=12");
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("frame_addr_bits"), std::string::npos) << r.err;
-  r = run_omma("hw export " + rig.string() + " " + (d / "x").string() + " --set sincos_addr_bits=14 --set angle_bits=14");
+  r = run_omma("hw export " + rig.string() + " " + (d / "x").string() +
+               " --set sincos_addr_bits=14 --set angle_bits=14");
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("angle_bits"), std::string::npos) << r.err;
   r = run_omma("hw simulate --frames " + d.string() + " --method gaussian");

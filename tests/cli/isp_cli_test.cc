@@ -1,11 +1,11 @@
 // CLI tests for `omma isp` and `omma link` (thesis §5.1, appendix A).
-#include <gtest/gtest.h>
-
 #include <filesystem>
 #include <fstream>
+#include <random>
+
+#include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
-#include <random>
 
 #include "tests/cli/cli_util.h"
 

@@ -13,7 +13,9 @@ namespace omma::test {
 namespace {
 namespace fs = std::filesystem;
 
-bool have(const std::string& tool) { return std::system(("command -v " + tool + " >/dev/null 2>&1").c_str()) == 0; }
+bool have(const std::string& tool) {
+  return std::system(("command -v " + tool + " >/dev/null 2>&1").c_str()) == 0;
+}
 
 std::string capture(const std::string& cmd) {
   std::unique_ptr<FILE, int (*)(FILE*)> p(popen(cmd.c_str(), "r"), pclose);
@@ -27,7 +29,8 @@ std::string capture(const std::string& cmd) {
 const fs::path& frames_dir() {
   static const fs::path dir = [] {
     const fs::path d = temp_dir("metadata") / "frames";
-    const RunResult r = run_omma("simulate --scene checker --ideal --supersample 1 --no-truth --out " + d.string() + " --json");
+    const RunResult r = run_omma("simulate --scene checker --ideal --supersample 1 --no-truth --out " +
+                                 d.string() + " --json");
     EXPECT_EQ(r.exit_code, 0) << r.err;
     return d;
   }();
@@ -50,8 +53,8 @@ TEST(MetadataCli, StitchedJpegAndPngCarryGPanoForExiftool) {
   for (const Case& c : kCases) {
     const fs::path out = dir / (c.projection + (c.projection == "vr180" ? ".png" : ".jpg"));
     const RunResult r = run_omma("stitch --rig " + (frames_dir() / "rig.json").string() + " --frames " +
-                                 frames_dir().string() + " --method nn --projection " + c.projection + " --size " +
-                                 c.size + " --out " + out.string() + " --json");
+                                 frames_dir().string() + " --method nn --projection " + c.projection +
+                                 " --size " + c.size + " --out " + out.string() + " --json");
     ASSERT_EQ(r.exit_code, 0) << r.err;
     files += " " + out.string();
   }
@@ -77,16 +80,21 @@ TEST(MetadataCli, StitchedJpegAndPngCarryGPanoForExiftool) {
 }
 
 TEST(MetadataCli, RunMp4CarriesSphericalVideoForFfprobe) {
-  if (!have("ffprobe")) GTEST_SKIP() << "ffprobe not installed (Debian ffmpeg; scripts/install-deps.sh --test)";
+  if (!have("ffprobe"))
+    GTEST_SKIP() << "ffprobe not installed (Debian ffmpeg; scripts/install-deps.sh --test)";
   const fs::path dir = frames_dir().parent_path();
   for (const Case& c : kCases) {
     const fs::path mp4 = dir / (c.projection + ".mp4");
-    const RunResult r = run_omma("run --rig " + (frames_dir() / "rig.json").string() + " --source frames:" +
-                                 frames_dir().string() + " --method nn --projection " + c.projection + " --size " +
-                                 c.size + " --frames 4 --fps 50 --no-cache --sink " + mp4.string() + " --json", 60);
+    const RunResult r = run_omma("run --rig " + (frames_dir() / "rig.json").string() +
+                                     " --source frames:" + frames_dir().string() +
+                                     " --method nn --projection " + c.projection + " --size " + c.size +
+                                     " --frames 4 --fps 50 --no-cache --sink " + mp4.string() + " --json",
+                                 60);
     ASSERT_EQ(r.exit_code, 0) << r.err;
-    const auto j = nlohmann::json::parse(capture("ffprobe -v error -print_format json -show_streams -count_frames "
-                                                 "-select_streams v:0 " + mp4.string()));
+    const auto j =
+        nlohmann::json::parse(capture("ffprobe -v error -print_format json -show_streams -count_frames "
+                                      "-select_streams v:0 " +
+                                      mp4.string()));
     SCOPED_TRACE(c.projection + ": " + j.dump());
     ASSERT_EQ(j["streams"].size(), 1u);
     const auto& s = j["streams"][0];

@@ -1,8 +1,8 @@
 // CLI tests for `omma stitch` and `omma eval` on a rendered far-field scene (15-camera test rig).
-#include <gtest/gtest.h>
-
 #include <filesystem>
 #include <fstream>
+
+#include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 
 #include "omma/testing/test_scenes.h"
@@ -11,7 +11,6 @@
 namespace omma::test {
 namespace {
 namespace fs = std::filesystem;
-
 
 std::string stitch_args(const fs::path& d, const std::string& method, const fs::path& out,
                         const std::string& size = "128x128") {

@@ -1,8 +1,8 @@
 // `omma stitch --raw`: the simulator's raw Bayer frames developed by the ISP (isp/isp.h)
 // give a panorama close to the one stitched from the simulator's own 8-bit frames.
-#include <gtest/gtest.h>
-
 #include <filesystem>
+
+#include <gtest/gtest.h>
 
 #include "omma/core/rig.h"
 #include "omma/testing/test_scenes.h"
@@ -15,9 +15,9 @@ namespace fs = std::filesystem;
 TEST(RawStitchCli, IspDevelopedFramesMatchTheRgbPath) {
   const fs::path d = temp_dir("rawstitch");
   save_rig(testing::small_rig(64), d / "rig.json");
-  const RunResult sim = run_omma("simulate --rig " + (d / "rig.json").string() + " --scene photo:" + data_dir() +
-                                 "/louvre.jpg --raw --color-gain 0 --truth-size 128x128 --out " +
-                                 (d / "f").string());
+  const RunResult sim =
+      run_omma("simulate --rig " + (d / "rig.json").string() + " --scene photo:" + data_dir() +
+               "/louvre.jpg --raw --color-gain 0 --truth-size 128x128 --out " + (d / "f").string());
   ASSERT_EQ(sim.exit_code, 0) << sim.err;
   const std::string base = "stitch --rig " + (d / "rig.json").string() + " --frames " + (d / "f").string() +
                            " --method linear --projection vr180 --size 128x128 --out ";

@@ -62,7 +62,8 @@ TEST(Reliability, RigFilesWithOutOfRangeNumbersAreRefused) {
   };
   const Case cases[] = {
       {"tiny-focal", [](nlohmann::json& j) { j["cameras"][3]["intrinsics"]["fu"] = 1e-320; }, "focal length"},
-      {"wide", [](nlohmann::json& j) { j["cameras"][0]["intrinsics"]["width"] = 4294967546ull; }, "out of range"},
+      {"wide", [](nlohmann::json& j) { j["cameras"][0]["intrinsics"]["width"] = 4294967546ull; },
+       "out of range"},
       {"name", [](nlohmann::json& j) { j["name"] = 17; }, "'name' must be a string"},
       {"version", [](nlohmann::json& j) { j["version"] = 99; }, "version 99"},
   };
@@ -85,7 +86,8 @@ TEST(Reliability, RigFilesWithOutOfRangeNumbersAreRefused) {
     many["cameras"].push_back(cam);
     many["cameras"].back()["id"] = i;
   }
-  expect_error(run_omma("rig check " + write_json(dir, "many.json", many).string()), "limit is 4096", "cameras");
+  expect_error(run_omma("rig check " + write_json(dir, "many.json", many).string()), "limit is 4096",
+               "cameras");
   fs::remove_all(dir);
 }
 
@@ -93,7 +95,8 @@ TEST(Reliability, RigFilesWithOutOfRangeNumbersAreRefused) {
 TEST(Reliability, DevicesAndFoldersAreRefusedBeforeReading) {
   const fs::path dir = temp_dir("rel-dev");
   expect_error(run_omma("rig check /dev/zero", 20), "not a regular file", "rig /dev/zero");
-  expect_error(run_omma("pto import /dev/zero " + (dir / "r.json").string(), 20), "not a regular file", "pto");
+  expect_error(run_omma("pto import /dev/zero " + (dir / "r.json").string(), 20), "not a regular file",
+               "pto");
   expect_error(run_omma("link decode /dev/zero " + (dir / "f").string(), 20), "not a regular file", "link");
   EXPECT_FALSE(fs::exists(dir / "r.json"));
   fs::remove_all(dir);
@@ -104,8 +107,10 @@ TEST(Reliability, DevicesAndFoldersAreRefusedBeforeReading) {
 TEST(Reliability, HugePanoramaSizesAreRefused) {
   const fs::path dir = temp_dir("rel-size");
   const fs::path rig = write_json(dir, "rig.json", prototype_json());
-  expect_error(run_omma("run --rig " + rig.string() + " --source sim:colon --frames 1 --no-cache --size 65536x65536", 30),
-               "out of range", "run --size");
+  expect_error(
+      run_omma("run --rig " + rig.string() + " --source sim:colon --frames 1 --no-cache --size 65536x65536",
+               30),
+      "out of range", "run --size");
   expect_error(run_omma("stitch --rig " + rig.string() + " --frames " + dir.string() + " --out " +
                         (dir / "o").string() + " --size 65536x65536"),
                "out of range", "stitch");
@@ -132,8 +137,8 @@ TEST(Reliability, DamagedMapCacheIsRecompiledWithAWarning) {
   const fs::path rig = write_json(dir, "rig.json", prototype_json());
   auto run = [&](const std::string& out) {
     return run_omma("run --rig " + rig.string() + " --source pano:" + data_dir() +
-                    "/lake.jpg@0 --frames 1 --size 216x216 --method mrf --fps 0 --cache " + (dir / "cache").string() +
-                    " --sink png:" + (dir / out).string());
+                    "/lake.jpg@0 --frames 1 --size 216x216 --method mrf --fps 0 --cache " +
+                    (dir / "cache").string() + " --sink png:" + (dir / out).string());
   };
   const RunResult first = run("first");
   ASSERT_EQ(first.exit_code, 0) << first.err;

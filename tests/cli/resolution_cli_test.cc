@@ -18,7 +18,8 @@ TEST(ResolutionCli, PrototypeResolvesAboutHalfADegree) {
   EXPECT_LE(bar, 4.0 * cam_px);
   EXPECT_EQ(j["elements"].size(), 30u);
   // The ground truth on the same grid resolves at least as fine.
-  EXPECT_LE(j["truth_limit"]["bar_deg_from_centre"].get<double>(), j["limit"]["bar_deg_from_centre"].get<double>());
+  EXPECT_LE(j["truth_limit"]["bar_deg_from_centre"].get<double>(),
+            j["limit"]["bar_deg_from_centre"].get<double>());
 }
 
 TEST(ResolutionCli, BadInput) {

@@ -36,8 +36,8 @@ TEST(SimCli, PhotoSceneWritesTheFramesFolder) {
   const auto dir = temp_dir("simcli");
   write_small_rig(dir / "rig.json");
   const auto out = dir / "frames";
-  const RunResult r = run_omma("simulate --rig " + (dir / "rig.json").string() + " --scene photo:" + data_dir() +
-                               "/lake.jpg --out " + out.string() +
+  const RunResult r = run_omma("simulate --rig " + (dir / "rig.json").string() +
+                               " --scene photo:" + data_dir() + "/lake.jpg --out " + out.string() +
                                " --truth-size 200x100 --projection equirect --raw --seed 3 --json");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto j = r.json();
@@ -67,13 +67,16 @@ TEST(SimCli, PerturbWritesTheTrueRig) {
   const auto dir = temp_dir("simcli_perturb");
   write_small_rig(dir / "rig.json");
   const auto out = dir / "frames";
-  const RunResult r = run_omma("simulate --rig " + (dir / "rig.json").string() + " --scene checker:60 --out " +
-                               out.string() + " --truth-size 64x64 --perturb orient=2,focal=0.05 --json");
+  const RunResult r =
+      run_omma("simulate --rig " + (dir / "rig.json").string() + " --scene checker:60 --out " + out.string() +
+               " --truth-size 64x64 --perturb orient=2,focal=0.05 --json");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const Rig nominal = load_rig(out / "rig.json"), truth = load_rig(out / "rig_true.json");
   for (size_t i = 0; i < nominal.cameras.size(); ++i) {
-    const Mat3 rel = truth.cameras[i].frame.dome_to_camera() * nominal.cameras[i].frame.dome_to_camera().transpose();
-    EXPECT_NEAR(rad2deg(std::acos(std::clamp((rel.trace() - 1) / 2, -1.0, 1.0))), 2.0, 1e-3);  // file precision
+    const Mat3 rel =
+        truth.cameras[i].frame.dome_to_camera() * nominal.cameras[i].frame.dome_to_camera().transpose();
+    EXPECT_NEAR(rad2deg(std::acos(std::clamp((rel.trace() - 1) / 2, -1.0, 1.0))), 2.0,
+                1e-3);  // file precision
     EXPECT_NEAR(std::abs(truth.cameras[i].in.fu / nominal.cameras[i].in.fu - 1), 0.05, 1e-6);
   }
   std::filesystem::remove_all(dir);
@@ -105,7 +108,8 @@ TEST(SimCli, BadInputGivesClearErrorsAndNoOutput) {
     EXPECT_FALSE(std::filesystem::exists(out)) << c.args;
   }
   // An empty rig.
-  std::ofstream(dir / "empty.json") << R"({"format": "omma-rig", "version": 1, "dome": {"radius_mm": 5}, "cameras": []})";
+  std::ofstream(dir / "empty.json")
+      << R"({"format": "omma-rig", "version": 1, "dome": {"radius_mm": 5}, "cameras": []})";
   const RunResult e = run_omma("simulate --rig " + (dir / "empty.json").string() + " --scene colon" + o);
   EXPECT_EQ(e.exit_code, 1);
   EXPECT_NE(e.err.find("camera"), std::string::npos) << e.err;

@@ -22,7 +22,6 @@ using json = nlohmann::json;
 // As root, OpenMPI wants --allow-run-as-root; --oversubscribe: more ranks than the 2 cores.
 const std::string kMpirun = std::string(OMMA_MPIEXEC) + " --allow-run-as-root --oversubscribe";
 
-
 // item_NNNN.bin -> contents, and every other file name (temporaries, journals).
 struct Folder {
   std::map<std::string, std::string> items;
@@ -111,9 +110,11 @@ TEST_F(DistMpi, AKilledRankFailsTheRunAndTheRerunRedoesOnlyTheRest) {
   EXPECT_NE(r1.err.find("run the same command again"), std::string::npos) << r1.err;
   const Folder after_kill = read_folder(out);
   int temporaries = 0;
-  for (const auto& name : after_kill.others) temporaries += name.rfind(".item_", 0) == 0 && name.find(".tmp") != std::string::npos;
+  for (const auto& name : after_kill.others)
+    temporaries += name.rfind(".item_", 0) == 0 && name.find(".tmp") != std::string::npos;
   EXPECT_GE(temporaries, 1) << "the dead rank's half-written item";
-  for (const auto& [name, bytes] : after_kill.items) EXPECT_TRUE(bytes == ref.items.at(name)) << name << " half-written";
+  for (const auto& [name, bytes] : after_kill.items)
+    EXPECT_TRUE(bytes == ref.items.at(name)) << name << " half-written";
   EXPECT_FALSE(after_kill.others.count("manifest.json"));
   EXPECT_TRUE(after_kill.others.count("manifest.json.journal"));
   std::map<std::string, ino_t> inode;  // a reused output keeps its inode (a remade one is renamed onto it)

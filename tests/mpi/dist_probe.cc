@@ -44,10 +44,12 @@ class ProbeJob : public omma::dist::Job {
     using clock = std::chrono::steady_clock;
     ItemTimes t;
     auto t0 = clock::now();
-    const uint64_t seed = std::stoull(omma::read_text_file(fs::path(a_.input) / fmt::format("in_{:04d}.txt", i)));
+    const uint64_t seed =
+        std::stoull(omma::read_text_file(fs::path(a_.input) / fmt::format("in_{:04d}.txt", i)));
     auto t1 = clock::now();
     t.read = std::chrono::duration<double>(t1 - t0).count();
-    if (i == a_.fail_at) throw std::runtime_error(fmt::format("input in_{:04d}.txt is damaged (--fail-at)", i));
+    if (i == a_.fail_at)
+      throw std::runtime_error(fmt::format("input in_{:04d}.txt is damaged (--fail-at)", i));
     std::this_thread::sleep_for(std::chrono::milliseconds(a_.cost_ms * (1 + i % 3)));
     std::string data(a_.bytes, '\0');
     uint64_t x = seed * 0x9e3779b97f4a7c15ull + static_cast<uint64_t>(i);

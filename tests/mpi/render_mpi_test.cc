@@ -23,7 +23,6 @@ using json = nlohmann::json;
 const std::string kMpirun = std::string(OMMA_MPIEXEC) + " --allow-run-as-root --oversubscribe";
 constexpr int kSets = 6;
 
-
 // A recording of 12 Giga-Eye cameras (skip-5 mode, 432 x 324) and kSets frame sets of smooth
 // 12-bit patterns that differ per camera and set.
 class RenderMpi : public ::testing::Test {
@@ -42,7 +41,8 @@ class RenderMpi : public ::testing::Test {
         for (int y = 0; y < raw.rows; ++y)
           for (int x = 0; x < raw.cols; ++x)
             raw.at<uint16_t>(y, x) = static_cast<uint16_t>(
-                2048 + 1500 * std::sin(x / 17.0 + c + 0.7 * s) * std::cos(y / (11.0 + s)) + 300 * ((x + y) % 2));
+                2048 + 1500 * std::sin(x / 17.0 + c + 0.7 * s) * std::cos(y / (11.0 + s)) +
+                300 * ((x + y) % 2));
         w.append(c, raw, s, s * 100'000'000LL + c * 1000);
       }
     w.close();
@@ -54,8 +54,9 @@ class RenderMpi : public ::testing::Test {
   static fs::path rec() { return *dir_ / "rec"; }
   static fs::path ref() { return *dir_ / "ref"; }
   static std::string render_args(const fs::path& out, const std::string& extra = "") {
-    return fmt::format("render {} --size 360x120 --band-rows 16 --method linear --no-cache --out {}/p_{{set}}.tif {}",
-                       rec().string(), out.string(), extra);
+    return fmt::format(
+        "render {} --size 360x120 --band-rows 16 --method linear --no-cache --out {}/p_{{set}}.tif {}",
+        rec().string(), out.string(), extra);
   }
   static std::string mpi_render(int np, const fs::path& out, const std::string& extra = "") {
     return fmt::format("{} -np {} {} {}", kMpirun, np, OMMA_BINARY, render_args(out, extra));
@@ -91,7 +92,8 @@ TEST_F(RenderMpi, ThreeRanksGiveTheBytesOfOneProcessByFrameSetsOrByBands) {
     EXPECT_GT(o["read"].get<double>(), 0);
     EXPECT_GT(o["develop"].get<double>(), 0);
     EXPECT_GT(o["render"].get<double>(), 0);
-    EXPECT_GE(o["seconds"].get<double>(), o["read"].get<double>() + o["develop"].get<double>() + o["render"].get<double>());
+    EXPECT_GE(o["seconds"].get<double>(),
+              o["read"].get<double>() + o["develop"].get<double>() + o["render"].get<double>());
   }
   EXPECT_GE(ranks.size(), 2u);
 
@@ -114,11 +116,12 @@ TEST_F(RenderMpi, ThreeRanksGiveTheBytesOfOneProcessByFrameSetsOrByBands) {
   // One panorama split by bands over the ranks (--split tiles).
   const fs::path tiles = *dir_ / "tiles";
   fs::create_directories(tiles);
-  const RunResult t = run_command(
-      fmt::format("{} -np 3 {} render {} --sets 3 --size 360x120 --band-rows 16 --method linear --no-cache --split tiles "
-                  "--out {} --json",
-                  kMpirun, OMMA_BINARY, rec().string(), (tiles / "one.tif").string()),
-      120);
+  const RunResult t =
+      run_command(fmt::format("{} -np 3 {} render {} --sets 3 --size 360x120 --band-rows 16 --method linear "
+                              "--no-cache --split tiles "
+                              "--out {} --json",
+                              kMpirun, OMMA_BINARY, rec().string(), (tiles / "one.tif").string()),
+                  120);
   ASSERT_EQ(t.exit_code, 0) << t.err;
   EXPECT_TRUE(slurp(ref() / "p_00003.tif") == slurp(tiles / "one.tif"));
   const json d = t.json()["distributed"];
@@ -138,8 +141,8 @@ TEST_F(RenderMpi, BadInputGivesOneClearErrorAndNoOutput) {
   // Rank 2 gets a recording path it cannot read (as on a node without the mount).
   const RunResult r = run_command(
       fmt::format("{} -np 2 {} {} : -np 1 {} {}", kMpirun, OMMA_BINARY, render_args(out), OMMA_BINARY,
-                  fmt::format("render {}/not-mounted --size 360x120 --no-cache --out {}/p_{{set}}.tif", dir_->string(),
-                              out.string())),
+                  fmt::format("render {}/not-mounted --size 360x120 --no-cache --out {}/p_{{set}}.tif",
+                              dir_->string(), out.string())),
       120);
   EXPECT_EQ(r.exit_code, 1) << r.err;
   EXPECT_EQ(count(r.err, "omma: error:"), 1) << r.err;

@@ -6,14 +6,14 @@
 //
 // Two builds of the same RTL: the thesis's link (250 x 250, 10 bits, 3 / 4 / 505 / 250 PP) and a
 // small one (20 x 10, resync 16 PP) on which many random streams run quickly.
-#include <gtest/gtest.h>
-
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
 #include <cstdio>
 #include <random>
 #include <string>
 #include <vector>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "Vfe_small.h"
 #include "Vfe_thesis.h"
@@ -198,7 +198,8 @@ LinkFrame photo_frame(const LinkConfig& c, const std::string& name, int x0, int 
 
 TEST(RtlFrontEnd, ThesisLinkCleanFramesMatchIsp) {
   const LinkConfig c = thesis_link();
-  const ChipStream s = omma::isp::encode_link({photo_frame(c, "louvre.jpg", 1200, 700), random_frame(c, 1)}, c);
+  const ChipStream s =
+      omma::isp::encode_link({photo_frame(c, "louvre.jpg", 1200, 700), random_frame(c, 1)}, c);
   const RtlRun rtl = run_rtl<Vfe_thesis>(s, c);
   const IspRun isp = run_isp(s, c);
   ASSERT_EQ(isp.stats.frames, 2);
@@ -210,8 +211,8 @@ TEST(RtlFrontEnd, ThesisLinkCleanFramesMatchIsp) {
 
 TEST(RtlFrontEnd, ThesisLinkWithBitFlipsAndLostSamplesMatchesIsp) {
   const LinkConfig c = thesis_link();
-  const ChipStream clean =
-      omma::isp::encode_link({photo_frame(c, "lake.jpg", 900, 500), random_frame(c, 2), random_frame(c, 3)}, c);
+  const ChipStream clean = omma::isp::encode_link(
+      {photo_frame(c, "lake.jpg", 900, 500), random_frame(c, 2), random_frame(c, 3)}, c);
   long damaged = 0;
   for (uint64_t seed : {11u, 12u}) {
     // ~7 flips and ~2 lost samples per frame: damaged rows, rows placed after a lost sample
@@ -250,7 +251,8 @@ TEST(RtlFrontEnd, SmallLinkRandomStreamsMatchIsp) {
     expect_same(run_rtl<Vfe_small>(s, c), isp, c, "trial " + std::to_string(trial));
     if (HasFailure()) break;
   }
-  std::printf("small link: %ld frames, %ld intact rows, %ld damaged rows, all identical\n", frames, ok, damaged);
+  std::printf("small link: %ld frames, %ld intact rows, %ld damaged rows, all identical\n", frames, ok,
+              damaged);
   EXPECT_GT(frames, 150);
   EXPECT_GT(damaged, 100);
   EXPECT_GT(ok, 1000);

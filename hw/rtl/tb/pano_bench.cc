@@ -7,9 +7,9 @@
 //   omma_rtl_pano_bench [--scene colon|louvre] [--projection vr180|equirect] [--size WxH]
 //                       [--method nn|linear] [--boundary]
 #include <chrono>
-#include <ctime>
 #include <cstdio>
 #include <cstring>
+#include <ctime>
 #include <iostream>
 #include <string>
 
@@ -29,18 +29,24 @@ int main(int argc, char** argv) {
         if (i + 1 >= argc) throw std::invalid_argument(a + " needs a value");
         return argv[++i];
       };
-      if (a == "--scene") scene = next();
-      else if (a == "--method") method = next();
-      else if (a == "--projection") grid.projection = parse_projection(next());
+      if (a == "--scene")
+        scene = next();
+      else if (a == "--method")
+        method = next();
+      else if (a == "--projection")
+        grid.projection = parse_projection(next());
       else if (a == "--size") {
         const std::string s = next();
-        if (std::sscanf(s.c_str(), "%dx%d", &grid.width, &grid.height) != 2) throw std::invalid_argument("--size WxH");
-      } else if (a == "--boundary") boundary = true;
+        if (std::sscanf(s.c_str(), "%dx%d", &grid.width, &grid.height) != 2)
+          throw std::invalid_argument("--size WxH");
+      } else if (a == "--boundary")
+        boundary = true;
       else if (a == "--help") {
         std::cout << "omma_rtl_pano_bench [--scene colon|louvre] [--projection vr180|equirect] [--size WxH] "
                      "[--method nn|linear] [--boundary]\n";
         return 0;
-      } else throw std::invalid_argument("unknown option " + a);
+      } else
+        throw std::invalid_argument("unknown option " + a);
     }
     if (scene != "colon" && scene != "louvre") throw std::invalid_argument("--scene colon|louvre");
     const pano::Method m = pano::parse_method(method);
@@ -70,12 +76,13 @@ int main(int argc, char** argv) {
         "{\"scene\": \"%s\", \"projection\": \"%s\", \"width\": %d, \"height\": %d, \"method\": \"%s\", "
         "\"boundary\": %s, \"pixels_out\": %llu, \"differing_pixels\": %d, \"cycles\": %llu, "
         "\"cycles_per_pixel\": %.4f, \"model_cycles\": %llu, \"model_cycles_per_pixel\": %.4f, "
-        "\"fps_at_120MHz\": %.2f, \"sim_run_seconds\": %.2f, \"sim_run_cpu_seconds\": %.2f, \"sim_load_seconds\": %.2f, "
+        "\"fps_at_120MHz\": %.2f, \"sim_run_seconds\": %.2f, \"sim_run_cpu_seconds\": %.2f, "
+        "\"sim_load_seconds\": %.2f, "
         "\"sim_cycles_per_second\": %.0f, \"model_seconds\": %.3f, \"config_error\": %s}\n",
         scene.c_str(), to_string(grid.projection).c_str(), grid.width, grid.height, method.c_str(),
         boundary ? "true" : "false", (unsigned long long)run.pixels, diff, (unsigned long long)run.cycles,
-        run.cycles / px, (unsigned long long)ref.stats.cycles, ref.stats.cycles / px, 120e6 / run.cycles, run_s,
-        run_cpu, load_s, run.cycles / run_s, model_s, chip.top().cfg_err ? "true" : "false");
+        run.cycles / px, (unsigned long long)ref.stats.cycles, ref.stats.cycles / px, 120e6 / run.cycles,
+        run_s, run_cpu, load_s, run.cycles / run_s, model_s, chip.top().cfg_err ? "true" : "false");
     return diff == 0 && run.pixels == uint64_t(px) ? 0 : 1;
   } catch (const std::exception& e) {
     std::cerr << "omma_rtl_pano_bench: error: " << e.what() << "\n";

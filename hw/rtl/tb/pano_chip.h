@@ -3,29 +3,30 @@
 // co-simulation test and the 1080x1080 benchmark.
 #pragma once
 
+#include <unistd.h>
+
 #include <algorithm>
-#include <atomic>
-#include <filesystem>
 #include <array>
+#include <atomic>
 #include <cstdint>
+#include <filesystem>
 #include <memory>
-#include <opencv2/core.hpp>
 #include <string>
 #include <vector>
 
-#include <unistd.h>
+#include <opencv2/core.hpp>
 
 #include "Vsys.h"
 #include "omma/core/frames.h"
-#include "omma/design/prototype.h"
 #include "omma/core/io.h"
+#include "omma/design/prototype.h"
 #include "omma/hw/export.h"
 #include "omma/hw/pipeline.h"
 #include "omma/hw/regmap.h"
 #include "omma/isp/link.h"
-#include "omma/testing/test_scenes.h"
 #include "omma/sim/scene.h"
 #include "omma/sim/simulate.h"
+#include "omma/testing/test_scenes.h"
 #include "verilated.h"
 
 namespace omma::hw::rtl {
@@ -181,8 +182,9 @@ class Chip {
 // text) are read back exactly as written.
 inline WordStreams exported_streams(const Rig& rig, const ExportOptions& o) {
   static std::atomic<int> n{0};
-  const std::filesystem::path dir = std::filesystem::temp_directory_path() /
-                                    ("omma_rtl_export_" + std::to_string(::getpid()) + "_" + std::to_string(n++));
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() /
+      ("omma_rtl_export_" + std::to_string(::getpid()) + "_" + std::to_string(n++));
   export_chip(rig, o, dir);
   WordStreams s;
   s.reg = parse_words(read_text_file(dir / "regs.hex"), "regs.hex");

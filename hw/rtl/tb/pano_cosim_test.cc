@@ -3,16 +3,16 @@
 // far-field photograph loaded into the frame memories as RGB565, the chip configured only through
 // the Table 6.6 channels with the word streams `omma hw export` writes (its .hex files, read back),
 // a whole small panorama run, every output pixel compared: 0 differing pixels for nn, linear and
-// the MRF evidence, with and without the boundary unit. Also: the cycles the simulation counts against the model's
-// throughput (hw::pixel_cycles), the §6.3 raster signals, and corrupt configuration streams.
-#include <gtest/gtest.h>
-
+// the MRF evidence, with and without the boundary unit. Also: the cycles the simulation counts against the
+// model's throughput (hw::pixel_cycles), the §6.3 raster signals, and corrupt configuration streams.
 #include <algorithm>
 #include <cstdio>
 #include <functional>
 #include <memory>
 #include <string>
 #include <vector>
+
+#include <gtest/gtest.h>
 
 #include "pano_chip.h"
 
@@ -27,8 +27,9 @@ void cosim(const std::vector<cv::Mat>& frames, const PanoGrid& grid, const char*
   model.load_frames(frames);
   Chip chip;
   chip.load(frames);
-  for (const auto& [m, boundary] : {std::pair{pano::Method::kNearest, false}, std::pair{pano::Method::kLinear, false},
-                                    std::pair{pano::Method::kMrf, false}, std::pair{pano::Method::kLinear, true}}) {
+  for (const auto& [m, boundary] :
+       {std::pair{pano::Method::kNearest, false}, std::pair{pano::Method::kLinear, false},
+        std::pair{pano::Method::kMrf, false}, std::pair{pano::Method::kLinear, true}}) {
     SCOPED_TRACE(std::string(scene) + " " + pano::to_string(m) + (boundary ? " +boundary" : ""));
     chip.configure(exported_streams(rig24(), ExportOptions{cfg, grid, m, boundary, vm}));
     ASSERT_FALSE(chip.top().cfg_err) << "code " << int(chip.top().cfg_err_code);
@@ -40,7 +41,8 @@ void cosim(const std::vector<cv::Mat>& frames, const PanoGrid& grid, const char*
     EXPECT_FALSE(chip.top().unsupported);
     const int diff = differing_pixels(run.pano, ref.pano);
     EXPECT_EQ(diff, 0) << "differing pixels";
-    for (int k = 0; k <= 8; ++k) EXPECT_EQ(run.contributors[k], ref.stats.contributors[k]) << k << " contributors";
+    for (int k = 0; k <= 8; ++k)
+      EXPECT_EQ(run.contributors[k], ref.stats.contributors[k]) << k << " contributors";
     // not a trivial panorama: most pixels are seen and lit; the near field has object boundaries
     EXPECT_GT(cv::countNonZero(run.pano.reshape(1)), int(run.pano.total()));
     if (boundary && near_field) {
@@ -51,14 +53,16 @@ void cosim(const std::vector<cv::Mat>& frames, const PanoGrid& grid, const char*
     const double px = double(grid.width) * grid.height;
     const double rtl_cpp = double(run.cycles) / px, model_cpp = double(ref.stats.cycles) / px;
     std::printf("%s %s%s %dx%d: %d differing pixels; cycles per pixel RTL %.3f, model %.3f\n", scene,
-                pano::to_string(m).c_str(), boundary ? " +boundary" : "", grid.width, grid.height, diff, rtl_cpp,
-                model_cpp);
+                pano::to_string(m).c_str(), boundary ? " +boundary" : "", grid.width, grid.height, diff,
+                rtl_cpp, model_cpp);
     EXPECT_LE(rtl_cpp, model_cpp * 1.02 + 0.05);
     EXPECT_GE(rtl_cpp, model_cpp * 0.75);
   }
 }
 
-TEST(RtlPano, ColonVr180MatchesModelBitForBit) { cosim(colon_frames(), {Projection::kVr180, 72, 72}, "colon", true); }
+TEST(RtlPano, ColonVr180MatchesModelBitForBit) {
+  cosim(colon_frames(), {Projection::kVr180, 72, 72}, "colon", true);
+}
 
 TEST(RtlPano, LouvreEquirectMatchesModelBitForBit) {
   cosim(louvre_frames(), {Projection::kEquirect, 128, 32}, "louvre", false);
@@ -79,7 +83,8 @@ TEST(RtlPano, VignettingTablesMatchModelBitForBit) {
 TEST(RtlPano, CorruptConfigurationStreamsAreFlagged) {
   const HwConfig cfg;
   Pipeline model(cfg, rig24(), {Projection::kVr180, 16, 16});
-  const WordStreams good = exported_streams(rig24(), ExportOptions{cfg, {Projection::kVr180, 16, 16}, pano::Method::kLinear, false, {}});
+  const WordStreams good = exported_streams(
+      rig24(), ExportOptions{cfg, {Projection::kVr180, 16, 16}, pano::Method::kLinear, false, {}});
   EXPECT_EQ(good.reg, encode(cfg, chip_config(model, pano::Method::kLinear, false)).reg);
   struct Case {
     const char* what;
@@ -88,7 +93,8 @@ TEST(RtlPano, CorruptConfigurationStreamsAreFlagged) {
   };
   const std::vector<Case> cases = {
       {"write enable clear", 1, 0, [](WordStreams& s) { s.reg[3] &= 0x7FFFFFFFu; }},
-      {"unknown register address", 2, 0, [](WordStreams& s) { s.reg[3] = 0x80000000u | (0x0123u << 16) | 5u; }},
+      {"unknown register address", 2, 0,
+       [](WordStreams& s) { s.reg[3] = 0x80000000u | (0x0123u << 16) | 5u; }},
       {"write to the read-only hw_version", 9, 0,
        [](WordStreams& s) { s.reg.insert(s.reg.begin() + 2, 0x80000000u | (0x7E00u << 16) | 1u); }},
       {"value wider than its register", 3, 0,

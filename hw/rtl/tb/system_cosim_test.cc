@@ -5,10 +5,10 @@
 // the pipeline makes the panorama. The model side: isp::decode_link and isp::demosaic of the same
 // streams give the frames (8 most significant bits of the 10-bit RGB) that hw::Pipeline renders.
 // 0 differing pixels.
-#include <gtest/gtest.h>
-
 #include <cstdio>
 #include <random>
+
+#include <gtest/gtest.h>
 
 #include "omma/isp/demosaic.h"
 #include "pano_chip.h"
@@ -55,7 +55,8 @@ TEST(RtlSystem, SerialLinksToPanoramaMatchIspAndModelBitForBit) {
     const isp::LinkSummary st = isp::decode_link(s.bytes, link, [&](const isp::LinkFrame& d) { dec = d; });
     ASSERT_EQ(st.frames, 1);
     damaged += st.rows_damaged;
-    const cv::Mat rgb10 = isp::demosaic(cv::Mat(40, 40, CV_16UC1, dec.pixels.data()), isp::Demosaic::kBilinear, 10);
+    const cv::Mat rgb10 =
+        isp::demosaic(cv::Mat(40, 40, CV_16UC1, dec.pixels.data()), isp::Demosaic::kBilinear, 10);
     cv::Mat bgr8(40, 40, CV_8UC3);
     for (int y = 0; y < 40; ++y)
       for (int x = 0; x < 40; ++x) {
@@ -84,8 +85,10 @@ TEST(RtlSystem, SerialLinksToPanoramaMatchIspAndModelBitForBit) {
   const Chip::Run run = chip.run(grid.width, grid.height);
   EXPECT_EQ(run.pixels, uint64_t(grid.width) * grid.height);
   const int diff = differing_pixels(run.pano, ref.pano);
-  std::printf("system: 24 links (%ld damaged rows) -> front ends -> frame memories -> %dx%d linear panorama: "
-              "%d differing pixels\n", damaged, grid.width, grid.height, diff);
+  std::printf(
+      "system: 24 links (%ld damaged rows) -> front ends -> frame memories -> %dx%d linear panorama: "
+      "%d differing pixels\n",
+      damaged, grid.width, grid.height, diff);
   EXPECT_EQ(diff, 0);
   EXPECT_GT(cv::countNonZero(run.pano.reshape(1)), int(run.pano.total()));
 }

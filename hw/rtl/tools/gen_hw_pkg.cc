@@ -90,8 +90,8 @@ int main(int argc, char** argv) {
                     n.c_str(), g.address, g.description, n.c_str(), bits);
       s += buf;
       if (g.read_only) {  // the chip's own value: a write is flagged (config_regs)
-        std::snprintf(buf, sizeof buf, "  localparam int RO_%s = 1;\n  localparam int V_%s = 'h%X;\n", n.c_str(),
-                      n.c_str(), g.thesis_default);
+        std::snprintf(buf, sizeof buf, "  localparam int RO_%s = 1;\n  localparam int V_%s = 'h%X;\n",
+                      n.c_str(), n.c_str(), g.thesis_default);
         s += buf;
       }
     }

@@ -1,27 +1,26 @@
 #include "omma/bench/bench.h"
 
-#include <cmath>
 #include <chrono>
+#include <cmath>
 #include <condition_variable>
-#include <mutex>
-#include <thread>
 #include <cstring>
 #include <ctime>
+#include <mutex>
 #include <stdexcept>
+#include <thread>
 
 #include <fmt/format.h>
-
 #include <opencv2/imgproc.hpp>
 #include <opencv2/stitching/detail/blenders.hpp>
 #include <tbb/parallel_for.h>
 
-#include "omma/design/prototype.h"
-#include "omma/render/depth_render.h"
-#include "omma/testing/synthetic.h"
 #include "omma/core/log.h"
+#include "omma/design/prototype.h"
 #include "omma/isp/isp.h"
 #include "omma/isp/photometric.h"
+#include "omma/render/depth_render.h"
 #include "omma/sim/render.h"
+#include "omma/testing/synthetic.h"
 
 namespace omma::bench {
 namespace {
@@ -63,8 +62,9 @@ std::vector<CameraWarp> camera_warps(const Rig& rig, const PanoGrid& g) {
 
 }  // namespace
 
-Workload omma_workload(const Rig& rig, const render::MapOptions& opt, int threads, const std::vector<cv::Mat>& frames,
-                       const std::string& variant, const std::string& suffix) {
+Workload omma_workload(const Rig& rig, const render::MapOptions& opt, int threads,
+                       const std::vector<cv::Mat>& frames, const std::string& variant,
+                       const std::string& suffix) {
   const auto t0 = std::chrono::steady_clock::now();
   auto map = std::make_shared<render::CompiledMap>(render::compile_map(rig, opt));
   const double compile_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -77,12 +77,15 @@ Workload omma_workload(const Rig& rig, const render::MapOptions& opt, int thread
   w.run = [map, store, out, threads] { render::render(*map, *store, *out, {.threads = threads}); };
   w.info = {{"bytes_per_pixel", map->bytes_per_pixel()},
             {"taps_per_pixel", double(map->taps()) / (double(map->width) * map->height)},
-            {"compile_s", compile_s}, {"threads", threads}, {"min_weight", opt.min_weight},
+            {"compile_s", compile_s},
+            {"threads", threads},
+            {"min_weight", opt.min_weight},
             {"kernel", to_string(render::best_kernel())}};
   return w;
 }
 
-Workload omma_depth_workload(const Rig& rig, const render::MapOptions& opt, const std::vector<cv::Mat>& frames) {
+Workload omma_depth_workload(const Rig& rig, const render::MapOptions& opt,
+                             const std::vector<cv::Mat>& frames) {
   render::DepthRenderOptions o;
   o.map = opt;
   auto dr = std::make_shared<render::DepthRenderer>(rig, o);
@@ -137,8 +140,10 @@ class CameraWorker {
       cv_.wait(l, [this] { return quit_ || (busy_ && frame_); });
       if (quit_) return;
       l.unlock();
-      if (!tables_.empty()) tables_[camera_].apply(*frame_, ready_);  // the correction ...
-      else frame_->copyTo(ready_);                                      // ... or the plain hand-over
+      if (!tables_.empty())
+        tables_[camera_].apply(*frame_, ready_);  // the correction ...
+      else
+        frame_->copyTo(ready_);  // ... or the plain hand-over
       l.lock();
       busy_ = false, frame_ = nullptr;
       cv_.notify_all();
@@ -171,14 +176,16 @@ Workload omma_live_workload(const Rig& rig, const render::MapOptions& opt, const
   auto out = std::make_shared<cv::Mat>();
   auto next = std::make_shared<size_t>(0);
   Workload w;
-  w.name = "omma-" + pano::to_string(opt.method) + (photometric ? "-photometric-" : "-store-") + size_tag(opt.grid);
+  w.name = "omma-" + pano::to_string(opt.method) + (photometric ? "-photometric-" : "-store-") +
+           size_tag(opt.grid);
   w.run = [map, store, worker, fr, out, next] {
     const size_t c = (*next)++ % fr->size();
-    worker->start(&(*fr)[c], c);               // the camera thread, concurrently with ...
-    render::render(*map, *store, *out, {});            // ... the render loop's panorama
-    store->set(int(c), worker->wait());        // then the new frame enters the store
+    worker->start(&(*fr)[c], c);             // the camera thread, concurrently with ...
+    render::render(*map, *store, *out, {});  // ... the render loop's panorama
+    store->set(int(c), worker->wait());      // then the new frame enters the store
   };
-  w.info = {{"bytes_per_pixel", map->bytes_per_pixel()}, {"camera_frames_per_panorama", 1},
+  w.info = {{"bytes_per_pixel", map->bytes_per_pixel()},
+            {"camera_frames_per_panorama", 1},
             {"photometric", photometric}};
   return w;
 }
@@ -246,7 +253,9 @@ Workload memcpy_workload(const render::CompiledMap& map, const std::string& tag)
       std::memcpy(dst->data() + a, src->data() + a, b - a);
     });
   };
-  w.info = {{"bytes", bytes}, {"map_bytes", map.bytes()}, {"store_bytes_read", store},
+  w.info = {{"bytes", bytes},
+            {"map_bytes", map.bytes()},
+            {"store_bytes_read", store},
             {"store_bytes", map.layout.bytes()}};
   return w;
 }
@@ -364,20 +373,26 @@ std::vector<BenchEntry> run_bench_suite(const Rig& rig_in, const BenchOptions& o
   const auto raws = random_raw_frames(rig, 7);
   const std::string set_tag = fmt::format("{}x{}x{}", raws.size(), raws[0].cols, raws[0].rows);
   if (wanted("isp-hybrid-grayworld-" + set_tag)) {
-    Workload w{"isp-hybrid-grayworld-" + set_tag, 0, [&raws] {
+    Workload w{"isp-hybrid-grayworld-" + set_tag,
+               0,
+               [&raws] {
                  isp::IspOptions o;  // hybrid + gray world by default
                  const auto developed = isp::develop_all(raws, o);
                  if (developed.empty()) throw std::logic_error("no frames");
-               }, {{"unit", "sets of frames"}}};
+               },
+               {{"unit", "sets of frames"}}};
     add(w);
   }
   if (wanted("opencv-bayer-bilinear-" + set_tag)) {
-    Workload w{"opencv-bayer-bilinear-" + set_tag, 0, [&raws] {
+    Workload w{"opencv-bayer-bilinear-" + set_tag,
+               0,
+               [&raws] {
                  std::vector<cv::Mat> out(raws.size());
                  tbb::parallel_for(size_t(0), raws.size(), [&](size_t i) {
                    cv::cvtColor(raws[i], out[i], cv::COLOR_BayerBG2BGR);  // RGGB with (0,0) = R
                  });
-               }, {{"unit", "sets of frames"}}};
+               },
+               {{"unit", "sets of frames"}}};
     add(w);
   }
   // Interleaved measurement (see bench.h).
@@ -410,7 +425,8 @@ nlohmann::json BenchRatio::to_json() const {
     j["vs_opencv_multiband"] = vs_multiband, j["target_100x_opencv_multiband_met"] = vs_multiband >= 100;
   if (!vs_remap_rounds.empty()) j["vs_opencv_remap_rounds"] = vs_remap_rounds;
   if (!vs_multiband_rounds.empty()) j["vs_opencv_multiband_rounds"] = vs_multiband_rounds;
-  if (bound_over > 0) j["memcpy_bound_over_ours"] = bound_over, j["target_within_2x_bound_met"] = bound_over <= 2;
+  if (bound_over > 0)
+    j["memcpy_bound_over_ours"] = bound_over, j["target_within_2x_bound_met"] = bound_over <= 2;
   if (name.rfind("omma-mrf-1080x1080", 0) == 0) j["target_400fps_met"] = fps >= 400;
   if (vs_static > 0) j["vs_static"] = vs_static;
   if (name == "omma-mrf-depth-1080x1080") j["target_25fps_met"] = fps >= 25;
@@ -444,7 +460,8 @@ std::vector<BenchRatio> bench_ratios(const std::vector<BenchEntry>& entries) {
   };
   std::vector<BenchRatio> out;
   for (const auto& e : entries) {
-    if (e.name.rfind("omma-", 0) != 0 || e.name.find("-1thread") != std::string::npos || !(e.fps > 0)) continue;
+    if (e.name.rfind("omma-", 0) != 0 || e.name.find("-1thread") != std::string::npos || !(e.fps > 0))
+      continue;
     const std::string size = e.name.substr(e.name.rfind('-') + 1);  // "1080x1080"
     BenchRatio r;
     r.name = e.name;
@@ -457,9 +474,12 @@ std::vector<BenchRatio> bench_ratios(const std::vector<BenchEntry>& entries) {
     if (const size_t d = e.name.find("-depth-"); d != std::string::npos)  // against the static map
       if (const double st = fps_of(e.name.substr(0, d) + "-" + size); st > 0) r.vs_static = e.fps / st;
     if (const size_t at = e.name.find("-photometric-"); at != std::string::npos) {
-      const std::string plain = e.name.substr(0, at) + "-" + size, store = e.name.substr(0, at) + "-store-" + size;
-      if (const double f = fps_of(plain); f > 0) r.vs_plain = e.fps / f, r.vs_plain_rounds = per_round(e, plain);
-      if (const double f = fps_of(store); f > 0) r.vs_store = e.fps / f, r.vs_store_rounds = per_round(e, store);
+      const std::string plain = e.name.substr(0, at) + "-" + size,
+                        store = e.name.substr(0, at) + "-store-" + size;
+      if (const double f = fps_of(plain); f > 0)
+        r.vs_plain = e.fps / f, r.vs_plain_rounds = per_round(e, plain);
+      if (const double f = fps_of(store); f > 0)
+        r.vs_store = e.fps / f, r.vs_store_rounds = per_round(e, store);
     }
     out.push_back(r);
   }

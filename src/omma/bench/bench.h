@@ -20,8 +20,8 @@ namespace omma::bench {
 
 // One measurable workload: run() renders (or copies) one panorama frame.
 struct Workload {
-  std::string name;   // e.g. "omma-mrf-1080x1080", "opencv-remap-1080x1080"
-  int threads = 0;    // 0 = all
+  std::string name;  // e.g. "omma-mrf-1080x1080", "opencv-remap-1080x1080"
+  int threads = 0;   // 0 = all
   std::function<void()> run;
   nlohmann::json info;  // extra facts (bytes per pixel, compile time, ...)
 };
@@ -29,13 +29,15 @@ struct Workload {
 // Our renderer for the map of `opt` (threads: 0 = all, 1 = one), named "omma-<method><variant>-
 // <W>x<H><suffix>". Throws std::logic_error if pano does not implement the method yet. The frames
 // are copied into a frame store once.
-Workload omma_workload(const Rig& rig, const render::MapOptions& opt, int threads, const std::vector<cv::Mat>& frames,
-                       const std::string& variant = "", const std::string& suffix = "");
+Workload omma_workload(const Rig& rig, const render::MapOptions& opt, int threads,
+                       const std::vector<cv::Mat>& frames, const std::string& variant = "",
+                       const std::string& suffix = "");
 
 // The depth-adaptive renderer (depth_render.h): per frame the depth estimate on its
 // coarse grid (with the temporal term) and the render with moved taps; named
 // "omma-<method>-depth-<W>x<H>".
-Workload omma_depth_workload(const Rig& rig, const render::MapOptions& opt, const std::vector<cv::Mat>& frames);
+Workload omma_depth_workload(const Rig& rig, const render::MapOptions& opt,
+                             const std::vector<cv::Mat>& frames);
 
 // Our renderer with frames arriving as in the live engine (engine.h): per panorama one camera's new
 // frame (round robin over the cameras) is made ready on a camera thread, as the engine's camera

@@ -7,10 +7,11 @@ namespace omma::bench {
 namespace {
 
 TEST(EngineBench, RatiosCompareOursWithThePeersOfTheSameSize) {
-  const std::vector<BenchEntry> e = {{"omma-mrf-1080x1080", 300, {}, {}},    {"omma-mrf-1080x1080-1thread", 160, {}, {}},
-                                     {"opencv-remap-1080x1080", 60, {}, {}},  {"opencv-multiband-1080x1080", 10, {}, {}},
-                                     {"memcpy-bound-1080x1080", 900, {}, {}}, {"omma-nn-1920x512", 500, {}, {}},
-                                     {"opencv-remap-1920x512", 25, {}, {}},   {"memcpy-bound-1920x512", 750, {}, {}}};
+  const std::vector<BenchEntry> e = {
+      {"omma-mrf-1080x1080", 300, {}, {}},     {"omma-mrf-1080x1080-1thread", 160, {}, {}},
+      {"opencv-remap-1080x1080", 60, {}, {}},  {"opencv-multiband-1080x1080", 10, {}, {}},
+      {"memcpy-bound-1080x1080", 900, {}, {}}, {"omma-nn-1920x512", 500, {}, {}},
+      {"opencv-remap-1920x512", 25, {}, {}},   {"memcpy-bound-1920x512", 750, {}, {}}};
   const auto r = bench_ratios(e);
   ASSERT_EQ(r.size(), 2u);  // the -1thread entry and the peers are not compared
   EXPECT_EQ(r[0].name, "omma-mrf-1080x1080");

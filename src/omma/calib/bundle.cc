@@ -149,7 +149,8 @@ double* BundleBlocks::k_block(int i) { return kk[share_distortion ? 0 : i].data(
 
 BundleBlocks init_bundle_blocks(const Rig& nominal, const Rig& start,
                                 const std::vector<std::vector<TrackObservation>>& tracks, SceneModel scene,
-                                const CalibrationOptions& opt, const std::optional<std::array<double, 4>>& tube_axis) {
+                                const CalibrationOptions& opt,
+                                const std::optional<std::array<double, 4>>& tube_axis) {
   const int n = static_cast<int>(nominal.cameras.size());
   BundleBlocks b;
   b.r_nom.resize(n);
@@ -223,7 +224,8 @@ BundleBlocks init_bundle_blocks(const Rig& nominal, const Rig& start,
 
 BundleManifolds::BundleManifolds(const BundleBlocks& b) : tube_offset_only(4, {2, 3}) {
   if (!b.k_const.empty() && b.k_const.size() < 5) k = std::make_unique<ceres::SubsetManifold>(5, b.k_const);
-  if (!b.fcc_const.empty() && b.fcc_const.size() < 4) fcc = std::make_unique<ceres::SubsetManifold>(4, b.fcc_const);
+  if (!b.fcc_const.empty() && b.fcc_const.size() < 4)
+    fcc = std::make_unique<ceres::SubsetManifold>(4, b.fcc_const);
 }
 
 int build_bundle_problem(ceres::Problem& problem, BundleManifolds& m, BundleBlocks& b,
@@ -250,8 +252,8 @@ int build_bundle_problem(ceres::Problem& problem, BundleManifolds& m, BundleBloc
       if (b.on_tube[ti]) {
         auto* cost = new ceres::AutoDiffCostFunction<TubeCost, 2, 3, 4, 5, 2, 4>(
             new TubeCost{{o.px, o.weight, b.r_nom[i], nominal.cameras[i].position_mm}, b.tube_r});
-        problem.AddResidualBlock(cost, make_loss(), b.delta[i].data(), b.fcc_block(i), b.k_block(i), b.uv[ti].data(),
-                                 b.axis.data());
+        problem.AddResidualBlock(cost, make_loss(), b.delta[i].data(), b.fcc_block(i), b.k_block(i),
+                                 b.uv[ti].data(), b.axis.data());
       } else if (b.near) {
         auto* cost = new ceres::AutoDiffCostFunction<NearCost, 2, 3, 4, 5, 4>(
             new NearCost{o.px, o.weight, b.r_nom[i], nominal.cameras[i].position_mm});
@@ -266,7 +268,8 @@ int build_bundle_problem(ceres::Problem& problem, BundleManifolds& m, BundleBloc
       ++added;
     }
     if (problem.HasParameterBlock(b.points[ti].data()))
-      problem.SetManifold(b.points[ti].data(), b.near ? static_cast<ceres::Manifold*>(&m.sphere4) : &m.sphere3);
+      problem.SetManifold(b.points[ti].data(),
+                          b.near ? static_cast<ceres::Manifold*>(&m.sphere4) : &m.sphere3);
   }
   if (b.tube && !opt.tube_tilt && problem.HasParameterBlock(b.axis.data()))
     problem.SetManifold(b.axis.data(), &m.tube_offset_only);
@@ -294,8 +297,10 @@ int build_bundle_problem(ceres::Problem& problem, BundleManifolds& m, BundleBloc
       blocks.push_back(b.fcc_block(i));
     }
     cost->SetNumResiduals(2);
-    if (blocks.empty()) delete cost;
-    else problem.AddResidualBlock(cost, nullptr, blocks);
+    if (blocks.empty())
+      delete cost;
+    else
+      problem.AddResidualBlock(cost, nullptr, blocks);
   }
   // Intrinsics: constant in pass 0, else the parts not estimated held by a subset manifold.
   for (int i = 0; i < n; ++i) {
@@ -307,8 +312,10 @@ int build_bundle_problem(ceres::Problem& problem, BundleManifolds& m, BundleBloc
       }
       const bool is_k = blk == b.k_block(i);
       const auto& cst = is_k ? b.k_const : b.fcc_const;
-      if (cst.size() == (is_k ? 5u : 4u)) problem.SetParameterBlockConstant(blk);
-      else if (!cst.empty()) problem.SetManifold(blk, is_k ? m.k.get() : m.fcc.get());
+      if (cst.size() == (is_k ? 5u : 4u))
+        problem.SetParameterBlockConstant(blk);
+      else if (!cst.empty())
+        problem.SetManifold(blk, is_k ? m.k.get() : m.fcc.get());
     }
   }
   return added;
@@ -322,7 +329,8 @@ using detail::BundleBlocks;
 
 // Step 4: cameras with too few observations keep their nominal values (a warning names them); their
 // observations and the tracks left with fewer than two are removed. Returns the active flags.
-std::vector<char> drop_inactive_cameras(const Rig& nominal, std::vector<std::vector<TrackObservation>>& tracks,
+std::vector<char> drop_inactive_cameras(const Rig& nominal,
+                                        std::vector<std::vector<TrackObservation>>& tracks,
                                         const CalibrationOptions& opt, CalibrationSummary& res) {
   const int n = static_cast<int>(nominal.cameras.size());
   std::vector<int> obs_count(n, 0);
@@ -341,15 +349,17 @@ std::vector<char> drop_inactive_cameras(const Rig& nominal, std::vector<std::vec
   if (!res.uncalibrated_ids.empty()) {
     std::string ids;
     for (int id : res.uncalibrated_ids) ids += (ids.empty() ? "" : ", ") + std::to_string(id);
-    const std::string w = fmt::format("cameras with fewer than {} matched observations keep their nominal values: {}",
-                                      opt.min_observations, ids);
+    const std::string w =
+        fmt::format("cameras with fewer than {} matched observations keep their nominal values: {}",
+                    opt.min_observations, ids);
     if (std::find(res.warnings.begin(), res.warnings.end(), w) == res.warnings.end()) {
       res.warnings.push_back(w);
       spdlog::warn("calibrate: {}", w);
     }
   }
   for (auto& t : tracks)
-    t.erase(std::remove_if(t.begin(), t.end(), [&](const TrackObservation& o) { return !active[o.cam]; }), t.end());
+    t.erase(std::remove_if(t.begin(), t.end(), [&](const TrackObservation& o) { return !active[o.cam]; }),
+            t.end());
   tracks.erase(std::remove_if(tracks.begin(), tracks.end(), [](const auto& t) { return t.size() < 2; }),
                tracks.end());
   return active;
@@ -372,10 +382,11 @@ std::vector<double> squared_errors(BundleBlocks& b, const std::vector<std::vecto
         ok = TubeCost{{obs, w, b.r_nom[i], nominal.cameras[i].position_mm}, b.tube_r}(
             b.delta[i].data(), b.fcc_block(i), b.k_block(i), b.uv[ti].data(), b.axis.data(), r);
       else if (b.near)
-        ok = NearCost{obs, w, b.r_nom[i], nominal.cameras[i].position_mm}(b.delta[i].data(), b.fcc_block(i),
-                                                                          b.k_block(i), b.points[ti].data(), r);
+        ok = NearCost{obs, w, b.r_nom[i], nominal.cameras[i].position_mm}(
+            b.delta[i].data(), b.fcc_block(i), b.k_block(i), b.points[ti].data(), r);
       else
-        ok = FarCost{obs, w, b.r_nom[i]}(b.delta[i].data(), b.fcc_block(i), b.k_block(i), b.points[ti].data(), r);
+        ok = FarCost{obs, w, b.r_nom[i]}(b.delta[i].data(), b.fcc_block(i), b.k_block(i), b.points[ti].data(),
+                                         r);
       err2.push_back(ok ? r[0] * r[0] + r[1] * r[1] : 1e6);
     }
   return err2;
@@ -393,7 +404,8 @@ void run_passes(BundleBlocks& b, const std::vector<std::vector<TrackObservation>
     popt.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
     ceres::Problem problem(popt);
     detail::BundleManifolds manifolds(b);
-    detail::build_bundle_problem(problem, manifolds, b, tracks, keep, nominal, opt, /*intrinsics_free=*/pass > 0);
+    detail::build_bundle_problem(problem, manifolds, b, tracks, keep, nominal, opt,
+                                 /*intrinsics_free=*/pass > 0);
     ceres::Solver::Options so;
     so.linear_solver_type = ceres::SPARSE_SCHUR;
     if (!ceres::IsSparseLinearAlgebraLibraryTypeAvailable(ceres::SUITE_SPARSE) &&
@@ -406,9 +418,10 @@ void run_passes(BundleBlocks& b, const std::vector<std::vector<TrackObservation>
     so.logging_type = ceres::SILENT;
     ceres::Solver::Summary summary;
     ceres::Solve(so, &problem, &summary);
-    spdlog::info("calibrate: bundle adjustment pass {}: {} residual blocks, {} iterations, cost {:.4g} -> {:.4g}",
-                 pass + 1, summary.num_residual_blocks, summary.iterations.size(), summary.initial_cost,
-                 summary.final_cost);
+    spdlog::info(
+        "calibrate: bundle adjustment pass {}: {} residual blocks, {} iterations, cost {:.4g} -> {:.4g}",
+        pass + 1, summary.num_residual_blocks, summary.iterations.size(), summary.initial_cost,
+        summary.final_cost);
     if (pass == 1) {
       // Outliers (wrong matches that passed RANSAC, e.g. along an epipolar line) are dropped once
       // the intrinsics are free, before the final solve. Not after pass 0: with the intrinsics still
@@ -430,8 +443,8 @@ void run_passes(BundleBlocks& b, const std::vector<std::vector<TrackObservation>
 // Step 6: statistics over the kept observations of tracks with >= 2 kept observations, and the
 // calibrated rig (the active cameras' solved parameters).
 void write_solution(BundleBlocks& b, const std::vector<std::vector<TrackObservation>>& tracks,
-                    const std::vector<std::vector<char>>& keep, const std::vector<char>& active, const Rig& nominal,
-                    CalibrationSummary& res) {
+                    const std::vector<std::vector<char>>& keep, const std::vector<char>& active,
+                    const Rig& nominal, CalibrationSummary& res) {
   const int n = static_cast<int>(nominal.cameras.size());
   const std::vector<double> e2 = squared_errors(b, tracks, nominal);
   std::vector<double> cam_sum(n, 0);
@@ -475,17 +488,17 @@ void write_solution(BundleBlocks& b, const std::vector<std::vector<TrackObservat
 
 }  // namespace
 
-CalibrationSummary solve_tracks(const Rig& nominal, const Rig& start, std::vector<std::vector<TrackObservation>> tracks,
-                                SceneModel scene, const CalibrationOptions& opt, CalibrationSummary res,
-                                SolveState* state) {
+CalibrationSummary solve_tracks(const Rig& nominal, const Rig& start,
+                                std::vector<std::vector<TrackObservation>> tracks, SceneModel scene,
+                                const CalibrationOptions& opt, CalibrationSummary res, SolveState* state) {
   res.uncalibrated_ids.clear();
   res.per_camera.clear();
   res.tracks = res.observations = res.rejected = 0;
   // 4. Cameras with too few observations keep their nominal values.
   const std::vector<char> active = drop_inactive_cameras(nominal, tracks, opt, res);
   // 5. Parameters, then the passes.
-  BundleBlocks b = detail::init_bundle_blocks(nominal, start, tracks, scene, opt,
-                                              state ? state->tube_axis : std::nullopt);
+  BundleBlocks b =
+      detail::init_bundle_blocks(nominal, start, tracks, scene, opt, state ? state->tube_axis : std::nullopt);
   // Per-observation keep mask (outlier removal between the solves).
   std::vector<std::vector<char>> keep(tracks.size());
   for (size_t ti = 0; ti < tracks.size(); ++ti) keep[ti].assign(tracks[ti].size(), 1);
@@ -501,32 +514,39 @@ CalibrationSummary solve_tracks(const Rig& nominal, const Rig& start, std::vecto
   for (size_t ti = 0; ti < tracks.size(); ++ti) {
     if (!b.on_tube[ti]) continue;
     Eigen::Vector4d x(b.axis[0] + b.axis[2] * b.uv[ti][1] + b.tube_r * std::cos(b.uv[ti][0]),
-                      b.axis[1] + b.axis[3] * b.uv[ti][1] + b.tube_r * std::sin(b.uv[ti][0]), b.uv[ti][1], 1.0);
+                      b.axis[1] + b.axis[3] * b.uv[ti][1] + b.tube_r * std::sin(b.uv[ti][0]), b.uv[ti][1],
+                      1.0);
     x.normalize();
     b.points[ti] = {x[0], x[1], x[2], x[3]};
   }
   if (b.tube)
-    spdlog::info("calibrate: tube axis offset ({:.3f}, {:.3f}) mm, tilt ({:.4f}, {:.4f})", b.axis[0], b.axis[1],
-                 b.axis[2], b.axis[3]);
+    spdlog::info("calibrate: tube axis offset ({:.3f}, {:.3f}) mm, tilt ({:.4f}, {:.4f})", b.axis[0],
+                 b.axis[1], b.axis[2], b.axis[3]);
   if (state) {
     state->tracks = tracks;
     state->points = b.points;
     if (b.tube) state->tube_axis = b.axis;
   }
-  spdlog::info("calibrate: reprojection RMS {:.3f} px (nominal rig {:.3f} px), {} tracks, {} observations, {} rejected",
-               res.rms_px, res.initial_rms_px, res.tracks, res.observations, res.rejected);
+  spdlog::info(
+      "calibrate: reprojection RMS {:.3f} px (nominal rig {:.3f} px), {} tracks, {} observations, {} "
+      "rejected",
+      res.rms_px, res.initial_rms_px, res.tracks, res.observations, res.rejected);
   return res;
 }
 
-CalibrationSummary calibrate_from_tracks(const Rig& nominal, std::vector<std::vector<TrackObservation>> tracks,
-                                        SceneModel scene, const CalibrationOptions& opt) {
-  if (scene == SceneModel::kAuto) throw std::invalid_argument("calibrate_from_tracks: scene must be far or near");
+CalibrationSummary calibrate_from_tracks(const Rig& nominal,
+                                         std::vector<std::vector<TrackObservation>> tracks, SceneModel scene,
+                                         const CalibrationOptions& opt) {
+  if (scene == SceneModel::kAuto)
+    throw std::invalid_argument("calibrate_from_tracks: scene must be far or near");
   std::string why;
   if (!opt.IsValid(&why)) throw std::invalid_argument("calibrate_from_tracks: " + why);
   const int n = static_cast<int>(nominal.cameras.size());
   for (const auto& t : tracks)
     for (const auto& o : t)
-      if (o.cam < 0 || o.cam >= n) throw std::invalid_argument(fmt::format("calibrate_from_tracks: camera index {} out of range", o.cam));
+      if (o.cam < 0 || o.cam >= n)
+        throw std::invalid_argument(
+            fmt::format("calibrate_from_tracks: camera index {} out of range", o.cam));
   CalibrationSummary res;
   res.rig = nominal;
   res.scene = scene;

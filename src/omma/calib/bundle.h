@@ -26,8 +26,9 @@ struct SolveState {
 // or a previous solution); the priors refer to `nominal`.
 // `res` carries the counts of the earlier stages (matches, inliers, pairs, warnings) through;
 // `state` (optional) receives what the subpixel refinement needs.
-CalibrationSummary solve_tracks(const Rig& nominal, const Rig& start, std::vector<std::vector<TrackObservation>> tracks,
-                               SceneModel scene, const CalibrationOptions& opt, CalibrationSummary res,
-                               SolveState* state = nullptr);
+CalibrationSummary solve_tracks(const Rig& nominal, const Rig& start,
+                                std::vector<std::vector<TrackObservation>> tracks, SceneModel scene,
+                                const CalibrationOptions& opt, CalibrationSummary res,
+                                SolveState* state = nullptr);
 
 }  // namespace omma::calib

@@ -39,15 +39,16 @@ struct BundleBlocks {
 // narrows the band to tube_tolerance_refined).
 BundleBlocks init_bundle_blocks(const Rig& nominal, const Rig& start,
                                 const std::vector<std::vector<TrackObservation>>& tracks, SceneModel scene,
-                                const CalibrationOptions& opt, const std::optional<std::array<double, 4>>& tube_axis);
+                                const CalibrationOptions& opt,
+                                const std::optional<std::array<double, 4>>& tube_axis);
 
 // The manifolds a pass's problem refers to (the problem must not own them).
 struct BundleManifolds {
   explicit BundleManifolds(const BundleBlocks& b);
-  ceres::SphereManifold<3> sphere3;            // far-field points
-  ceres::SphereManifold<4> sphere4;            // near-field homogeneous points
-  std::unique_ptr<ceres::Manifold> k, fcc;     // the intrinsics' held entries (null: none or all held)
-  ceres::SubsetManifold tube_offset_only;      // the tube's tilt held (CalibrationOptions::tube_tilt)
+  ceres::SphereManifold<3> sphere3;         // far-field points
+  ceres::SphereManifold<4> sphere4;         // near-field homogeneous points
+  std::unique_ptr<ceres::Manifold> k, fcc;  // the intrinsics' held entries (null: none or all held)
+  ceres::SubsetManifold tube_offset_only;   // the tube's tilt held (CalibrationOptions::tube_tilt)
 };
 
 // Builds one pass's problem (Problem::Options::manifold_ownership = DO_NOT_TAKE_OWNERSHIP): one

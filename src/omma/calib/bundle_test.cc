@@ -1,8 +1,7 @@
 // The bundle adjustment's problem builder (bundle_problem.h) on hand-made tracks.
-#include "omma/calib/bundle_problem.h"
-
 #include <gtest/gtest.h>
 
+#include "omma/calib/bundle_problem.h"
 #include "omma/design/prototype.h"
 
 namespace omma::calib::detail {

@@ -31,8 +31,10 @@ bool CalibrationOptions::IsValid(std::string* why) const {
   if (!subpixel.IsValid(&sub)) return fail("subpixel: " + sub);
   if (!dense_subpixel.IsValid(&sub)) return fail("dense_subpixel: " + sub);
   if (!(near_ratio > 0)) return fail("near_ratio must be > 0");
-  if (!(overlap_margin_deg >= 0 && overlap_margin_deg < 180)) return fail("overlap_margin_deg must be in [0, 180)");
-  if (radial_terms < 0 || radial_terms > 3) return fail(fmt::format("radial_terms must be 0..3, got {}", radial_terms));
+  if (!(overlap_margin_deg >= 0 && overlap_margin_deg < 180))
+    return fail("overlap_margin_deg must be in [0, 180)");
+  if (radial_terms < 0 || radial_terms > 3)
+    return fail(fmt::format("radial_terms must be 0..3, got {}", radial_terms));
   if (loss != "auto" && loss != "huber" && loss != "cauchy" && loss != "none")
     return fail("loss must be auto, huber, cauchy or none, got '" + loss + "'");
   if (!(loss_scale_px > 0) || !(outlier_px > 0) || !(refine_outlier_px > 0))
@@ -40,13 +42,15 @@ bool CalibrationOptions::IsValid(std::string* why) const {
   if (!(prior_rotation_deg >= 0) || !(prior_mean_focal >= 0))
     return fail("prior_rotation_deg and prior_mean_focal must be >= 0");
   if (refine_rounds < 0 || dense_rounds < 0) return fail("refine_rounds and dense_rounds must be >= 0");
-  if (!(refine_min_fraction >= 0 && refine_min_fraction <= 1)) return fail("refine_min_fraction must be in [0, 1]");
+  if (!(refine_min_fraction >= 0 && refine_min_fraction <= 1))
+    return fail("refine_min_fraction must be in [0, 1]");
   if (dense_neighbours < 1) return fail("dense_neighbours must be >= 1");
   if (!(dense_max_gap_px > 0) || !(dense_weight_floor > 0) || !(dense_reference_weight > 0))
     return fail("dense_max_gap_px, dense_weight_floor and dense_reference_weight must be > 0");
   if (!(tube_diameter_mm >= 0) || !std::isfinite(tube_diameter_mm))
     return fail("tube_diameter_mm must be a diameter in mm (> 0), or 0 for none");
-  if (!(tube_tolerance > 0 && tube_tolerance < 1) || !(tube_tolerance_refined > 0 && tube_tolerance_refined < 1))
+  if (!(tube_tolerance > 0 && tube_tolerance < 1) ||
+      !(tube_tolerance_refined > 0 && tube_tolerance_refined < 1))
     return fail("tube_tolerance and tube_tolerance_refined must be in (0, 1)");
   if (max_iterations < 1) return fail("max_iterations must be >= 1");
   if (min_observations < 0) return fail("min_observations must be >= 0");
@@ -58,8 +62,9 @@ namespace {
 
 // Step 2 of calibrate_rig: matches between the overlapping cameras (pms), the scene model (auto: the
 // consensus over all pairs) under which every pair keeps its inliers, and the counts in res.
-SceneModel match_pairs(const Rig& nominal, const std::vector<CameraFeatures>& feats, const CalibrationOptions& opt,
-                       std::vector<PairMatches>& pms, CalibrationSummary& res) {
+SceneModel match_pairs(const Rig& nominal, const std::vector<CameraFeatures>& feats,
+                       const CalibrationOptions& opt, std::vector<PairMatches>& pms,
+                       CalibrationSummary& res) {
   const auto pairs = overlapping_pairs(nominal, deg2rad(opt.overlap_margin_deg));
   res.pairs = static_cast<int>(pairs.size());
   long rot_total = 0, ess_total = 0;
@@ -78,8 +83,8 @@ SceneModel match_pairs(const Rig& nominal, const std::vector<CameraFeatures>& fe
   if (scene == SceneModel::kAuto) {
     // Parallax shows as matches that no rotation explains but an essential matrix does.
     scene = ess_total > opt.near_ratio * rot_total ? SceneModel::kNear : SceneModel::kFar;
-    spdlog::info("calibrate: consensus over all pairs: rotation-only {}, essential matrix {} -> {} scene", rot_total,
-                 ess_total, to_string(scene));
+    spdlog::info("calibrate: consensus over all pairs: rotation-only {}, essential matrix {} -> {} scene",
+                 rot_total, ess_total, to_string(scene));
     // All pairs use the one chosen model.
     for (auto& pm : pms) pm.choose(scene, opt.match.min_inliers);
   } else {
@@ -88,10 +93,13 @@ SceneModel match_pairs(const Rig& nominal, const std::vector<CameraFeatures>& fe
   res.scene = scene;
   if (scene == SceneModel::kNear && opt.tube_diameter_mm <= 0) {
     res.warnings.push_back(
-        "near-field scene (parallax): scene points with camera positions fixed at nominal; the mean focal length "
+        "near-field scene (parallax): scene points with camera positions fixed at nominal; the mean focal "
+        "length "
         "is held at the nominal one (prior, the focal/depth ambiguity) and principal point trades against "
-        "rotation (on the simulated colon: ~0.5 deg, ~0.7-1.1 % focal, ~2 px centre errors, panorama as good as "
-        "with the true rig); calibrate from several shots of the calibration tube (--tube) or a far-field scene "
+        "rotation (on the simulated colon: ~0.5 deg, ~0.7-1.1 % focal, ~2 px centre errors, panorama as good "
+        "as "
+        "with the true rig); calibrate from several shots of the calibration tube (--tube) or a far-field "
+        "scene "
         "for accurate intrinsics");
     spdlog::warn("calibrate: {}", res.warnings.back());
   }
@@ -103,8 +111,9 @@ SceneModel match_pairs(const Rig& nominal, const std::vector<CameraFeatures>& fe
 
 // The subpixel refinement rounds of calibrate_rig: align every observation (dense: new ones from
 // every keypoint), then solve again from the previous solution; stops with a warning when too few align.
-void refine_rounds(const Rig& nominal, const std::vector<cv::Mat>& frames, const std::vector<CameraFeatures>& feats,
-                   SceneModel scene, const CalibrationOptions& opt, SolveState& st, CalibrationSummary& res) {
+void refine_rounds(const Rig& nominal, const std::vector<cv::Mat>& frames,
+                   const std::vector<CameraFeatures>& feats, SceneModel scene, const CalibrationOptions& opt,
+                   SolveState& st, CalibrationSummary& res) {
   const int n = static_cast<int>(nominal.cameras.size());
   std::vector<cv::Mat> gray(n);
   const bool dense = scene == SceneModel::kNear && opt.dense_refine;
@@ -117,9 +126,10 @@ void refine_rounds(const Rig& nominal, const std::vector<cv::Mat>& frames, const
   for (int round = 0; round < rounds; ++round) {
     int attempted = 0, refined = 0;
     auto rtracks = dense ? dense_tracks(res.rig, gray, feats, st, opt, &attempted, &refined)
-                         : refine_tracks(res.rig, gray, st, scene == SceneModel::kNear, opt.subpixel, &attempted, &refined);
-    spdlog::info("calibrate: subpixel refinement round {}: {} of {} observations aligned, {} tracks", round + 1,
-                 refined, attempted, rtracks.size());
+                         : refine_tracks(res.rig, gray, st, scene == SceneModel::kNear, opt.subpixel,
+                                         &attempted, &refined);
+    spdlog::info("calibrate: subpixel refinement round {}: {} of {} observations aligned, {} tracks",
+                 round + 1, refined, attempted, rtracks.size());
     if (refined < opt.refine_min_fraction * attempted) {
       // Texture the alignment cannot lock onto (flat cells, repetitive patterns): keep the
       // unrefined solution rather than solve again from a few observations.
@@ -138,12 +148,13 @@ void refine_rounds(const Rig& nominal, const std::vector<cv::Mat>& frames, const
 }  // namespace
 
 CalibrationSummary calibrate_rig(const Rig& nominal, const std::vector<cv::Mat>& frames,
-                                const CalibrationOptions& opt) {
+                                 const CalibrationOptions& opt) {
   std::string why;
   if (!opt.IsValid(&why)) throw std::invalid_argument("calibrate: " + why);
   const int n = static_cast<int>(nominal.cameras.size());
   if (static_cast<int>(frames.size()) != n)
-    throw std::invalid_argument(fmt::format("calibrate: {} frames for a rig of {} cameras", frames.size(), n));
+    throw std::invalid_argument(
+        fmt::format("calibrate: {} frames for a rig of {} cameras", frames.size(), n));
   if (n < 2) throw std::invalid_argument("calibrate: the rig needs at least 2 cameras");
   for (int i = 0; i < n; ++i)
     if (frames[i].cols != nominal.cameras[i].in.width || frames[i].rows != nominal.cameras[i].in.height)
@@ -171,8 +182,8 @@ CalibrationSummary calibrate_rig(const Rig& nominal, const std::vector<cv::Mat>&
   {
     std::vector<int> hist(6, 0);
     for (const auto& t : tracks) ++hist[std::min<size_t>(t.size(), 5)];
-    spdlog::info("calibrate: {} tracks, by length 2: {}, 3: {}, 4: {}, 5+: {}", tracks.size(), hist[2], hist[3],
-                 hist[4], hist[5]);
+    spdlog::info("calibrate: {} tracks, by length 2: {}, 3: {}, 4: {}, 5+: {}", tracks.size(), hist[2],
+                 hist[3], hist[4], hist[5]);
   }
   SolveState st;
   res = solve_tracks(nominal, nominal, std::move(tracks), scene, opt, std::move(res), &st);
@@ -185,14 +196,17 @@ std::vector<cv::Mat> average_frame_sets(const std::vector<std::vector<cv::Mat>>&
   const size_t n = sets[0].size();
   for (size_t s = 0; s < sets.size(); ++s) {
     if (sets[s].size() != n)
-      throw std::invalid_argument(fmt::format("shots differ: shot {} has {} frames, shot 0 has {}", s, sets[s].size(), n));
+      throw std::invalid_argument(
+          fmt::format("shots differ: shot {} has {} frames, shot 0 has {}", s, sets[s].size(), n));
     for (size_t i = 0; i < n; ++i) {
       const cv::Mat& f = sets[s][i];
       if (f.type() != CV_8UC3 && f.type() != CV_16UC3)
-        throw std::invalid_argument(fmt::format("shot {}, camera index {}: not an 8- or 16-bit colour frame", s, i));
+        throw std::invalid_argument(
+            fmt::format("shot {}, camera index {}: not an 8- or 16-bit colour frame", s, i));
       if (f.size() != sets[0][i].size())
-        throw std::invalid_argument(fmt::format("shots differ: camera index {} is {}x{} in shot {} but {}x{} in shot 0",
-                                                i, f.cols, f.rows, s, sets[0][i].cols, sets[0][i].rows));
+        throw std::invalid_argument(
+            fmt::format("shots differ: camera index {} is {}x{} in shot {} but {}x{} in shot 0", i, f.cols,
+                        f.rows, s, sets[0][i].cols, sets[0][i].rows));
     }
   }
   if (sets.size() == 1) return sets[0];
@@ -205,7 +219,8 @@ std::vector<cv::Mat> average_frame_sets(const std::vector<std::vector<cv::Mat>>&
       cv::Mat enc(sum.size(), CV_16UC3);
       const float* src = sum.ptr<float>();
       uint16_t* dst = enc.ptr<uint16_t>();
-      for (size_t k = 0; k < sum.total() * 3; ++k) dst[k] = uint16_t(std::lround(65535.0f * linear_to_srgb(src[k])));
+      for (size_t k = 0; k < sum.total() * 3; ++k)
+        dst[k] = uint16_t(std::lround(65535.0f * linear_to_srgb(src[k])));
       out[size_t(i)] = enc;
     }
   });

@@ -89,42 +89,42 @@ struct CalibrationOptions {
   double overlap_margin_deg = 0;  // pairs need nominal cones intersecting by more than this
 
   bool estimate_rotation = true;
-  bool estimate_focal = true;     // fu, fv
-  bool estimate_center = true;    // cu, cv
-  int radial_terms = 1;           // how many radial coefficients to estimate: 0..3 = k1, k2, k5
+  bool estimate_focal = true;        // fu, fv
+  bool estimate_center = true;       // cu, cv
+  int radial_terms = 1;              // how many radial coefficients to estimate: 0..3 = k1, k2, k5
   bool estimate_tangential = false;  // k3, k4
-  bool share_focal = false;       // one fu, fv for all cameras
-  bool share_center = false;      // one cu, cv for all cameras
-  bool share_distortion = false;  // one k1..k5 for all cameras
+  bool share_focal = false;          // one fu, fv for all cameras
+  bool share_center = false;         // one cu, cv for all cameras
+  bool share_distortion = false;     // one k1..k5 for all cameras
 
-  std::string loss = "auto";      // "huber", "cauchy", "none" or "auto": Huber in the far field,
-                                  // Cauchy in the near field (see "Near-field focal ambiguity" above)
+  std::string loss = "auto";  // "huber", "cauchy", "none" or "auto": Huber in the far field,
+                              // Cauchy in the near field (see "Near-field focal ambiguity" above)
   double loss_scale_px = 1.0;
-  double outlier_px = 3.0;        // after the first solve, drop observations with a larger error
-  double prior_rotation_deg = 5;  // gauge prior (see above)
+  double outlier_px = 3.0;          // after the first solve, drop observations with a larger error
+  double prior_rotation_deg = 5;    // gauge prior (see above)
   double prior_mean_focal = 0.002;  // near field only: sigma (relative) of a prior pulling the MEAN
-                                  // of fu/fu_nominal (and fv) over the calibrated cameras to 1;
-                                  // 0 = off (see "Near-field focal ambiguity" above)
-  int refine_rounds = 1;          // subpixel refinement rounds after the first solve (0 = off):
-                                  // ECC patch alignment of every observation, then solve again
+                                    // of fu/fu_nominal (and fv) over the calibrated cameras to 1;
+                                    // 0 = off (see "Near-field focal ambiguity" above)
+  int refine_rounds = 1;            // subpixel refinement rounds after the first solve (0 = off):
+                                    // ECC patch alignment of every observation, then solve again
   SubpixelOptions subpixel;
   double refine_min_fraction = 0.5;  // fewer observations aligned: keep the unrefined solution
-                                  // (warning)
-  double refine_outlier_px = 1.0; // outlier_px of the solves on refined observations
-  bool dense_refine = true;       // near field: dense guided correspondences from every keypoint
-                                  // (see dense_tracks in refine.h) instead of the matched tracks
-  int dense_rounds = 2;           // near field with dense_refine: refinement rounds (instead of
-                                  // refine_rounds); the second aligns ~50 % more, from a better rig
+                                     // (warning)
+  double refine_outlier_px = 1.0;    // outlier_px of the solves on refined observations
+  bool dense_refine = true;          // near field: dense guided correspondences from every keypoint
+                                     // (see dense_tracks in refine.h) instead of the matched tracks
+  int dense_rounds = 2;              // near field with dense_refine: refinement rounds (instead of
+                                     // refine_rounds); the second aligns ~50 % more, from a better rig
   SubpixelOptions dense_subpixel = dense_subpixel_defaults();  // alignment options of dense_refine
-  int dense_neighbours = 8;       // scene points whose median depth places a candidate keypoint
-  double dense_max_gap_px = 40;   // candidates farther from any observed scene point are skipped
-  bool dense_weighting = true;    // whiten by the alignment covariance (AlignInfo)
-  double dense_weight_floor = 0.5;  // sigma floor, relative to the median sigma
+  int dense_neighbours = 8;           // scene points whose median depth places a candidate keypoint
+  double dense_max_gap_px = 40;       // candidates farther from any observed scene point are skipped
+  bool dense_weighting = true;        // whiten by the alignment covariance (AlignInfo)
+  double dense_weight_floor = 0.5;    // sigma floor, relative to the median sigma
   double dense_reference_weight = 1;  // weight of the reference observation (the patch centre)
   // The calibration tube (thesis §3.6, Fig. 3.12a; the simulator's tube scene): its known diameter.
   // Near field only: scene points within tube_tolerance (relative) of its wall, a cylinder about an
-  // axis near the dome's z axis whose offset (and with tube_tilt its tilt) is estimated with the rig, are constrained
-  // to it (two surface coordinates instead of a free 3D point), which fixes the depth scale (no
+  // axis near the dome's z axis whose offset (and with tube_tilt its tilt) is estimated with the rig, are
+  // constrained to it (two surface coordinates instead of a free 3D point), which fixes the depth scale (no
   // mean-focal prior is then needed or used) and removes the near field's flat directions (see
   // "Near-field focal ambiguity" and docs/near_field_calibration.md). 0 = off (free points).
   double tube_diameter_mm = 0;
@@ -135,10 +135,10 @@ struct CalibrationOptions {
   bool tube_tilt = false;
   double tube_tolerance = 0.15;          // first solve (from the nominal rig)
   double tube_tolerance_refined = 0.03;  // solves after the first
-  int max_iterations = 50;        // Ceres iterations per solve
-  int min_observations = 30;      // a camera with fewer keeps its nominal values (warning)
-  int threads = 2;                // Ceres threads; near-field results vary with the summation order
-                                  // of a multi-threaded solve, 1 = reproducible
+  int max_iterations = 50;               // Ceres iterations per solve
+  int min_observations = 30;             // a camera with fewer keeps its nominal values (warning)
+  int threads = 2;                       // Ceres threads; near-field results vary with the summation order
+                                         // of a multi-threaded solve, 1 = reproducible
 
   // False (with the reason in *why) when a value lies outside the range the code relies on.
   bool IsValid(std::string* why = nullptr) const;
@@ -146,22 +146,22 @@ struct CalibrationOptions {
 
 struct CameraReport {
   int id = 0;
-  double rms_px = 0;     // reprojection RMS over this camera's observations
-  int matches = 0;       // observations (feature track members) of this camera used in the fit
+  double rms_px = 0;  // reprojection RMS over this camera's observations
+  int matches = 0;    // observations (feature track members) of this camera used in the fit
   bool calibrated = true;
 };
 
 struct CalibrationSummary {
-  Rig rig;                       // the calibrated rig (uncalibrated cameras keep nominal values)
+  Rig rig;                              // the calibrated rig (uncalibrated cameras keep nominal values)
   SceneModel scene = SceneModel::kFar;  // the model used
-  int matches = 0;               // pairwise matches after the ratio test, all pairs
-  int inliers = 0;               // pairwise matches after RANSAC
-  int pairs = 0;                 // camera pairs matched (nominal cones intersect)
-  int tracks = 0;                // scene points in the bundle adjustment
-  int observations = 0;          // residual blocks in the final solve
-  int rejected = 0;              // observations dropped as outliers after the first solve
-  double rms_px = 0;             // final reprojection RMS, pixels
-  double initial_rms_px = 0;     // RMS with the nominal rig (same observations), pixels
+  int matches = 0;                      // pairwise matches after the ratio test, all pairs
+  int inliers = 0;                      // pairwise matches after RANSAC
+  int pairs = 0;                        // camera pairs matched (nominal cones intersect)
+  int tracks = 0;                       // scene points in the bundle adjustment
+  int observations = 0;                 // residual blocks in the final solve
+  int rejected = 0;                     // observations dropped as outliers after the first solve
+  double rms_px = 0;                    // final reprojection RMS, pixels
+  double initial_rms_px = 0;            // RMS with the nominal rig (same observations), pixels
   std::vector<CameraReport> per_camera;
   std::vector<int> uncalibrated_ids;  // cameras with too few matches (kept nominal)
   std::vector<std::string> warnings;
@@ -170,7 +170,7 @@ struct CalibrationSummary {
 // Throws std::runtime_error if nothing can be calibrated (e.g. textureless frames: no camera has
 // enough matches). `frames` are in rig order (see omma/core/frames.h load_frames).
 CalibrationSummary calibrate_rig(const Rig& nominal, const std::vector<cv::Mat>& frames,
-                                const CalibrationOptions& opt = {});
+                                 const CalibrationOptions& opt = {});
 
 // Several shots of a static scene: the frame sets averaged in linear light (sRGB decoded,
 // averaged, encoded again as 16-bit sRGB, CV_16UC3), which divides the sensor noise by sqrt(shots)
@@ -178,13 +178,13 @@ CalibrationSummary calibrate_rig(const Rig& nominal, const std::vector<cv::Mat>&
 // or in a frame's size or are not 8/16-bit colour images (names the set and camera index).
 std::vector<cv::Mat> average_frame_sets(const std::vector<std::vector<cv::Mat>>& sets);
 
-
 // The bundle adjustment of calibrate_rig alone, on given feature tracks (one scene point per track,
 // scene kFar or kNear; tracks with fewer than 2 observations of calibrated cameras are ignored).
 // Used to check the model: tracks made by projecting known points through a rig must give that
 // rig back. Throws std::invalid_argument on a bad camera index or kAuto, std::runtime_error if
 // fewer than 2 cameras have min_observations.
-CalibrationSummary calibrate_from_tracks(const Rig& nominal, std::vector<std::vector<TrackObservation>> tracks,
-                                        SceneModel scene, const CalibrationOptions& opt = {});
+CalibrationSummary calibrate_from_tracks(const Rig& nominal,
+                                         std::vector<std::vector<TrackObservation>> tracks, SceneModel scene,
+                                         const CalibrationOptions& opt = {});
 
 }  // namespace omma::calib

@@ -7,17 +7,16 @@
 #include <random>
 
 #include <gtest/gtest.h>
-
 #include <opencv2/imgproc.hpp>
 
 #include "omma/calib/photometric.h"
 #include "omma/calib/rig_diff.h"
-#include "omma/testing/test_scenes.h"
 #include "omma/design/prototype.h"
 #include "omma/pano/quality.h"
 #include "omma/pano/stitch.h"
 #include "omma/sim/perturb.h"
 #include "omma/sim/simulate.h"
+#include "omma/testing/test_scenes.h"
 
 namespace omma::calib {
 namespace {
@@ -31,7 +30,8 @@ struct Outcome {
   double psnr_true = 0, psnr_calibrated = 0, psnr_nominal = 0;
 };
 
-double stitch_psnr(const Rig& rig, const std::vector<cv::Mat>& frames, const cv::Mat& truth, const cv::Mat& mask) {
+double stitch_psnr(const Rig& rig, const std::vector<cv::Mat>& frames, const cv::Mat& truth,
+                   const cv::Mat& mask) {
   pano::StitchOptions so;
   so.method = pano::Method::kNearest;
   so.grid = kGrid;
@@ -80,11 +80,11 @@ Outcome run_simulated(const std::string& scene_spec) {
       "  nn PSNR vs truth: true rig %.2f dB, calibrated %.2f dB, nominal %.2f dB\n",
       scene_spec.c_str(), o.result.matches, o.result.inliers, o.result.tracks, o.result.observations,
       o.result.rejected, o.result.rms_px, o.result.initial_rms_px, o.result.uncalibrated_ids.size(),
-      o.after.orientation_error_deg.median, o.after.orientation_error_deg.max, o.before.orientation_error_deg.median,
-      o.after.focal_error_rel.median, o.after.focal_error_rel.max, o.before.focal_error_rel.median,
-      o.after.center_error_px.median, o.after.center_error_px.max, o.before.center_error_px.median,
-      o.after.ray_error_deg.median, o.after.ray_error_deg.max, o.before.ray_error_deg.median, o.psnr_true,
-      o.psnr_calibrated, o.psnr_nominal);
+      o.after.orientation_error_deg.median, o.after.orientation_error_deg.max,
+      o.before.orientation_error_deg.median, o.after.focal_error_rel.median, o.after.focal_error_rel.max,
+      o.before.focal_error_rel.median, o.after.center_error_px.median, o.after.center_error_px.max,
+      o.before.center_error_px.median, o.after.ray_error_deg.median, o.after.ray_error_deg.max,
+      o.before.ray_error_deg.median, o.psnr_true, o.psnr_calibrated, o.psnr_nominal);
   return o;
 }
 
@@ -134,13 +134,13 @@ TEST(Calibrate, ColonNearFieldCalibration) {
   const Outcome o = run_simulated("colon");
   EXPECT_EQ(o.result.scene, SceneModel::kNear);
   EXPECT_TRUE(o.result.uncalibrated_ids.empty());
-  EXPECT_GT(o.result.tracks, 4000);                              // the dense refinement's tracks
-  EXPECT_LT(o.result.rms_px, 0.2);                               // target 0.5 px
-  EXPECT_GT(o.psnr_calibrated, o.psnr_true - 0.5);               // the panorama target
+  EXPECT_GT(o.result.tracks, 4000);                 // the dense refinement's tracks
+  EXPECT_LT(o.result.rms_px, 0.2);                  // target 0.5 px
+  EXPECT_GT(o.psnr_calibrated, o.psnr_true - 0.5);  // the panorama target
   EXPECT_GT(o.psnr_calibrated, o.psnr_nominal + 0.5);
-  EXPECT_LT(o.after.orientation_error_deg.median, 0.75);         // target 0.1 deg: not met
+  EXPECT_LT(o.after.orientation_error_deg.median, 0.75);  // target 0.1 deg: not met
   EXPECT_LT(o.after.orientation_error_deg.max, 1.3);
-  EXPECT_LT(o.after.focal_error_rel.median, 0.016);              // target 0.5 %: not met
+  EXPECT_LT(o.after.focal_error_rel.median, 0.016);  // target 0.5 %: not met
   EXPECT_LT(o.after.center_error_px.median, 0.7 * o.before.center_error_px.median);
   // What the stitch sees: the rays of the calibrated cameras (rig_diff.h), a quarter of the nominal
   // rig's ray error or better.
@@ -150,7 +150,8 @@ TEST(Calibrate, ColonNearFieldCalibration) {
 // The thesis's calibration (§3.6): several shots of the static, well-lit 35 mm calibration tube,
 // averaged, flat-fielded with shots of a white target, wall points constrained to the tube
 // (CalibrationOptions::tube_diameter_mm). The full figures (8 shots, three seeds: every accuracy
-// target met) come from docs/results/tube_calibration.sh (docs/results/tube_calibration.md); this test keeps CI shorter
+// target met) come from docs/results/tube_calibration.sh (docs/results/tube_calibration.md); this test keeps
+// CI shorter
 // (~30 s of CPU) with 2 shots, one dense round and SIFT without upsampling. Measured (seed 1):
 // orientation median 0.19 deg (max 0.30), focal 0.33 % (max 0.61), centre 0.59 px, RMS 0.058 px
 // (with SIFT upsampled: 0.16 / 0.33 deg at 42 s; 8 shots, full settings: 0.089 / 0.165 deg).
@@ -178,13 +179,17 @@ TEST(Calibrate, CalibrationTubeFewShots) {
   opt.features.upsample = 1;  // SIFT on the frames as they are: a quarter of the work
   const CalibrationSummary r = calibrate_rig(nominal, frames, opt);
   const RigDiff d = diff_rigs(r.rig, tube.true_rig);
-  std::printf("tube, 2 shots: orientation median %.3f max %.3f deg, focal median %.4f max %.4f, centre median %.3f px, "
-              "RMS %.3f px, %d tracks\n", d.orientation_error_deg.median, d.orientation_error_deg.max,
-              d.focal_error_rel.median, d.focal_error_rel.max, d.center_error_px.median, r.rms_px, r.tracks);
+  std::printf(
+      "tube, 2 shots: orientation median %.3f max %.3f deg, focal median %.4f max %.4f, centre median %.3f "
+      "px, "
+      "RMS %.3f px, %d tracks\n",
+      d.orientation_error_deg.median, d.orientation_error_deg.max, d.focal_error_rel.median,
+      d.focal_error_rel.max, d.center_error_px.median, r.rms_px, r.tracks);
   EXPECT_TRUE(r.uncalibrated_ids.empty());
   // Measured 0.158 deg (max 0.260), 0.32 %, 0.55 px (0.19 / 0.30 deg with the tube's tilt estimated).
-  EXPECT_LT(d.orientation_error_deg.median, 0.25);  // target 0.1 with 8 shots (met there: docs/results/tube_calibration.md)
-  EXPECT_LT(d.orientation_error_deg.max, 0.45);     // target 0.3 with 8 shots
+  EXPECT_LT(d.orientation_error_deg.median,
+            0.25);  // target 0.1 with 8 shots (met there: docs/results/tube_calibration.md)
+  EXPECT_LT(d.orientation_error_deg.max, 0.45);  // target 0.3 with 8 shots
   EXPECT_LT(d.focal_error_rel.median, 0.005);
   EXPECT_LT(d.center_error_px.median, 1.0);
   EXPECT_LT(r.rms_px, 0.3);
@@ -196,7 +201,8 @@ TEST(Calibrate, CalibrationTubeFewShots) {
 // the true rig back exactly when no prior biases it; with 0.2 px noise (SIFT's level) the same
 // geometry only determines the rig to ~0.5 deg / ~1 % / ~2 px: the colon's limit is conditioning
 // (5 mm baseline against ~20 mm depth), not a model mismatch.
-std::vector<std::vector<TrackObservation>> tube_tracks(const Rig& rig, int points, double noise_px, unsigned seed) {
+std::vector<std::vector<TrackObservation>> tube_tracks(const Rig& rig, int points, double noise_px,
+                                                       unsigned seed) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> uz(-40, 40), uphi(0, 2 * kPi);
   std::normal_distribution<double> g(0, 1);
@@ -222,18 +228,22 @@ TEST(Calibrate, NearFieldModelRecoversTrueRigFromPerfectTracks) {
   CalibrationOptions opt;
   opt.prior_rotation_deg = 0;  // near field: the fixed camera positions fix the gauge
   opt.prior_mean_focal = 0;
-  const CalibrationSummary r = calibrate_from_tracks(nominal, tube_tracks(truth, 3000, 0, 3), SceneModel::kNear, opt);
+  const CalibrationSummary r =
+      calibrate_from_tracks(nominal, tube_tracks(truth, 3000, 0, 3), SceneModel::kNear, opt);
   const RigDiff d = diff_rigs(r.rig, truth);
   EXPECT_LT(r.rms_px, 1e-3);
   EXPECT_LT(d.orientation_error_deg.max, 1e-3);
   EXPECT_LT(d.focal_error_rel.max, 1e-5);
   EXPECT_LT(d.center_error_px.max, 1e-2);
   // The same with SIFT-like noise: the conditioning limit (numbers in the comment above).
-  const CalibrationSummary rn = calibrate_from_tracks(nominal, tube_tracks(truth, 3000, 0.2, 3), SceneModel::kNear, opt);
+  const CalibrationSummary rn =
+      calibrate_from_tracks(nominal, tube_tracks(truth, 3000, 0.2, 3), SceneModel::kNear, opt);
   const RigDiff dn = diff_rigs(rn.rig, truth, /*align=*/true);  // as the accuracy tests
-  std::printf("perfect tracks: orientation %.5f deg, focal %.6f, centre %.4f px; 0.2 px noise: %.3f deg, %.4f, %.3f px\n",
-              d.orientation_error_deg.median, d.focal_error_rel.median, d.center_error_px.median,
-              dn.orientation_error_deg.median, dn.focal_error_rel.median, dn.center_error_px.median);
+  std::printf(
+      "perfect tracks: orientation %.5f deg, focal %.6f, centre %.4f px; 0.2 px noise: %.3f deg, %.4f, %.3f "
+      "px\n",
+      d.orientation_error_deg.median, d.focal_error_rel.median, d.center_error_px.median,
+      dn.orientation_error_deg.median, dn.focal_error_rel.median, dn.center_error_px.median);
   EXPECT_LT(dn.orientation_error_deg.median, 1.0);
   EXPECT_GT(dn.orientation_error_deg.median, 0.1);  // documents that 0.2 px noise is too much for 0.1 deg
 }
@@ -299,7 +309,8 @@ TEST(Options, MatchOptionsRefuseBadValues) {
   o.ratio = 1.5;
   EXPECT_FALSE(o.IsValid());
   const Rig rig = design::thesis_prototype_rig();
-  EXPECT_NE(refusal([&] { match_pair(rig, 0, 1, {}, {}, SceneModel::kFar, o); }).find("ratio"), std::string::npos);
+  EXPECT_NE(refusal([&] { match_pair(rig, 0, 1, {}, {}, SceneModel::kFar, o); }).find("ratio"),
+            std::string::npos);
 }
 
 TEST(Options, CalibrationOptionsRefuseBadValues) {

@@ -33,7 +33,8 @@ bool MatchOptions::IsValid(std::string* why) const {
     return false;
   };
   if (!(ratio > 0 && ratio <= 1)) return fail("ratio must be in (0, 1]");
-  if (!(overlap_margin_deg >= 0 && overlap_margin_deg < 180)) return fail("overlap_margin_deg must be in [0, 180)");
+  if (!(overlap_margin_deg >= 0 && overlap_margin_deg < 180))
+    return fail("overlap_margin_deg must be in [0, 180)");
   if (!(ransac_threshold_px > 0)) return fail("ransac_threshold_px must be > 0");
   if (ransac_iterations < 1) return fail("ransac_iterations must be >= 1");
   if (min_inliers < 1) return fail("min_inliers must be >= 1");
@@ -62,7 +63,8 @@ CameraFeatures detect(const cv::Mat& gray_in, const FeatureOptions& opt, bool cl
   const double border = opt.border_px * up;
   for (size_t i = 0; i < kps.size(); ++i) {
     const auto& p = kps[i].pt;
-    if (p.x < border || p.y < border || p.x > gray.cols - 1 - border || p.y > gray.rows - 1 - border) continue;
+    if (p.x < border || p.y < border || p.x > gray.cols - 1 - border || p.y > gray.rows - 1 - border)
+      continue;
     keep.push_back(static_cast<int>(i));
     // OpenCV's SIFT works on the image upsampled 2x (resize INTER_LINEAR: upsampled pixel i looks
     // at source i/2 - 0.25 in integer-centre coordinates) and reports pt = i/2, so the source
@@ -115,9 +117,12 @@ SceneModel parse_scene_model(const std::string& name) {
 
 std::string to_string(SceneModel m) {
   switch (m) {
-    case SceneModel::kFar: return "far";
-    case SceneModel::kNear: return "near";
-    default: return "auto";
+    case SceneModel::kFar:
+      return "far";
+    case SceneModel::kNear:
+      return "near";
+    default:
+      return "auto";
   }
 }
 
@@ -133,8 +138,8 @@ Mat3 fit_rotation(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
 namespace {
 
 // Ratio test + mutual nearest neighbours between the keypoint subsets ia (of a) and ib (of b).
-std::vector<Match> ratio_matches(const CameraFeatures& fa, const CameraFeatures& fb, const std::vector<int>& ia,
-                                 const std::vector<int>& ib, double ratio) {
+std::vector<Match> ratio_matches(const CameraFeatures& fa, const CameraFeatures& fb,
+                                 const std::vector<int>& ia, const std::vector<int>& ib, double ratio) {
   std::vector<Match> out;
   if (ia.size() < 2 || ib.size() < 2) return out;
   cv::Mat da(static_cast<int>(ia.size()), fa.descriptors.cols, CV_32F);
@@ -156,7 +161,8 @@ std::vector<Match> ratio_matches(const CameraFeatures& fa, const CameraFeatures&
 
 // Keypoints of camera `from` whose nominal direction falls inside the cone of camera `to`,
 // widened by `margin` radians (the overlap region; everything else cannot match).
-std::vector<int> in_overlap(const CameraModel& from, const CameraFeatures& f, const CameraModel& to, double margin) {
+std::vector<int> in_overlap(const CameraModel& from, const CameraFeatures& f, const CameraModel& to,
+                            double margin) {
   std::vector<int> idx;
   const double cos_lim = std::cos(std::min(kPi / 2, to.in.aov / 2 + margin));
   for (size_t i = 0; i < f.px.size(); ++i)
@@ -281,7 +287,9 @@ std::vector<std::vector<TrackObservation>> build_tracks(const std::vector<Camera
   std::map<int, std::vector<int>> groups;
   for (int g = 0; g < offset[n]; ++g)
     if (used[g]) groups[uf.find(g)].push_back(g);
-  auto cam_of = [&](int g) { return static_cast<int>(std::upper_bound(offset.begin(), offset.end(), g) - offset.begin()) - 1; };
+  auto cam_of = [&](int g) {
+    return static_cast<int>(std::upper_bound(offset.begin(), offset.end(), g) - offset.begin()) - 1;
+  };
   std::vector<std::vector<TrackObservation>> tracks;
   for (const auto& [root, members] : groups) {
     std::vector<TrackObservation> t;

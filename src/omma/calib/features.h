@@ -23,20 +23,20 @@
 namespace omma::calib {
 
 struct CameraFeatures {
-  std::vector<Vec2> px;   // continuous pixel coordinates (centres at integer + 0.5)
-  cv::Mat descriptors;    // CV_32F, one row per keypoint (SIFT, 128 columns)
+  std::vector<Vec2> px;  // continuous pixel coordinates (centres at integer + 0.5)
+  cv::Mat descriptors;   // CV_32F, one row per keypoint (SIFT, 128 columns)
 };
 
 struct FeatureOptions {
-  int max_features = 2000;        // per camera (SIFT nfeatures)
+  int max_features = 2000;           // per camera (SIFT nfeatures)
   double contrast_threshold = 0.01;  // SIFT contrast threshold (lower: more features on small images)
-  int border_px = 2;              // drop keypoints this close to the image border
-  int upsample = 2;               // run SIFT on the image upsampled this much (more, finer
-                                  // keypoints on 250x250 frames; 1 = off)
-  double blur_sigma = 0;          // Gaussian pre-smoothing (pixels, 0: off) against sensor noise
-  double clahe_clip = 3.0;        // contrast-limited histogram equalisation (0: off), applied only
-  int clahe_below = 200;          // when plain SIFT finds fewer keypoints than this: brings out
-                                  // texture in dark, low-contrast views (night sky)
+  int border_px = 2;                 // drop keypoints this close to the image border
+  int upsample = 2;                  // run SIFT on the image upsampled this much (more, finer
+                                     // keypoints on 250x250 frames; 1 = off)
+  double blur_sigma = 0;             // Gaussian pre-smoothing (pixels, 0: off) against sensor noise
+  double clahe_clip = 3.0;           // contrast-limited histogram equalisation (0: off), applied only
+  int clahe_below = 200;             // when plain SIFT finds fewer keypoints than this: brings out
+                                     // texture in dark, low-contrast views (night sky)
 
   // False (with the reason in *why) when a value lies outside the range the code relies on.
   bool IsValid(std::string* why = nullptr) const;
@@ -60,7 +60,7 @@ struct MatchOptions {
                                    // assembly errors of the nominal rig)
   double ransac_threshold_px = 5;  // inlier threshold, pixels (converted to angle with the focal)
   int ransac_iterations = 500;
-  int min_inliers = 8;             // fewer: the pair is dropped
+  int min_inliers = 8;  // fewer: the pair is dropped
   unsigned seed = 1;
 
   // False (with the reason in *why) when a value lies outside the range the code relies on.
@@ -72,12 +72,12 @@ struct Match {
 };
 
 struct PairMatches {
-  int cam_a = 0, cam_b = 0;       // rig indices
-  int putative = 0;               // after the ratio test (mutual nearest neighbours)
-  std::vector<Match> inliers;     // after RANSAC, with the model asked for (auto: see match_pair)
+  int cam_a = 0, cam_b = 0;    // rig indices
+  int putative = 0;            // after the ratio test (mutual nearest neighbours)
+  std::vector<Match> inliers;  // after RANSAC, with the model asked for (auto: see match_pair)
   std::vector<Match> rotation_set, essential_set;  // consensus sets of both models
-  int rotation_inliers = 0;       // consensus of the rotation-only model
-  int essential_inliers = 0;      // consensus of the essential-matrix model (near field), 0 if not run
+  int rotation_inliers = 0;                        // consensus of the rotation-only model
+  int essential_inliers = 0;         // consensus of the essential-matrix model (near field), 0 if not run
   Mat3 rotation = Mat3::Identity();  // far-field model: d_b = rotation * d_a (dome frame, nominal)
   // True when the essential-matrix consensus is clearly larger (the pair shows parallax).
   bool prefers_near() const { return essential_inliers > 1.3 * rotation_inliers + 5; }

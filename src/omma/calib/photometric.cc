@@ -39,17 +39,18 @@ void check_sets(const Rig& rig, const std::vector<std::vector<cv::Mat>>& sets, c
   if (sets.empty()) throw std::invalid_argument(fmt::format("{}: no frame sets", what));
   for (size_t s = 0; s < sets.size(); ++s) {
     if (sets[s].size() != rig.cameras.size())
-      throw std::invalid_argument(fmt::format("{}: frame set {} has {} frames for a rig of {} cameras", what, s,
-                                              sets[s].size(), rig.cameras.size()));
+      throw std::invalid_argument(fmt::format("{}: frame set {} has {} frames for a rig of {} cameras", what,
+                                              s, sets[s].size(), rig.cameras.size()));
     for (size_t i = 0; i < rig.cameras.size(); ++i) {
       const cv::Mat& f = sets[s][i];
       const RigCamera& c = rig.cameras[i];
       if (f.type() != CV_8UC3 && f.type() != CV_16UC3)
-        throw std::invalid_argument(fmt::format("{}: frame of camera {} (set {}) is not an 8- or 16-bit colour image",
-                                                what, c.id, s));
+        throw std::invalid_argument(fmt::format(
+            "{}: frame of camera {} (set {}) is not an 8- or 16-bit colour image", what, c.id, s));
       if (f.cols != c.in.width || f.rows != c.in.height)
-        throw std::invalid_argument(fmt::format("{}: frame of camera {} (set {}) is {}x{}, the rig says {}x{}", what,
-                                                c.id, s, f.cols, f.rows, c.in.width, c.in.height));
+        throw std::invalid_argument(
+            fmt::format("{}: frame of camera {} (set {}) is {}x{}, the rig says {}x{}", what, c.id, s, f.cols,
+                        f.rows, c.in.width, c.in.height));
     }
   }
 }
@@ -69,7 +70,8 @@ Prepared prepare(const cv::Mat& frame, const PhotometricOptions& o) {
   cv::log(clipped, p.log);
   // Saturated or black pixels (raw, before smoothing), grown by the smoothing's reach.
   cv::Mat lo, hi, bad;
-  cv::inRange(lin, cv::Scalar::all(o.min_signal), cv::Scalar::all(o.max_signal), lo);  // 255 where all in range
+  cv::inRange(lin, cv::Scalar::all(o.min_signal), cv::Scalar::all(o.max_signal),
+              lo);  // 255 where all in range
   cv::bitwise_not(lo, bad);
   const int grow = int(std::ceil(2 * o.smooth_sigma_px)) + 1;
   cv::dilate(bad, bad, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * grow + 1, 2 * grow + 1)));
@@ -88,13 +90,14 @@ Prepared prepare(const cv::Mat& frame, const PhotometricOptions& o) {
 
 struct Sample {
   int a = 0, b = 0;
-  float la[3], lb[3];  // smoothed log signal
+  float la[3], lb[3];     // smoothed log signal
   double qa = 0, qb = 0;  // tan^2 of the ray angle in each camera
 };
 
 cv::Vec3f bilinear(const cv::Mat& m, const Vec2& px) {
   const double x = px.x() - 0.5, y = px.y() - 0.5;  // pixel-centre convention -> sample grid
-  const int x0 = std::clamp(int(std::floor(x)), 0, m.cols - 2), y0 = std::clamp(int(std::floor(y)), 0, m.rows - 2);
+  const int x0 = std::clamp(int(std::floor(x)), 0, m.cols - 2),
+            y0 = std::clamp(int(std::floor(y)), 0, m.rows - 2);
   const float ax = float(std::clamp(x - x0, 0.0, 1.0)), ay = float(std::clamp(y - y0, 0.0, 1.0));
   const cv::Vec3f* r0 = m.ptr<cv::Vec3f>(y0);
   const cv::Vec3f* r1 = m.ptr<cv::Vec3f>(y0 + 1);
@@ -156,10 +159,12 @@ bool PhotometricOptions::IsValid(std::string* why) const {
   if (!(smooth_sigma_px >= 0 && smooth_sigma_px <= 20)) return fail("smooth_sigma_px must be in [0, 20]");
   if (!(min_signal >= 0 && max_signal <= 1 && min_signal < max_signal))
     return fail("need 0 <= min_signal < max_signal <= 1");
-  if (!(registration_px > 0) || !(max_log_change > 0)) return fail("registration_px and max_log_change must be > 0");
+  if (!(registration_px > 0) || !(max_log_change > 0))
+    return fail("registration_px and max_log_change must be > 0");
   if (!(loss_scale > 0)) return fail("loss_scale must be > 0");
   if (!(noise_signal >= 0)) return fail("noise_signal must be >= 0");
-  if (min_samples < 1 || max_samples_per_pair < 10) return fail("min_samples >= 1, max_samples_per_pair >= 10");
+  if (min_samples < 1 || max_samples_per_pair < 10)
+    return fail("min_samples >= 1, max_samples_per_pair >= 10");
   if (threads < 1 || max_iterations < 1) return fail("threads and max_iterations must be >= 1");
   return true;
 }
@@ -196,11 +201,12 @@ std::vector<cv::Mat> flat_field_frames(const std::vector<cv::Mat>& frames,
                                        const std::vector<std::vector<cv::Mat>>& flat_sets, double sigma_px) {
   for (const auto& set : flat_sets) {
     if (set.size() != frames.size())
-      throw std::invalid_argument(fmt::format("flat field: {} flat frames for {} frames", set.size(), frames.size()));
+      throw std::invalid_argument(
+          fmt::format("flat field: {} flat frames for {} frames", set.size(), frames.size()));
     for (size_t i = 0; i < frames.size(); ++i)
       if (set[i].size() != frames[i].size())
-        throw std::invalid_argument(fmt::format("flat field: flat frame {} is {}x{}, the frame is {}x{}", i, set[i].cols,
-                                                set[i].rows, frames[i].cols, frames[i].rows));
+        throw std::invalid_argument(fmt::format("flat field: flat frame {} is {}x{}, the frame is {}x{}", i,
+                                                set[i].cols, set[i].rows, frames[i].cols, frames[i].rows));
   }
   if (flat_sets.empty()) return frames;
   std::vector<cv::Mat> out(frames.size());
@@ -215,7 +221,8 @@ std::vector<cv::Mat> flat_field_frames(const std::vector<cv::Mat>& frames,
     for (int r = 0; r < lin.rows; ++r) {
       const float* src = lin.ptr<float>(r);
       uint16_t* dst = enc.ptr<uint16_t>(r);
-      for (int k = 0; k < lin.cols * 3; ++k) dst[k] = uint16_t(std::lround(65535.0f * linear_to_srgb(src[k])));
+      for (int k = 0; k < lin.cols * 3; ++k)
+        dst[k] = uint16_t(std::lround(65535.0f * linear_to_srgb(src[k])));
     }
     out[i] = enc;
   });
@@ -246,7 +253,8 @@ Photometric photometric_from_lens(const RigCamera& camera, const Lens& beta,
     double mx = 0;
     for (int r = 0; r < H; r += 2)
       for (int c = 0; c < W; c += 2)
-        mx = std::max(mx, std::abs(vignetting_falloff(p, W, H, c + 0.5, r + 0.5) / v_lens(c + 0.5, r + 0.5) - 1));
+        mx = std::max(mx,
+                      std::abs(vignetting_falloff(p, W, H, c + 0.5, r + 0.5) / v_lens(c + 0.5, r + 0.5) - 1));
     *max_error = mx;
   }
   return p;
@@ -287,7 +295,9 @@ PhotometricSummary calibrate_photometric(const Rig& rig, const std::vector<std::
               const Vec3 w = model[a].unproject(pa);
               if (w.dot(cb.frame.t) <= 0.1) continue;
               const auto pb = model[b].project(w);
-              if (!pb || pb->x() < 2 || pb->y() < 2 || pb->x() > cb.in.width - 2 || pb->y() > cb.in.height - 2) continue;
+              if (!pb || pb->x() < 2 || pb->y() < 2 || pb->x() > cb.in.width - 2 ||
+                  pb->y() > cb.in.height - 2)
+                continue;
               if (!usable_at(prep[b].usable, *pb)) continue;
               Sample s;
               s.a = a, s.b = b;
@@ -320,17 +330,20 @@ PhotometricSummary calibrate_photometric(const Rig& rig, const std::vector<std::
   }
   if (std::count(active.begin(), active.end(), 1) < 2)
     throw std::runtime_error(fmt::format(
-        "photometric calibration: too little overlap to calibrate ({} usable samples over {} camera pairs; every "
+        "photometric calibration: too little overlap to calibrate ({} usable samples over {} camera pairs; "
+        "every "
         "camera needs {}): are the frames dark, saturated or flat, or does the rig not match them?",
         samples.size(), res.pairs, o.min_samples));
-  samples.erase(std::remove_if(samples.begin(), samples.end(), [&](const Sample& s) { return !active[s.a] || !active[s.b]; }),
+  samples.erase(std::remove_if(samples.begin(), samples.end(),
+                               [&](const Sample& s) { return !active[s.a] || !active[s.b]; }),
                 samples.end());
   res.samples = static_cast<int>(samples.size());
   if (!res.uncalibrated_ids.empty()) {
     std::string ids;
     for (int id : res.uncalibrated_ids) ids += (ids.empty() ? "" : ", ") + std::to_string(id);
     res.warnings.push_back(fmt::format(
-        "cameras with fewer than {} usable overlap samples keep unit gains (and the lens's falloff): {}", o.min_samples, ids));
+        "cameras with fewer than {} usable overlap samples keep unit gains (and the lens's falloff): {}",
+        o.min_samples, ids));
     spdlog::warn("photometric: {}", res.warnings.back());
   }
 
@@ -358,7 +371,8 @@ PhotometricSummary calibrate_photometric(const Rig& rig, const std::vector<std::
       const double w = lo / std::sqrt(lo * lo + o.noise_signal * o.noise_signal);
       auto* cost = new ceres::AutoDiffCostFunction<OverlapCost, 3, 3, 3, kLensTerms>(
           new OverlapCost{{s.la[0], s.la[1], s.la[2]}, {s.lb[0], s.lb[1], s.lb[2]}, s.qa, s.qb, w});
-      problem.AddResidualBlock(cost, new ceres::CauchyLoss(o.loss_scale), lg[s.a].data(), lg[s.b].data(), beta.data());
+      problem.AddResidualBlock(cost, new ceres::CauchyLoss(o.loss_scale), lg[s.a].data(), lg[s.b].data(),
+                               beta.data());
     }
     auto* gauge = new GaugeCost;
     auto* gcost = new ceres::DynamicAutoDiffCostFunction<GaugeCost>(gauge);
@@ -396,8 +410,10 @@ PhotometricSummary calibrate_photometric(const Rig& rig, const std::vector<std::
   } catch (const RigError& e) {
     throw std::runtime_error(std::string("photometric calibration gave an invalid model: ") + e.what());
   }
-  spdlog::info("photometric: {} samples over {} pairs, RMS {:.4f} -> {:.4f} (log), lens falloff at the corners {:.3f}",
-               res.samples, res.pairs, res.initial_rms_log, res.rms_log, lens_falloff(beta.data(), 0.78));  // q = 0.78: the corners of the prototype's cameras
+  spdlog::info(
+      "photometric: {} samples over {} pairs, RMS {:.4f} -> {:.4f} (log), lens falloff at the corners {:.3f}",
+      res.samples, res.pairs, res.initial_rms_log, res.rms_log,
+      lens_falloff(beta.data(), 0.78));  // q = 0.78: the corners of the prototype's cameras
   return res;
 }
 
@@ -418,8 +434,10 @@ PhotometricSummary calibrate_flat_field(const Rig& rig, const std::vector<std::v
     cv::Mat mean;
     for (const auto& set : sets) {
       const cv::Mat lin = decode_linear(set[i]);
-      if (mean.empty()) mean = lin.clone();
-      else mean += lin;
+      if (mean.empty())
+        mean = lin.clone();
+      else
+        mean += lin;
     }
     mean /= double(sets.size());
     cv::Mat sm;
@@ -434,7 +452,8 @@ PhotometricSummary calibrate_flat_field(const Rig& rig, const std::vector<std::v
       for (int c = 1; c < cam.in.width - 1; c += step) {
         const cv::Vec3f v = sm.at<cv::Vec3f>(r, c);
         const cv::Vec3f raw = mean.at<cv::Vec3f>(r, c);
-        if (std::min({raw[0], raw[1], raw[2]}) < o.min_signal || std::max({raw[0], raw[1], raw[2]}) > o.max_signal) {
+        if (std::min({raw[0], raw[1], raw[2]}) < o.min_signal ||
+            std::max({raw[0], raw[1], raw[2]}) > o.max_signal) {
           ++bad;
           continue;
         }
@@ -443,8 +462,10 @@ PhotometricSummary calibrate_flat_field(const Rig& rig, const std::vector<std::v
       }
     const size_t total = rows.size() + size_t(bad);
     if (rows.size() < total / 2) {
-      errors[i] = fmt::format("camera {}: the flat-field frame is too dark or saturated ({} of {} pixels outside [{}, {}] "
-                              "linear)", cam.id, bad, total, o.min_signal, o.max_signal);
+      errors[i] = fmt::format(
+          "camera {}: the flat-field frame is too dark or saturated ({} of {} pixels outside [{}, {}] "
+          "linear)",
+          cam.id, bad, total, o.min_signal, o.max_signal);
       return;
     }
     Eigen::MatrixXd a(Eigen::Index(rows.size()), kLensTerms + 1);

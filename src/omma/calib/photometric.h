@@ -45,24 +45,24 @@
 namespace omma::calib {
 
 struct PhotometricOptions {
-  int grid_step_px = 3;          // overlap samples on a grid of this pitch in camera a
-  double smooth_sigma_px = 1.5;  // Gaussian smoothing of the linear images before sampling
-  double min_signal = 0.003;     // linear, every channel of both samples above ...
-  double max_signal = 0.9;       // ... and below (saturation: the smoothing spreads it)
-  double registration_px = 0.3;  // assumed misregistration, pixels (more than a calibrated
-                                 // far-field rig's: the margin covers parallax of distant objects)
-  double max_log_change = 0.05;  // keep samples whose log value changes less than this over
-                                 // registration_px (every channel, both cameras); tuning:
-                                 // docs/results/tuning-photometric.md
-  double loss_scale = 0.03;      // Cauchy scale, log units (3 %)
-  double noise_signal = 0.01;    // linear signal at which a sample's weight is 1/sqrt(2): weight =
-                                 // s / sqrt(s^2 + noise_signal^2), s = its darkest channel (dark
-                                 // samples are noisy and biased in log units); 0 = equal weights
-  int min_samples = 300;         // a camera with fewer samples keeps gain 1 (warning; its
-                                 // falloff is the lens's, which every camera shares)
+  int grid_step_px = 3;             // overlap samples on a grid of this pitch in camera a
+  double smooth_sigma_px = 1.5;     // Gaussian smoothing of the linear images before sampling
+  double min_signal = 0.003;        // linear, every channel of both samples above ...
+  double max_signal = 0.9;          // ... and below (saturation: the smoothing spreads it)
+  double registration_px = 0.3;     // assumed misregistration, pixels (more than a calibrated
+                                    // far-field rig's: the margin covers parallax of distant objects)
+  double max_log_change = 0.05;     // keep samples whose log value changes less than this over
+                                    // registration_px (every channel, both cameras); tuning:
+                                    // docs/results/tuning-photometric.md
+  double loss_scale = 0.03;         // Cauchy scale, log units (3 %)
+  double noise_signal = 0.01;       // linear signal at which a sample's weight is 1/sqrt(2): weight =
+                                    // s / sqrt(s^2 + noise_signal^2), s = its darkest channel (dark
+                                    // samples are noisy and biased in log units); 0 = equal weights
+  int min_samples = 300;            // a camera with fewer samples keeps gain 1 (warning; its
+                                    // falloff is the lens's, which every camera shares)
   int max_samples_per_pair = 6000;  // evenly thinned beyond this
   bool estimate_vignetting = true;  // false: gains only (V = 1)
-  int threads = 2;               // Ceres threads
+  int threads = 2;                  // Ceres threads
   int max_iterations = 100;
 
   bool IsValid(std::string* why = nullptr) const;
@@ -70,15 +70,15 @@ struct PhotometricOptions {
 
 struct PhotometricSummary {
   static constexpr int kLensTerms = 5;
-  Rig rig;                          // the input rig with each camera's photometric model set
+  Rig rig;                                // the input rig with each camera's photometric model set
   std::array<double, kLensTerms> lens{};  // beta of the shared V(a) (overlaps), or the mean (flat)
-  int pairs = 0;                    // overlapping camera pairs sampled
-  int samples = 0;                  // samples in the fit (all frame sets)
-  double rms_log = 0;               // RMS residual (log units) of the samples after the fit
-  double initial_rms_log = 0;       // the same with V = 1 and unit gains
-  double max_fit_error = 0;         // largest |V_pixel_model - V_angle_model| over all cameras' pixels
-  std::vector<int> samples_per_camera;  // rig order
-  std::vector<int> uncalibrated_ids;    // cameras left at gain 1 (too few samples)
+  int pairs = 0;                          // overlapping camera pairs sampled
+  int samples = 0;                        // samples in the fit (all frame sets)
+  double rms_log = 0;                     // RMS residual (log units) of the samples after the fit
+  double initial_rms_log = 0;             // the same with V = 1 and unit gains
+  double max_fit_error = 0;               // largest |V_pixel_model - V_angle_model| over all cameras' pixels
+  std::vector<int> samples_per_camera;    // rig order
+  std::vector<int> uncalibrated_ids;      // cameras left at gain 1 (too few samples)
   std::vector<std::string> warnings;
 };
 
@@ -98,7 +98,8 @@ PhotometricSummary calibrate_flat_field(const Rig& rig, const std::vector<std::v
 // radius model of `camera` (centred on its principal point), by the minimax fit over its pixels
 // (core/photometric.h fit_vignetting).
 // *max_error gets the largest relative difference over the image.
-Photometric photometric_from_lens(const RigCamera& camera, const std::array<double, PhotometricSummary::kLensTerms>& beta,
+Photometric photometric_from_lens(const RigCamera& camera,
+                                  const std::array<double, PhotometricSummary::kLensTerms>& beta,
                                   const std::array<double, 3>& gains, double* max_error = nullptr);
 
 // Classic flat-fielding, no model and no geometry needed: each frame (sRGB 8/16-bit) divided in
@@ -108,7 +109,8 @@ Photometric photometric_from_lens(const RigCamera& camera, const std::array<doub
 // brightness ramp across a patch biases (docs/near_field_calibration.md). Throws
 // std::invalid_argument on mismatched counts or sizes.
 std::vector<cv::Mat> flat_field_frames(const std::vector<cv::Mat>& frames,
-                                       const std::vector<std::vector<cv::Mat>>& flat_sets, double sigma_px = 3);
+                                       const std::vector<std::vector<cv::Mat>>& flat_sets,
+                                       double sigma_px = 3);
 
 // Linear frames: sRGB 8- or 16-bit -> CV_32FC3 linear light in [0, 1].
 cv::Mat decode_linear(const cv::Mat& srgb);

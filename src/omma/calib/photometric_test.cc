@@ -44,7 +44,8 @@ Errors compare(const Rig& estimated, const Rig& true_rig, const sim::CameraEffec
     const cv::Vec3d g = sim::camera_gains(e, c.id);
     double cam_max = 0;
     for (int k = 0; k < 3; ++k)
-      cam_max = std::max(cam_max, std::abs(std::exp(std::log(p.gains[k]) - le[k] - std::log(g[k]) + lt[k]) - 1));
+      cam_max =
+          std::max(cam_max, std::abs(std::exp(std::log(p.gains[k]) - le[k] - std::log(g[k]) + lt[k]) - 1));
     err.gain_max = std::max(err.gain_max, cam_max);
     for (int r = 0; r < c.in.height; r += 2)
       for (int col = 0; col < c.in.width; col += 2) {
@@ -80,10 +81,11 @@ TEST(PhotometricCalibration, FlatFieldMeetsOnePercentTargets) {
   so.shots = 2;
   const auto flat = sim::make_flat_scene(0.6);
   const sim::SimulateSummary sr = sim::simulate(nominal, *flat, so);
-  const PhotometricSummary s = calibrate_flat_field(sr.true_rig, {images(sr.frames), images(sr.more_shots[0])});
+  const PhotometricSummary s =
+      calibrate_flat_field(sr.true_rig, {images(sr.frames), images(sr.more_shots[0])});
   const Errors e = compare(s.rig, sr.true_rig, so.effects, false);
-  std::printf("flat field: gains max %.4f, falloff max %.4f, pixel-model fit %.5f\n", e.gain_max, e.falloff_max,
-              s.max_fit_error);
+  std::printf("flat field: gains max %.4f, falloff max %.4f, pixel-model fit %.5f\n", e.gain_max,
+              e.falloff_max, s.max_fit_error);
   EXPECT_LT(e.gain_max, 0.01);
   EXPECT_LT(e.falloff_max, 0.01);
   EXPECT_TRUE(s.uncalibrated_ids.empty());
@@ -102,8 +104,9 @@ TEST(PhotometricCalibration, OverlapsOfAFarScene) {
 
   const PhotometricSummary s = calibrate_photometric(sr.true_rig, {images(sr.frames)}, po);
   const Errors e = compare(s.rig, sr.true_rig, so.effects, true);
-  std::printf("overlaps: %d samples, %d pairs, rms %.4f -> %.4f, gains max %.4f, falloff max %.4f, fit %.5f\n",
-              s.samples, s.pairs, s.initial_rms_log, s.rms_log, e.gain_max, e.falloff_max, s.max_fit_error);
+  std::printf(
+      "overlaps: %d samples, %d pairs, rms %.4f -> %.4f, gains max %.4f, falloff max %.4f, fit %.5f\n",
+      s.samples, s.pairs, s.initial_rms_log, s.rms_log, e.gain_max, e.falloff_max, s.max_fit_error);
   EXPECT_LT(e.gain_max, 0.01);
   EXPECT_LT(e.falloff_max, 0.01);
   EXPECT_LT(s.rms_log, 0.6 * s.initial_rms_log);

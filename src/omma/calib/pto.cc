@@ -142,7 +142,8 @@ PtoCamera pto_from_camera(const RigCamera& cam, LensFit* fit) {
   const double r0 = std::min(in.width, in.height) / 2.0;
   std::vector<double> rs, ws;
   const double r_max = 4 * std::hypot(in.width, in.height) / f;
-  radius_samples(in.width, in.height, in.cu, in.cv, [&](double r) { return omma_rho(f, in.k, r); }, r_max, &rs, &ws);
+  radius_samples(
+      in.width, in.height, in.cu, in.cv, [&](double r) { return omma_rho(f, in.k, r); }, r_max, &rs, &ws);
   auto solve_abc = [&](double fpt, double* a, double* b, double* c) {
     // rho_pt = fpt R [1 + a (q^3 R^3 - 1) + b (q^2 R^2 - 1) + c (q R - 1)], q = fpt / r0: linear.
     const double q = fpt / r0;
@@ -207,8 +208,9 @@ RigCamera camera_from_pto(const PtoCamera& p, int radial_terms, LensFit* fit) {
   in.aov = deg2rad(p.hfov_deg);
   std::vector<double> rs, ws;
   const double r_max = 4 * std::hypot(p.width, p.height) / fpt;
-  radius_samples(p.width, p.height, in.cu, in.cv, [&](double r) { return pt_rho(fpt, r0, p.a, p.b, p.c, r); },
-                 r_max, &rs, &ws);
+  radius_samples(
+      p.width, p.height, in.cu, in.cv, [&](double r) { return pt_rho(fpt, r0, p.a, p.b, p.c, r); }, r_max,
+      &rs, &ws);
   // rho / R = f + (f k1) R^2 + (f k2) R^4 + (f k5) R^6: linear least squares.
   const int terms = std::clamp(radial_terms, 0, 3);
   Eigen::MatrixXd m(rs.size(), 1 + terms);
@@ -259,25 +261,30 @@ PtoExportSummary export_pto(const Rig& rig, const PtoExportOptions& opt) {
     res.max_fit_px = std::max(res.max_fit_px, fit.max_px);
     s2 += fit.rms_px * fit.rms_px;
     if (std::abs(cam.in.fu - cam.in.fv) > 1e-9 * cam.in.fu)
-      res.warnings.push_back(fmt::format("camera {}: fu != fv ({} vs {}); PTO holds one focal length (sqrt(fu fv) written)",
-                                         cam.id, cam.in.fu, cam.in.fv));
+      res.warnings.push_back(
+          fmt::format("camera {}: fu != fv ({} vs {}); PTO holds one focal length (sqrt(fu fv) written)",
+                      cam.id, cam.in.fu, cam.in.fv));
     if (cam.in.k[2] != 0 || cam.in.k[3] != 0)
-      res.warnings.push_back(fmt::format("camera {}: tangential distortion k3, k4 has no PTO equivalent (dropped)", cam.id));
+      res.warnings.push_back(
+          fmt::format("camera {}: tangential distortion k3, k4 has no PTO equivalent (dropped)", cam.id));
     std::string image = frame_filename(cam.id);
     if (!opt.frames_dir.empty()) image = (fs::path(opt.frames_dir) / image).string();
     os << "#-omma camera id " << cam.id << " position_mm " << fmt_num(cam.position_mm.x()) << " "
        << fmt_num(cam.position_mm.y()) << " " << fmt_num(cam.position_mm.z()) << " aov_deg "
-       << fmt_num(rad2deg(cam.in.aov)) << " fv_over_fu " << fmt_num(cam.in.fv / cam.in.fu) << " k " << fmt_num(cam.in.k[0])
-       << " " << fmt_num(cam.in.k[1]) << " " << fmt_num(cam.in.k[2]) << " " << fmt_num(cam.in.k[3]) << " "
-       << fmt_num(cam.in.k[4]) << " f " << fmt_num(std::sqrt(cam.in.fu * cam.in.fv)) << "\n";
+       << fmt_num(rad2deg(cam.in.aov)) << " fv_over_fu " << fmt_num(cam.in.fv / cam.in.fu) << " k "
+       << fmt_num(cam.in.k[0]) << " " << fmt_num(cam.in.k[1]) << " " << fmt_num(cam.in.k[2]) << " "
+       << fmt_num(cam.in.k[3]) << " " << fmt_num(cam.in.k[4]) << " f "
+       << fmt_num(std::sqrt(cam.in.fu * cam.in.fv)) << "\n";
     const Photometric ph = cam.photometric.value_or(Photometric{});
-    os << "i w" << p.width << " h" << p.height << " f0 v" << fmt_num(p.hfov_deg) << (opt.linear_response ? " Rt1" : "")
-       << " Ra0 Rb0 Rc0 Rd0 Re0 Eev" << fmt_num(0.0 - std::log2(ph.gains[1])) << " Er" << fmt_num(ph.gains[2] / ph.gains[1])
-       << " Eb" << fmt_num(ph.gains[0] / ph.gains[1]) << " r" << fmt_num(p.roll_deg) << " p" << fmt_num(p.pitch_deg)
+    os << "i w" << p.width << " h" << p.height << " f0 v" << fmt_num(p.hfov_deg)
+       << (opt.linear_response ? " Rt1" : "") << " Ra0 Rb0 Rc0 Rd0 Re0 Eev"
+       << fmt_num(0.0 - std::log2(ph.gains[1])) << " Er" << fmt_num(ph.gains[2] / ph.gains[1]) << " Eb"
+       << fmt_num(ph.gains[0] / ph.gains[1]) << " r" << fmt_num(p.roll_deg) << " p" << fmt_num(p.pitch_deg)
        << " y" << fmt_num(p.yaw_deg) << " TrX0 TrY0 TrZ0 j0 a" << fmt_num(p.a) << " b" << fmt_num(p.b) << " c"
-       << fmt_num(p.c) << " d" << fmt_num(p.d) << " e" << fmt_num(p.e) << " g0 t0 Va1 Vb" << fmt_num(ph.vignetting[0])
-       << " Vc" << fmt_num(ph.vignetting[1]) << " Vd" << fmt_num(ph.vignetting[2]) << " Vx" << fmt_num(ph.center_px.x())
-       << " Vy" << fmt_num(ph.center_px.y()) << " Vm5 n\"" << image << "\"\n";
+       << fmt_num(p.c) << " d" << fmt_num(p.d) << " e" << fmt_num(p.e) << " g0 t0 Va1 Vb"
+       << fmt_num(ph.vignetting[0]) << " Vc" << fmt_num(ph.vignetting[1]) << " Vd"
+       << fmt_num(ph.vignetting[2]) << " Vx" << fmt_num(ph.center_px.x()) << " Vy"
+       << fmt_num(ph.center_px.y()) << " Vm5 n\"" << image << "\"\n";
   }
   res.rms_fit_px = rig.cameras.empty() ? 0 : std::sqrt(s2 / rig.cameras.size());
   res.text = os.str();
@@ -330,10 +337,14 @@ PtoImportSummary import_pto(const std::string& text, const fs::path& base_dir) {
       std::istringstream ls(line.substr(10));
       std::string key, v;
       while (ls >> key) {
-        if (key == "name") ls >> std::quoted(res.rig.name);
-        else if (key == "radius_mm" && ls >> v) res.rig.dome.radius_mm = parse_number(v, where + " radius_mm");
-        else if (key == "sphere" && ls >> v) res.rig.dome.sphere = parse_int(v, where + " sphere", 0, 1) != 0;
-        else if (key == "cameras" && ls >> v) expected_images = parse_int(v, where + " cameras", 1, kMaxCameras);
+        if (key == "name")
+          ls >> std::quoted(res.rig.name);
+        else if (key == "radius_mm" && ls >> v)
+          res.rig.dome.radius_mm = parse_number(v, where + " radius_mm");
+        else if (key == "sphere" && ls >> v)
+          res.rig.dome.sphere = parse_int(v, where + " sphere", 0, 1) != 0;
+        else if (key == "cameras" && ls >> v)
+          expected_images = parse_int(v, where + " cameras", 1, kMaxCameras);
       }
     } else if (line.rfind("#-omma camera", 0) == 0) {
       if (pending.count("_valid"))
@@ -355,8 +366,8 @@ PtoImportSummary import_pto(const std::string& text, const fs::path& base_dir) {
       // Hugin writes every parameter; a line without these is cut short or not a project.
       for (const char* key : {"f", "v", "y", "p", "r", "n"})
         if (!kv.count(key))
-          throw PtoError(fmt::format("{}: image line without its '{}' parameter (a truncated or damaged project?)",
-                                     where, key));
+          throw PtoError(fmt::format(
+              "{}: image line without its '{}' parameter (a truncated or damaged project?)", where, key));
       if (kv.count("_unterminated"))
         throw PtoError(where + ": image name n\"... is not terminated (a truncated or damaged project?)");
       if (images.size() >= size_t(kMaxCameras))
@@ -378,16 +389,18 @@ PtoImportSummary import_pto(const std::string& text, const fs::path& base_dir) {
       if (it == images[idx].end()) return def;
       const std::string& s = it->second;
       if (s.empty())
-        throw PtoError(fmt::format("PTO image {} (line {}): parameter {} has no value", idx, images[idx]["_line"], key));
+        throw PtoError(
+            fmt::format("PTO image {} (line {}): parameter {} has no value", idx, images[idx]["_line"], key));
       if (s[0] == '=') {  // linked to another image's value
-        const size_t ref = size_t(parse_int(s.substr(1), fmt::format("PTO image {} parameter {} link", idx, key), 0,
-                                            kMaxCameras));
+        const size_t ref = size_t(
+            parse_int(s.substr(1), fmt::format("PTO image {} parameter {} link", idx, key), 0, kMaxCameras));
         if (ref >= images.size())
           throw PtoError(fmt::format("PTO image {}: parameter {} links to missing image {}", idx, key, ref));
         idx = ref;
         continue;
       }
-      return parse_number(s, fmt::format("PTO image {} (line {}) parameter {}", idx, images[idx]["_line"], key));
+      return parse_number(s,
+                          fmt::format("PTO image {} (line {}) parameter {}", idx, images[idx]["_line"], key));
     }
     throw PtoError("PTO: circular parameter links");
   };
@@ -395,7 +408,8 @@ PtoImportSummary import_pto(const std::string& text, const fs::path& base_dir) {
     const double lens = value(i, "f", 0);
     if (lens != 0)
       throw PtoError(fmt::format(
-          "PTO image {} (line {}): lens type f{} is not supported (only f0, rectilinear, matches omma's pinhole "
+          "PTO image {} (line {}): lens type f{} is not supported (only f0, rectilinear, matches omma's "
+          "pinhole "
           "model; f1 panoramic, f2 circular fisheye, f3 full-frame fisheye, f4 equirectangular ... are not)",
           i, images[i]["_line"], lens));
     PtoCamera p;
@@ -403,7 +417,8 @@ PtoImportSummary import_pto(const std::string& text, const fs::path& base_dir) {
     const double w = value(i, "w", 0), h = value(i, "h", 0);
     if (w != 0 || h != 0) {  // 0 or absent: the image file's size
       if (w != std::floor(w) || h != std::floor(h))
-        throw PtoError(fmt::format("PTO image {} (line {}): size w{} h{} is not whole pixels", i, images[i]["_line"], w, h));
+        throw PtoError(fmt::format("PTO image {} (line {}): size w{} h{} is not whole pixels", i,
+                                   images[i]["_line"], w, h));
       try {
         check_image_size(int64_t(std::clamp(w, -1.0, 1e9)), int64_t(std::clamp(h, -1.0, 1e9)), "image size");
       } catch (const std::invalid_argument& e) {
@@ -411,7 +426,9 @@ PtoImportSummary import_pto(const std::string& text, const fs::path& base_dir) {
       }
       p.width = int(w), p.height = int(h);
     }
-    const fs::path img_path = p.image.empty() ? fs::path() : (fs::path(p.image).is_absolute() ? fs::path(p.image) : base_dir / p.image);
+    const fs::path img_path =
+        p.image.empty() ? fs::path()
+                        : (fs::path(p.image).is_absolute() ? fs::path(p.image) : base_dir / p.image);
     const bool exists = !p.image.empty() && fs::exists(img_path);
     if (p.width <= 0 || p.height <= 0) {
       if (!exists)
@@ -421,13 +438,14 @@ PtoImportSummary import_pto(const std::string& text, const fs::path& base_dir) {
       if (m.empty()) throw PtoError(fmt::format("PTO image {}: cannot read '{}'", i, img_path.string()));
       p.width = m.cols, p.height = m.rows;
     } else if (!exists) {
-      res.warnings.push_back(fmt::format("PTO image {}: image file '{}' is missing (geometry imported anyway)", i,
-                                         img_path.string()));
+      res.warnings.push_back(fmt::format(
+          "PTO image {}: image file '{}' is missing (geometry imported anyway)", i, img_path.string()));
     }
     p.hfov_deg = value(i, "v", 0);
     if (!(p.hfov_deg > 0 && p.hfov_deg < 180))
-      throw PtoError(fmt::format("PTO image {} (line {}): field of view v{} must be in (0, 180) for a rectilinear lens", i,
-                                 images[i]["_line"], p.hfov_deg));
+      throw PtoError(
+          fmt::format("PTO image {} (line {}): field of view v{} must be in (0, 180) for a rectilinear lens",
+                      i, images[i]["_line"], p.hfov_deg));
     p.yaw_deg = value(i, "y", 0);
     p.pitch_deg = value(i, "p", 0);
     p.roll_deg = value(i, "r", 0);
@@ -484,17 +502,22 @@ PtoImportSummary import_pto(const std::string& text, const fs::path& base_dir) {
       // Vm: Hugin's vignetting mode flags (1 radial, 2 flat field, 4 and 8 options), a whole number.
       const double vm_value = value(i, "Vm", 0);
       if (!(vm_value >= 0 && vm_value <= 63 && vm_value == std::floor(vm_value)))
-        throw PtoError(fmt::format("PTO image {} (line {}): Vm{} is not a vignetting mode (a whole number 0..63)", i,
-                                   images[i]["_line"], vm_value));
+        throw PtoError(
+            fmt::format("PTO image {} (line {}): Vm{} is not a vignetting mode (a whole number 0..63)", i,
+                        images[i]["_line"], vm_value));
       const int vm = static_cast<int>(vm_value);
-      const double va = value(i, "Va", 1), eev = value(i, "Eev", 0), er = value(i, "Er", 1), eb = value(i, "Eb", 1);
+      const double va = value(i, "Va", 1), eev = value(i, "Eev", 0), er = value(i, "Er", 1),
+                   eb = value(i, "Eb", 1);
       Photometric ph;
       if (vm & 1) {
-        if (!(va > 0)) throw PtoError(fmt::format("PTO image {} (line {}): Va{} must be positive", i, images[i]["_line"], va));
+        if (!(va > 0))
+          throw PtoError(
+              fmt::format("PTO image {} (line {}): Va{} must be positive", i, images[i]["_line"], va));
         ph.vignetting = {value(i, "Vb", 0) / va, value(i, "Vc", 0) / va, value(i, "Vd", 0) / va};
         ph.center_px = Vec2(value(i, "Vx", 0), value(i, "Vy", 0));
       } else if (vm & 2) {
-        res.warnings.push_back(fmt::format("PTO image {}: flat-field vignetting (Vm{}) is not imported", i, vm));
+        res.warnings.push_back(
+            fmt::format("PTO image {}: flat-field vignetting (Vm{}) is not imported", i, vm));
       }
       const double scale = (vm & 1) ? va : 1.0;
       const double g = std::exp2(-eev) * scale;

@@ -72,10 +72,10 @@ class PtoError : public std::runtime_error {
 struct PtoCamera {
   int width = 0, height = 0;
   double yaw_deg = 0, pitch_deg = 0, roll_deg = 0;
-  double hfov_deg = 0;     // v
+  double hfov_deg = 0;  // v
   double a = 0, b = 0, c = 0;
-  double d = 0, e = 0;     // shifts, pixels
-  std::string image;       // n"..."
+  double d = 0, e = 0;  // shifts, pixels
+  std::string image;    // n"..."
 };
 
 // PanoTools camera <-> omma camera (the conversions documented above).
@@ -88,11 +88,11 @@ PtoCamera pto_from_camera(const RigCamera& cam, LensFit* fit = nullptr);
 RigCamera camera_from_pto(const PtoCamera& p, int radial_terms = 3, LensFit* fit = nullptr);
 
 struct PtoExportOptions {
-  std::string frames_dir;  // image paths are frames_dir/cam_XX.png (relative to the PTO's folder
-                           // when possible); empty: bare "cam_XX.png"
-  int pano_width = 1440;   // p-line: equirect 360 x 180 of pano_width x pano_width/2
-  bool crop_to_dome = true;  // hemisphere rigs: crop the p-line to the top half (omma's 360 x 90)
-  int interpolator = 0;    // m-line i: 0 poly3 (Hugin's default), 5 bilinear, 6 nearest
+  std::string frames_dir;        // image paths are frames_dir/cam_XX.png (relative to the PTO's folder
+                                 // when possible); empty: bare "cam_XX.png"
+  int pano_width = 1440;         // p-line: equirect 360 x 180 of pano_width x pano_width/2
+  bool crop_to_dome = true;      // hemisphere rigs: crop the p-line to the top half (omma's 360 x 90)
+  int interpolator = 0;          // m-line i: 0 poly3 (Hugin's default), 5 bilinear, 6 nearest
   bool linear_response = false;  // i-lines Rt1: the frames are linear light (see Photometry above)
 
   // False (with the reason in *why) when a value lies outside the range the code relies on.
@@ -101,7 +101,7 @@ struct PtoExportOptions {
 
 struct PtoExportSummary {
   std::string text;
-  double max_fit_px = 0;   // largest distortion-conversion residual over all cameras
+  double max_fit_px = 0;  // largest distortion-conversion residual over all cameras
   double rms_fit_px = 0;
   std::vector<std::string> warnings;
 };

@@ -12,14 +12,14 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "omma/calib/rig_diff.h"
-#include "omma/testing/test_scenes.h"
-#include "omma/core/frames.h"
-#include "omma/design/prototype.h"
 #include "omma/calib/photometric.h"
+#include "omma/calib/rig_diff.h"
+#include "omma/core/frames.h"
 #include "omma/core/srgb.h"
+#include "omma/design/prototype.h"
 #include "omma/isp/photometric.h"
 #include "omma/pano/stitch.h"
+#include "omma/testing/test_scenes.h"
 
 namespace omma::calib {
 namespace {
@@ -99,8 +99,9 @@ TEST(Pto, HigherRadialTermsAreFittedWithASmallResidual) {
   rig.cameras[0].in.k = {0.05, -0.02, 0, 0, 0.01};
   LensFit fit;
   const PtoCamera p = pto_from_camera(rig.cameras[0], &fit);
-  std::printf("k = (0.05, -0.02, k5 0.01): PTO fit residual rms %.4f px, max %.4f px (a %.5f b %.5f c %.5f v %.4f)\n",
-              fit.rms_px, fit.max_px, p.a, p.b, p.c, p.hfov_deg);
+  std::printf(
+      "k = (0.05, -0.02, k5 0.01): PTO fit residual rms %.4f px, max %.4f px (a %.5f b %.5f c %.5f v %.4f)\n",
+      fit.rms_px, fit.max_px, p.a, p.b, p.c, p.hfov_deg);
   EXPECT_GT(fit.max_px, 1e-6);  // not exactly representable ...
   EXPECT_LT(fit.max_px, 0.5);   // ... but close over the image
   LensFit back;
@@ -129,7 +130,8 @@ TEST(Pto, UnsupportedLensAndMissingImagesFail) {
     EXPECT_NE(std::string(e.what()).find("lens type f3"), std::string::npos) << e.what();
   }
   EXPECT_THROW(import_pto("p f2 w100 h50 v360\n"), PtoError);
-  EXPECT_THROW(import_pto("i f0 v60 y0 p0 r0 n\"/nonexistent/cam_00.png\"\n"), PtoError);  // no size, no image
+  EXPECT_THROW(import_pto("i f0 v60 y0 p0 r0 n\"/nonexistent/cam_00.png\"\n"),
+               PtoError);  // no size, no image
   const PtoImportSummary warn = import_pto("i w250 h250 f0 v60 y0 p0 r0 n\"/nonexistent/cam_00.png\"\n");
   EXPECT_FALSE(warn.warnings.empty());
 }
@@ -148,8 +150,8 @@ TEST(Pto, MalformedAndTruncatedProjectsAreRefused) {
     }
     return std::string();
   };
-  for (const char* bad : {"y=nan", "ynan", "yinf", "y1e999", "y12abc", "y", "y=7", "w1e10", "w250.5", "h-3",
-                          "f1e300", "v"}) {
+  for (const char* bad :
+       {"y=nan", "ynan", "yinf", "y1e999", "y12abc", "y", "y=7", "w1e10", "w250.5", "h-3", "f1e300", "v"}) {
     std::string text = line;
     const std::string key(1, bad[0]);
     const size_t at = text.find(" " + key) + 1;
@@ -178,7 +180,8 @@ TEST(Pto, MalformedAndTruncatedProjectsAreRefused) {
   for (size_t cut = hugin.find("\ni ") + 2; cut + 1 < hugin.size(); cut += 5)
     if (hugin[cut - 1] != '\n' && hugin.substr(cut - 1, 2) != "\"\n") {
       const std::string part = hugin.substr(0, cut);
-      EXPECT_THROW(import_pto(part), PtoError) << "cut at " << cut << ": ..." << part.substr(part.size() - 30);
+      EXPECT_THROW(import_pto(part), PtoError)
+          << "cut at " << cut << ": ..." << part.substr(part.size() - 30);
     }
 }
 
@@ -196,7 +199,8 @@ TEST(Pto, NonaRendersOurExportLikeOurNearestNeighbourStitch) {
   const auto frames = testing::render_photo_frames(rig, scene);
   const fs::path dir = fs::temp_directory_path() / ("omma-pto-nona-" + std::to_string(::getpid()));
   fs::create_directories(dir);
-  for (size_t i = 0; i < frames.size(); ++i) cv::imwrite((dir / frame_filename(rig.cameras[i].id)).string(), frames[i]);
+  for (size_t i = 0; i < frames.size(); ++i)
+    cv::imwrite((dir / frame_filename(rig.cameras[i].id)).string(), frames[i]);
   PtoExportOptions opt;
   opt.pano_width = 1440;
   opt.interpolator = 5;  // bilinear, like our sampler
@@ -225,7 +229,8 @@ TEST(Pto, NonaRendersOurExportLikeOurNearestNeighbourStitch) {
   const double db = testing::psnr_masked(ours, nona, both);
   std::printf("nona vs omma stitch nn: PSNR %.2f dB over %.1f %% of the panorama\n", db, 100 * covered);
   const cv::Mat truth = testing::render_photo_truth(scene, grid);
-  std::printf("vs truth: nona %.2f dB, ours %.2f dB\n", testing::psnr_masked(nona, truth, both), testing::psnr_masked(ours, truth, both));
+  std::printf("vs truth: nona %.2f dB, ours %.2f dB\n", testing::psnr_masked(nona, truth, both),
+              testing::psnr_masked(ours, truth, both));
   cv::Mat nona_flipped, mask_flipped, both_flipped;
   cv::flip(nona, nona_flipped, 1);
   cv::flip(nona_mask, mask_flipped, 1);
@@ -278,15 +283,18 @@ TEST(Pto, PhotometricModelRoundTripsUnderHuginsNames) {
   EXPECT_FALSE(import_pto(plain).rig.cameras[0].photometric.has_value());
   // Va scales the model (folded into the gains); a non-positive Va or a falloff that reaches zero
   // is an error.
-  const PtoImportSummary va = import_pto("i w250 h250 f0 v60 y0 p0 r0 Va2 Vb-0.4 Vm5 Eev0 Er1 Eb1 n\"x.png\"\n");
+  const PtoImportSummary va =
+      import_pto("i w250 h250 f0 v60 y0 p0 r0 Va2 Vb-0.4 Vm5 Eev0 Er1 Eb1 n\"x.png\"\n");
   ASSERT_TRUE(va.rig.cameras[0].photometric.has_value());
   EXPECT_NEAR(va.rig.cameras[0].photometric->vignetting[0], -0.2, 1e-12);
   EXPECT_NEAR(va.rig.cameras[0].photometric->gains[1], 2, 1e-12);
   EXPECT_THROW(import_pto("i w250 h250 f0 v60 y0 p0 r0 Va1 Vb-1.5 Vm5 n\"x.png\"\n"), PtoError);
   EXPECT_THROW(import_pto("i w250 h250 f0 v60 y0 p0 r0 Va0 Vb-0.4 Vm5 n\"x.png\"\n"), PtoError);
   // Found by the fuzzer: a vignetting mode beyond int (UB when narrowed) or not whole.
-  EXPECT_THROW(import_pto("i w250 h250 f0 v60 y0 p0 r0 Vm57777777777777777777777777777777777777777777777 n\"x.png\"\n"),
-               PtoError);
+  EXPECT_THROW(
+      import_pto(
+          "i w250 h250 f0 v60 y0 p0 r0 Vm57777777777777777777777777777777777777777777777 n\"x.png\"\n"),
+      PtoError);
   EXPECT_THROW(import_pto("i w250 h250 f0 v60 y0 p0 r0 Vm1.5 Vb-0.4 n\"x.png\"\n"), PtoError);
 }
 
@@ -312,9 +320,11 @@ TEST(Pto, NonaAppliesOurPhotometricModelLikeWeDo) {
     for (int r = 0; r < lin.rows; ++r)
       for (int col = 0; col < lin.cols; ++col)
         for (int k = 0; k < 3; ++k) {
-          const double v = std::min(1.0, lin.at<cv::Vec3f>(r, col)[k] * p.gains[k] *
-                                             vignetting_falloff(p, c.in.width, c.in.height, col + 0.5, r + 0.5));
-          f8.at<cv::Vec3b>(r, col)[k] = cv::saturate_cast<uint8_t>(std::lround(255 * linear_to_srgb(float(v))));
+          const double v =
+              std::min(1.0, lin.at<cv::Vec3f>(r, col)[k] * p.gains[k] *
+                                vignetting_falloff(p, c.in.width, c.in.height, col + 0.5, r + 0.5));
+          f8.at<cv::Vec3b>(r, col)[k] =
+              cv::saturate_cast<uint8_t>(std::lround(255 * linear_to_srgb(float(v))));
         }
     frames.push_back(f8);
     // nona's input: the same frame in linear light, 16 bits.
@@ -336,7 +346,8 @@ TEST(Pto, NonaAppliesOurPhotometricModelLikeWeDo) {
   cv::Mat nona8(nona.size(), CV_8UC3);
   for (int r = 0; r < nona.rows; ++r)
     for (int c = 0; c < nona.cols * 3; ++c)
-      nona8.ptr<uint8_t>(r)[c] = cv::saturate_cast<uint8_t>(std::lround(255 * linear_to_srgb(nona.ptr<uint16_t>(r)[c] / 65535.0f)));
+      nona8.ptr<uint8_t>(r)[c] =
+          cv::saturate_cast<uint8_t>(std::lround(255 * linear_to_srgb(nona.ptr<uint16_t>(r)[c] / 65535.0f)));
   const PanoGrid grid{Projection::kEquirect, 1440, 360};
   pano::StitchOptions so;
   so.method = pano::Method::kNearest;
@@ -351,8 +362,10 @@ TEST(Pto, NonaAppliesOurPhotometricModelLikeWeDo) {
   cv::bitwise_and(mask, nona_mask > 0, both);
   const double db = testing::psnr_masked(ours, nona8, both);
   const double db_uncorrected = testing::psnr_masked(uncorrected, nona8, both);
-  std::printf("nona (photometric, linear response) vs omma corrected nn: %.2f dB (uncorrected frames: %.2f dB) over "
-              "%.1f %%\n", db, db_uncorrected, 100.0 * cv::countNonZero(both) / double(both.total()));
+  std::printf(
+      "nona (photometric, linear response) vs omma corrected nn: %.2f dB (uncorrected frames: %.2f dB) over "
+      "%.1f %%\n",
+      db, db_uncorrected, 100.0 * cv::countNonZero(both) / double(both.total()));
   EXPECT_GE(db, 30.0);
   EXPECT_GT(db, db_uncorrected + 3);  // the correction is what agrees, not the geometry alone
   fs::remove_all(dir);
@@ -374,7 +387,8 @@ TEST(Options, PtoExportOptionsRefuseBadValues) {
   EXPECT_TRUE(o.IsValid());
   o.pano_width = 1;
   EXPECT_FALSE(o.IsValid());
-  EXPECT_NE(refusal([&] { export_pto(design::thesis_prototype_rig(), o); }).find("pano_width"), std::string::npos);
+  EXPECT_NE(refusal([&] { export_pto(design::thesis_prototype_rig(), o); }).find("pano_width"),
+            std::string::npos);
 }
 
 }  // namespace

@@ -15,8 +15,8 @@ namespace {
 // The homography (continuous pixels of camera a -> camera b) of the scene plane through x (dome
 // frame, mm) with normal `normal`, fitted to a 5 x 5 grid of points within +-half pixels of pa;
 // false if the plane is seen edge-on or a point leaves a camera.
-bool plane_homography(const RigCamera& ca, const RigCamera& cb, const Vec2& pa, const Vec3& x, const Vec3& normal,
-                      double half, Eigen::Matrix3d* h) {
+bool plane_homography(const RigCamera& ca, const RigCamera& cb, const Vec2& pa, const Vec3& x,
+                      const Vec3& normal, double half, Eigen::Matrix3d* h) {
   const CameraModel ma = ca.model(), mb = cb.model();
   std::vector<cv::Point2d> src, dst;
   for (int i = -2; i <= 2; ++i)
@@ -43,14 +43,16 @@ bool plane_homography(const RigCamera& ca, const RigCamera& cb, const Vec2& pa, 
 Eigen::Matrix2d whitening(const Eigen::Matrix2d& cov, double scale, double floor_px) {
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> es(cov);
   const Eigen::Vector2d ev = es.eigenvalues().cwiseMax(floor_px * floor_px);
-  return scale * (es.eigenvectors() * ev.cwiseSqrt().cwiseInverse().asDiagonal() * es.eigenvectors().transpose());
+  return scale *
+         (es.eigenvectors() * ev.cwiseSqrt().cwiseInverse().asDiagonal() * es.eigenvectors().transpose());
 }
 
 }  // namespace
 
 std::vector<std::vector<TrackObservation>> refine_tracks(const Rig& rig, const std::vector<cv::Mat>& gray,
-                                                         const SolveState& st, bool near, const SubpixelOptions& so,
-                                                         int* attempted, int* refined) {
+                                                         const SolveState& st, bool near,
+                                                         const SubpixelOptions& so, int* attempted,
+                                                         int* refined) {
   const size_t m = st.tracks.size();
   std::vector<Vec3> x(m);
   std::vector<char> finite(m, 0);
@@ -77,7 +79,8 @@ std::vector<std::vector<TrackObservation>> refine_tracks(const Rig& rig, const s
     for (int k = 0; k < kNeighbours; ++k) mean += x[d[k].second];
     mean /= kNeighbours + 1;
     Mat3 cov = (x[ti] - mean) * (x[ti] - mean).transpose();
-    for (int k = 0; k < kNeighbours; ++k) cov += (x[d[k].second] - mean) * (x[d[k].second] - mean).transpose();
+    for (int k = 0; k < kNeighbours; ++k)
+      cov += (x[d[k].second] - mean) * (x[d[k].second] - mean).transpose();
     Eigen::SelfAdjointEigenSolver<Mat3> es(cov);
     if (es.eigenvalues()(0) < 0.2 * es.eigenvalues()(1)) normal[ti] = es.eigenvectors().col(0);
   }
@@ -132,8 +135,9 @@ std::vector<std::vector<TrackObservation>> refine_tracks(const Rig& rig, const s
 }
 
 std::vector<std::vector<TrackObservation>> dense_tracks(const Rig& rig, const std::vector<cv::Mat>& gray,
-                                                        const std::vector<CameraFeatures>& feats, const SolveState& st,
-                                                        const CalibrationOptions& opt, int* attempted, int* refined) {
+                                                        const std::vector<CameraFeatures>& feats,
+                                                        const SolveState& st, const CalibrationOptions& opt,
+                                                        int* attempted, int* refined) {
   const int n = static_cast<int>(rig.cameras.size());
   const SubpixelOptions& so = opt.dense_subpixel;
   std::vector<CameraModel> model(n);
@@ -165,7 +169,8 @@ std::vector<std::vector<TrackObservation>> dense_tracks(const Rig& rig, const st
     const RigCamera& ca = rig.cameras[a];
     if (seen[a].size() < 3) continue;
     for (const Vec2& q : feats[a].px) {
-      if (q.x() < margin || q.y() < margin || q.x() > ca.in.width - margin || q.y() > ca.in.height - margin) continue;
+      if (q.x() < margin || q.y() < margin || q.x() > ca.in.width - margin || q.y() > ca.in.height - margin)
+        continue;
       // The nearest observed scene points in this camera.
       std::vector<std::pair<double, int>> d;
       d.reserve(seen[a].size());
@@ -219,7 +224,8 @@ std::vector<std::vector<TrackObservation>> dense_tracks(const Rig& rig, const st
       const Job& job = jobs[k];
       for (int b : job.targets) {
         Eigen::Matrix3d h;
-        if (!plane_homography(rig.cameras[job.ref.cam], rig.cameras[b], job.ref.px, job.x, job.normal, half, &h))
+        if (!plane_homography(rig.cameras[job.ref.cam], rig.cameras[b], job.ref.px, job.x, job.normal, half,
+                              &h))
           continue;
         AlignInfo info;
         const auto p = align_patch(gray[job.ref.cam], job.ref.px, gray[b], h, so, &info);
@@ -250,8 +256,9 @@ std::vector<std::vector<TrackObservation>> dense_tracks(const Rig& rig, const st
     }
     out.push_back(std::move(t));
   }
-  spdlog::info("calibrate: dense refinement: {} reference patches, {} of {} alignments, median sigma {:.3f} px",
-               out.size(), *refined, *attempted, msig);
+  spdlog::info(
+      "calibrate: dense refinement: {} reference patches, {} of {} alignments, median sigma {:.3f} px",
+      out.size(), *refined, *attempted, msig);
   return out;
 }
 

@@ -21,8 +21,9 @@ namespace omma::calib {
 // nearest neighbouring scene points (the direction to the dome centre when those are degenerate);
 // in the far field it is the plane at infinity. Observations whose alignment fails are dropped.
 std::vector<std::vector<TrackObservation>> refine_tracks(const Rig& rig, const std::vector<cv::Mat>& gray,
-                                                         const SolveState& st, bool near, const SubpixelOptions& so,
-                                                         int* attempted, int* refined);
+                                                         const SolveState& st, bool near,
+                                                         const SubpixelOptions& so, int* attempted,
+                                                         int* refined);
 
 // Dense guided correspondences (near field, after the first solve). Every keypoint of every camera
 // is a candidate reference pixel, not only the matched ones: its depth is the median depth of the
@@ -34,7 +35,8 @@ std::vector<std::vector<TrackObservation>> refine_tracks(const Rig& rig, const s
 // observation gets the whitening of its covariance (AlignInfo), scaled so that the median
 // observation weighs 1, floored at dense_weight_floor (CalibrationOptions) times the median sigma.
 std::vector<std::vector<TrackObservation>> dense_tracks(const Rig& rig, const std::vector<cv::Mat>& gray,
-                                                        const std::vector<CameraFeatures>& feats, const SolveState& st,
-                                                        const CalibrationOptions& opt, int* attempted, int* refined);
+                                                        const std::vector<CameraFeatures>& feats,
+                                                        const SolveState& st, const CalibrationOptions& opt,
+                                                        int* attempted, int* refined);
 
 }  // namespace omma::calib

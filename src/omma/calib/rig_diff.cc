@@ -89,8 +89,8 @@ double ray_error_deg(const RigCamera& a, const RigCamera& b) {
 
 RigDiff diff_rigs(const Rig& a_in, const Rig& b, bool align) {
   if (a_in.cameras.size() != b.cameras.size())
-    throw std::invalid_argument(fmt::format("rig-diff: rig A has {} cameras, rig B has {}", a_in.cameras.size(),
-                                            b.cameras.size()));
+    throw std::invalid_argument(
+        fmt::format("rig-diff: rig A has {} cameras, rig B has {}", a_in.cameras.size(), b.cameras.size()));
   RigDiff d;
   Rig a = a_in;
   if (align) {
@@ -104,7 +104,8 @@ RigDiff diff_rigs(const Rig& a_in, const Rig& b, bool align) {
     const Mat3 rel = ca.frame.dome_to_camera() * cb.frame.dome_to_camera().transpose();
     const double angle = Eigen::AngleAxisd(rel).angle();
     orient.push_back(rad2deg(angle));
-    focal.push_back(std::max(std::abs(ca.in.fu - cb.in.fu) / cb.in.fu, std::abs(ca.in.fv - cb.in.fv) / cb.in.fv));
+    focal.push_back(
+        std::max(std::abs(ca.in.fu - cb.in.fu) / cb.in.fu, std::abs(ca.in.fv - cb.in.fv) / cb.in.fv));
     center.push_back(std::hypot(ca.in.cu - cb.in.cu, ca.in.cv - cb.in.cv));
     ray.push_back(ray_error_deg(ca, cb));
   }

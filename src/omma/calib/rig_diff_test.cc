@@ -36,7 +36,8 @@ TEST(RigDiff, RayErrorIsWhatTheStitchSees) {
   // ... and a rotation about v by ~5 / f rad nearly undoes it (the principal-point / rotation
   // ambiguity of calibration): a large orientation error, a small ray error.
   double best = 1e9;
-  for (double sign : {-1.0, 1.0}) best = std::min(best, ray_error_deg(rotated(shifted, Vec3(0, 0, 1), sign * 5 / c.in.fu), c));
+  for (double sign : {-1.0, 1.0})
+    best = std::min(best, ray_error_deg(rotated(shifted, Vec3(0, 0, 1), sign * 5 / c.in.fu), c));
   EXPECT_LT(best, 0.15 * pp_only);
   Rig a = rig, b = rig;
   b.cameras[4] = shifted;

@@ -19,7 +19,8 @@ bool SubpixelOptions::IsValid(std::string* why) const {
   };
   if (patch_px < 3) return fail("patch_px must be >= 3");
   if (search_margin_px < 0) return fail("search_margin_px must be >= 0");
-  if (gauss_px < 0 || (gauss_px > 1 && gauss_px % 2 == 0)) return fail("gauss_px must be 0, 1 or odd (a Gaussian kernel size)");
+  if (gauss_px < 0 || (gauss_px > 1 && gauss_px % 2 == 0))
+    return fail("gauss_px must be 0, 1 or odd (a Gaussian kernel size)");
   if (max_iterations < 1) return fail("max_iterations must be >= 1");
   if (!(epsilon > 0)) return fail("epsilon must be > 0");
   if (!(min_correlation >= -1 && min_correlation <= 1)) return fail("min_correlation must be in [-1, 1]");
@@ -76,7 +77,8 @@ std::optional<Vec2> align_patch(const cv::Mat& a, const Vec2& pa, const cv::Mat&
     x0 = std::min(x0, c.x()), y0 = std::min(y0, c.y()), x1 = std::max(x1, c.x()), y1 = std::max(y1, c.y());
   }
   if (x1 - x0 > 4 * side || y1 - y0 > 4 * side) return std::nullopt;  // degenerate map
-  cv::Rect crop(static_cast<int>(std::floor(x0)) - opt.search_margin_px, static_cast<int>(std::floor(y0)) - opt.search_margin_px,
+  cv::Rect crop(static_cast<int>(std::floor(x0)) - opt.search_margin_px,
+                static_cast<int>(std::floor(y0)) - opt.search_margin_px,
                 static_cast<int>(std::ceil(x1 - x0)) + 2 * opt.search_margin_px + 1,
                 static_cast<int>(std::ceil(y1 - y0)) + 2 * opt.search_margin_px + 1);
   crop &= cv::Rect(0, 0, b.cols, b.rows);
@@ -97,10 +99,12 @@ std::optional<Vec2> align_patch(const cv::Mat& a, const Vec2& pa, const cv::Mat&
   // without it: the two images are blurred in their own pixel frames, which differ by the map, and
   // the mismatched blur shifts the optimum by up to ~0.1 px on fine texture.
   double rho = 0;
-  const cv::TermCriteria crit(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, opt.max_iterations, opt.epsilon);
+  const cv::TermCriteria crit(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, opt.max_iterations,
+                              opt.epsilon);
   try {
     if (opt.gauss_px > 1)
-      rho = cv::findTransformECC(a(ta), b(crop), warp, cv::MOTION_HOMOGRAPHY, crit, cv::noArray(), opt.gauss_px);
+      rho = cv::findTransformECC(a(ta), b(crop), warp, cv::MOTION_HOMOGRAPHY, crit, cv::noArray(),
+                                 opt.gauss_px);
     rho = cv::findTransformECC(a(ta), b(crop), warp, cv::MOTION_HOMOGRAPHY, crit, cv::noArray(), 1);
   } catch (const cv::Exception&) {
     return std::nullopt;
@@ -162,7 +166,8 @@ std::optional<Vec2> align_patch(const cv::Mat& a, const Vec2& pa, const cv::Mat&
       const int ix[3] = {0, 2, 3}, iy[3] = {1, 4, 5};
       for (int i = 0; i < 3; ++i)
         for (int j = 0; j < 3; ++j) f(ix[i], ix[j]) -= m(i, j), f(iy[i], iy[j]) -= m(i, j);
-      if (Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>>(f).eigenvalues()(0) <= 0) return std::nullopt;
+      if (Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>>(f).eigenvalues()(0) <= 0)
+        return std::nullopt;
     }
     const Eigen::Matrix<double, 6, 6> fi = f.inverse();
     Eigen::Matrix2d cov_a = info->residual_sigma * info->residual_sigma * fi.topLeftCorner<2, 2>();

@@ -27,18 +27,18 @@
 namespace omma::calib {
 
 struct SubpixelOptions {
-  int patch_px = 21;            // template side (pixels of image A, odd)
-  int search_margin_px = 10;    // image B is cropped to the warped template's box plus this
-  int gauss_px = 5;             // ECC's Gaussian pre-filter size of the coarse stage (odd; 0 or 1:
-                                // no coarse stage); the fine stage runs unfiltered
-  int max_iterations = 12;      // ECC iterations per stage
-  double epsilon = 1e-5;        // ECC convergence threshold (parameter increment)
-  double min_correlation = 0.8; // reject alignments with a lower ECC correlation coefficient
-  double max_shift_px = 2.5;    // reject if the refined position moved more than this from the start
+  int patch_px = 21;              // template side (pixels of image A, odd)
+  int search_margin_px = 10;      // image B is cropped to the warped template's box plus this
+  int gauss_px = 5;               // ECC's Gaussian pre-filter size of the coarse stage (odd; 0 or 1:
+                                  // no coarse stage); the fine stage runs unfiltered
+  int max_iterations = 12;        // ECC iterations per stage
+  double epsilon = 1e-5;          // ECC convergence threshold (parameter increment)
+  double min_correlation = 0.8;   // reject alignments with a lower ECC correlation coefficient
+  double max_shift_px = 2.5;      // reject if the refined position moved more than this from the start
   double flatfield_sigma_px = 0;  // to_alignment_image: divide by the local mean (Gaussian of this
-                                // sigma, pixels); 0 = the plain grey image (see below)
+                                  // sigma, pixels); 0 = the plain grey image (see below)
   bool noise_corrected_covariance = true;  // AlignInfo::covariance without the noise's share of
-                                // the gradient energy (alignments where nothing is left fail)
+                                           // the gradient energy (alignments where nothing is left fail)
 
   // False (with the reason in *why) when a value lies outside the range the code relies on.
   bool IsValid(std::string* why = nullptr) const;
@@ -58,8 +58,8 @@ cv::Mat to_alignment_image(const cv::Mat& image, double flatfield_sigma_px = 0);
 
 // What an alignment measured besides the position.
 struct AlignInfo {
-  double correlation = 0;          // ECC's enhanced correlation coefficient
-  double residual_sigma = 0;       // RMS of template - (gain * warped b + offset), template units
+  double correlation = 0;     // ECC's enhanced correlation coefficient
+  double residual_sigma = 0;  // RMS of template - (gain * warped b + offset), template units
   Eigen::Matrix2d covariance = Eigen::Matrix2d::Identity();  // of the position in b, pixels^2
   Eigen::Matrix3d homography = Eigen::Matrix3d::Identity();  // final map, continuous pixels a -> b
 };

@@ -6,7 +6,6 @@
 #include <random>
 
 #include <gtest/gtest.h>
-
 #include <opencv2/imgproc.hpp>
 
 #include "omma/calib/calibrate.h"
@@ -34,7 +33,7 @@ TEST(Subpixel, RecoversKnownAffineCorrespondence) {
   // warpAffine with WARP_INVERSE_MAP takes dst (OpenCV coords) -> src coords.
   const Eigen::Matrix2d li = l.inverse();
   const Vec2 o = Vec2(125, 125) - 0.5 * Vec2::Ones();  // OpenCV coords of the continuous centre
-  const Vec2 t = -li * (o + shift) + o;  // src_cv = li (dst_cv - o - shift) + o
+  const Vec2 t = -li * (o + shift) + o;                // src_cv = li (dst_cv - o - shift) + o
   cv::Mat inv = (cv::Mat_<double>(2, 3) << li(0, 0), li(0, 1), t.x(), li(1, 0), li(1, 1), t.y());
   cv::Mat b;
   cv::warpAffine(a, b, inv, a.size(), cv::INTER_CUBIC | cv::WARP_INVERSE_MAP, cv::BORDER_REFLECT);
@@ -90,8 +89,9 @@ TEST(Options, SubpixelOptionsRefuseBadValues) {
   EXPECT_FALSE(o.IsValid(&why));
   EXPECT_NE(why.find("gauss_px"), std::string::npos);
   const cv::Mat img(64, 64, CV_32FC1, cv::Scalar(0.5));
-  EXPECT_NE(refusal([&] { align_patch(img, Vec2(32, 32), img, Eigen::Matrix3d::Identity(), o); }).find("gauss_px"),
-            std::string::npos);
+  EXPECT_NE(
+      refusal([&] { align_patch(img, Vec2(32, 32), img, Eigen::Matrix3d::Identity(), o); }).find("gauss_px"),
+      std::string::npos);
 }
 
 }  // namespace

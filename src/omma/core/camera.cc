@@ -12,9 +12,7 @@ bool Intrinsics::has_distortion() const {
   return false;
 }
 
-double Intrinsics::focal_for_aov(int width, double aov) {
-  return 0.5 * width / std::tan(aov / 2);
-}
+double Intrinsics::focal_for_aov(int width, double aov) { return 0.5 * width / std::tan(aov / 2); }
 
 double Intrinsics::bounding_aov() const {
   // Largest angle from the optical axis over the ray through every point of the border.
@@ -49,10 +47,10 @@ std::string to_string(Intrinsics::Field f) { return f == Intrinsics::Field::kCon
 
 Vec2 distort(const std::array<double, 5>& k, const Vec2& xy) {
   const double x = xy.x(), y = xy.y();
-  const double r2 = x * x + y * y;                                      // eq. 5.23
+  const double r2 = x * x + y * y;                                        // eq. 5.23
   const double p = 1 + k[0] * r2 + k[1] * r2 * r2 + k[4] * r2 * r2 * r2;  // eq. 5.24
-  return {p * x + 2 * k[3] * x * y + k[2] * (r2 + 2 * x * x),           // eq. 5.25
-          p * y + 2 * k[2] * x * y + k[3] * (r2 + 2 * y * y)};          // eq. 5.26
+  return {p * x + 2 * k[3] * x * y + k[2] * (r2 + 2 * x * x),             // eq. 5.25
+          p * y + 2 * k[2] * x * y + k[3] * (r2 + 2 * y * y)};            // eq. 5.26
 }
 
 Vec2 undistort(const std::array<double, 5>& k, const Vec2& xd, int iterations) {

@@ -12,12 +12,12 @@
 namespace omma {
 
 struct Intrinsics {
-  int width = 250;         // pixels
-  int height = 250;        // pixels
-  double fu = 200;         // focal length along u (image x), pixels
-  double fv = 200;         // focal length along v (image y), pixels
-  double cu = 125;         // principal point, image x, pixels (pixel-centre convention)
-  double cv = 125;         // principal point, image y, pixels
+  int width = 250;            // pixels
+  int height = 250;           // pixels
+  double fu = 200;            // focal length along u (image x), pixels
+  double fv = 200;            // focal length along v (image y), pixels
+  double cu = 125;            // principal point, image x, pixels (pixel-centre convention)
+  double cv = 125;            // principal point, image y, pixels
   std::array<double, 5> k{};  // k1, k2 radial; k3, k4 tangential; k5 radial (eq. 5.24-5.26)
   double aov = deg2rad(64);   // full angle of view of the camera cone, radians (eq. 2.3)
   // Which directions the camera sees. kCone (the thesis's model, eq. 2.3, and the default of rig

@@ -115,9 +115,7 @@ TEST(Camera, BoundingAovOfTheImage) {
   EXPECT_THROW(parse_field("square"), std::invalid_argument);
 }
 
-TEST(Camera, FocalForAov) {
-  EXPECT_NEAR(Intrinsics::focal_for_aov(250, deg2rad(90)), 125.0, 1e-9);
-}
+TEST(Camera, FocalForAov) { EXPECT_NEAR(Intrinsics::focal_for_aov(250, deg2rad(90)), 125.0, 1e-9); }
 
 }  // namespace
 }  // namespace omma

@@ -16,7 +16,6 @@ std::uint32_t crc32(const void* data, std::size_t n, std::uint32_t crc) {
   return static_cast<std::uint32_t>(::crc32_z(crc, static_cast<const Bytef*>(data), n));
 }
 
-
 namespace {
 std::string format_hash(XXH64_hash_t h) { return fmt::format("xxh3:{:016x}", static_cast<uint64_t>(h)); }
 }  // namespace

@@ -58,7 +58,8 @@ std::vector<fs::path> expand_shot_folders(const std::vector<fs::path>& paths) {
     for (const auto& e : fs::directory_iterator(p)) {
       const std::string name = e.path().filename().string();
       if (e.is_directory() && name.rfind("shot_", 0) == 0) shots.push_back(e.path());
-      if (e.is_regular_file() && name.rfind("cam_", 0) == 0 && e.path().extension() == ".png") has_frames = true;
+      if (e.is_regular_file() && name.rfind("cam_", 0) == 0 && e.path().extension() == ".png")
+        has_frames = true;
     }
     if (has_frames) {
       out.push_back(p);
@@ -66,7 +67,8 @@ std::vector<fs::path> expand_shot_folders(const std::vector<fs::path>& paths) {
       std::sort(shots.begin(), shots.end());
       out.insert(out.end(), shots.begin(), shots.end());
     } else {
-      throw IoError("'" + p.string() + "' is neither a frames folder (cam_XX.png) nor a shots folder (shot_XX/)");
+      throw IoError("'" + p.string() +
+                    "' is neither a frames folder (cam_XX.png) nor a shots folder (shot_XX/)");
     }
   }
   return out;

@@ -36,7 +36,8 @@ std::vector<cv::Mat> load_raw_frames(const std::filesystem::path& dir, const Rig
 // is neither.
 std::vector<std::filesystem::path> expand_shot_folders(const std::vector<std::filesystem::path>& paths);
 // load_frames of every folder of expand_shot_folders(paths): one frame set per shot.
-std::vector<std::vector<cv::Mat>> load_frame_sets(const std::vector<std::filesystem::path>& paths, const Rig& rig);
+std::vector<std::vector<cv::Mat>> load_frame_sets(const std::vector<std::filesystem::path>& paths,
+                                                  const Rig& rig);
 
 // 8U / 16U / 32F image -> CV_32F with the same channels, values in [0, 1].
 cv::Mat to_float01(const cv::Mat& image);

@@ -69,15 +69,12 @@ Frame frame_looking_at(const Vec3& t_in, const Vec3& down_hint) {
 
 FrameError frame_error(const Frame& f) {
   FrameError e;
-  e.max_norm_error = std::max({std::abs(f.t.norm() - 1), std::abs(f.u.norm() - 1),
-                               std::abs(f.v.norm() - 1)});
+  e.max_norm_error = std::max({std::abs(f.t.norm() - 1), std::abs(f.u.norm() - 1), std::abs(f.v.norm() - 1)});
   e.max_dot = std::max({std::abs(f.t.dot(f.u)), std::abs(f.t.dot(f.v)), std::abs(f.u.dot(f.v))});
   e.handedness_error = (f.u.cross(f.v) - f.t).norm();
   return e;
 }
 
-double angle_between(const Vec3& a, const Vec3& b) {
-  return std::atan2(a.cross(b).norm(), a.dot(b));
-}
+double angle_between(const Vec3& a, const Vec3& b) { return std::atan2(a.cross(b).norm(), a.dot(b)); }
 
 }  // namespace omma

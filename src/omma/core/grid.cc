@@ -11,10 +11,14 @@ namespace omma {
 
 AngularSpan angular_span(Projection p) {
   switch (p) {
-    case Projection::kEquirect: return {2 * kPi, kPi / 2};
-    case Projection::kVr180: return {kPi, kPi};
-    case Projection::kEquirectFull: return {2 * kPi, kPi};
-    case Projection::kEquirect100: return {2 * kPi, deg2rad(100)};
+    case Projection::kEquirect:
+      return {2 * kPi, kPi / 2};
+    case Projection::kVr180:
+      return {kPi, kPi};
+    case Projection::kEquirectFull:
+      return {2 * kPi, kPi};
+    case Projection::kEquirect100:
+      return {2 * kPi, deg2rad(100)};
   }
   return {2 * kPi, kPi};
 }
@@ -30,10 +34,14 @@ Projection parse_projection(const std::string& name) {
 
 std::string to_string(Projection p) {
   switch (p) {
-    case Projection::kEquirect: return "equirect";
-    case Projection::kVr180: return "vr180";
-    case Projection::kEquirectFull: return "equirect-full";
-    case Projection::kEquirect100: return "equirect-100";
+    case Projection::kEquirect:
+      return "equirect";
+    case Projection::kVr180:
+      return "vr180";
+    case Projection::kEquirectFull:
+      return "equirect-full";
+    case Projection::kEquirect100:
+      return "equirect-100";
   }
   return "?";
 }
@@ -125,8 +133,10 @@ Size2 parse_size(const std::string& text, bool banded) {
     return v;
   };
   const int64_t w = number(0, x), h = number(x + 1, text.size());
-  if (banded) check_banded_size(w, h, "size");
-  else check_image_size(w, h, "size");
+  if (banded)
+    check_banded_size(w, h, "size");
+  else
+    check_image_size(w, h, "size");
   return Size2{int(w), int(h)};
 }
 

@@ -11,8 +11,8 @@
 namespace omma {
 
 enum class Projection {
-  kEquirect,     // 360 x 90 deg: phi 360..0 left to right (G1), theta 0 (dome axis) top .. 90 deg bottom
-  kVr180,        // 180 x 180 deg half-equirectangular, dome axis (+z) at the centre, right=-x, up=+y (G2)
+  kEquirect,      // 360 x 90 deg: phi 360..0 left to right (G1), theta 0 (dome axis) top .. 90 deg bottom
+  kVr180,         // 180 x 180 deg half-equirectangular, dome axis (+z) at the centre, right=-x, up=+y (G2)
   kEquirectFull,  // 360 x 180 deg: theta 0 top .. 180 deg bottom (full-sphere rigs)
   kEquirect100    // 360 x 100 deg: theta 0 top .. 100 deg bottom (Giga-Eye, thesis Table 7.4)
 };

@@ -1,8 +1,8 @@
 #include "omma/core/grid.h"
 
-#include <gtest/gtest.h>
-
 #include <cmath>
+
+#include <gtest/gtest.h>
 
 namespace omma {
 namespace {
@@ -19,17 +19,17 @@ TEST(Grid, EquirectTopRowIsDomeAxis) {
   PanoGrid g{Projection::kEquirect, 1920, 512};
   EXPECT_NEAR(g.direction(100, 0).z(), 1.0, 1e-12);
   EXPECT_NEAR(g.direction(0, 512).z(), 0.0, 1e-12);
-  EXPECT_NEAR((g.direction(0, 512) - Vec3::UnitX()).norm(), 0, 1e-12);     // left edge = +x (G1)
-  EXPECT_NEAR((g.direction(960, 512) + Vec3::UnitX()).norm(), 0, 1e-12);   // centre = -x
-  EXPECT_NEAR((g.direction(480, 512) + Vec3::UnitY()).norm(), 0, 1e-12);   // a quarter turn right = -y
+  EXPECT_NEAR((g.direction(0, 512) - Vec3::UnitX()).norm(), 0, 1e-12);    // left edge = +x (G1)
+  EXPECT_NEAR((g.direction(960, 512) + Vec3::UnitX()).norm(), 0, 1e-12);  // centre = -x
+  EXPECT_NEAR((g.direction(480, 512) + Vec3::UnitY()).norm(), 0, 1e-12);  // a quarter turn right = -y
 }
 
 // conventions.h: a panorama is the world as seen by a person at the rig's centre. Wherever that
 // person looks (f, with "up" h the image's up there), the image's right is their right, f x h, and
 // never their left: the grids are not mirrored.
 TEST(Grid, ImageRightIsTheViewersRightInEveryProjection) {
-  for (Projection p : {Projection::kVr180, Projection::kEquirect, Projection::kEquirectFull,
-                       Projection::kEquirect100}) {
+  for (Projection p :
+       {Projection::kVr180, Projection::kEquirect, Projection::kEquirectFull, Projection::kEquirect100}) {
     const PanoGrid g{p, 720, 360};
     int checked = 0;
     for (int r = 10; r < 350; r += 20)
@@ -61,8 +61,8 @@ TEST(Grid, EquirectLongitudeFunctionsAreInverse) {
 }
 
 TEST(Grid, RoundTripAllProjections) {
-  for (Projection p : {Projection::kVr180, Projection::kEquirect, Projection::kEquirectFull,
-                       Projection::kEquirect100}) {
+  for (Projection p :
+       {Projection::kVr180, Projection::kEquirect, Projection::kEquirectFull, Projection::kEquirect100}) {
     PanoGrid g{p, 640, 320};
     for (int r = 3; r < 320; r += 37)
       for (int c = 2; c < 640; c += 41) {

@@ -11,8 +11,8 @@ namespace fs = std::filesystem;
 
 void write_atomically(const fs::path& path, const std::function<void(const fs::path&)>& write) {
   const fs::path dir = path.has_parent_path() ? path.parent_path() : fs::path(".");
-  if (!fs::is_directory(dir)) throw IoError("cannot write '" + path.string() + "': folder '" +
-                                            dir.string() + "' does not exist");
+  if (!fs::is_directory(dir))
+    throw IoError("cannot write '" + path.string() + "': folder '" + dir.string() + "' does not exist");
   std::random_device rd;
   // Keep the extension so that format-by-extension writers (OpenCV) still work.
   const fs::path tmp = dir / ("." + path.stem().string() + ".tmp" + std::to_string(rd() % 1000000) +
@@ -73,13 +73,14 @@ void read_bounded(const fs::path& path, std::uintmax_t max_bytes, const std::str
   const fs::file_status st = fs::status(path, ec);
   if (ec || st.type() == fs::file_type::not_found)
     throw IoError(what + " '" + path.string() + "' does not exist");
-  if (st.type() == fs::file_type::directory) throw IoError("'" + path.string() + "' is a folder, not a " + what);
+  if (st.type() == fs::file_type::directory)
+    throw IoError("'" + path.string() + "' is a folder, not a " + what);
   if (st.type() != fs::file_type::regular)
     throw IoError(what + " '" + path.string() + "' is not a regular file (a device, FIFO or socket)");
   const std::uintmax_t size = fs::file_size(path, ec);
   auto too_large = [&](std::uintmax_t n) {
-    return IoError(fmt::format("{} '{}' is too large ({}{} bytes; the limit is {} bytes)", what, path.string(),
-                               n > max_bytes ? "" : "more than ", n, max_bytes));
+    return IoError(fmt::format("{} '{}' is too large ({}{} bytes; the limit is {} bytes)", what,
+                               path.string(), n > max_bytes ? "" : "more than ", n, max_bytes));
   };
   if (!ec && size > max_bytes) throw too_large(size);
   std::ifstream in(path, std::ios::binary);

@@ -10,8 +10,9 @@ namespace {
 void check_size(std::int64_t width, std::int64_t height, const std::string& what, std::int64_t side,
                 std::int64_t pixels) {
   if (width < 1 || height < 1 || width > side || height > side || width * height > pixels)
-    throw std::invalid_argument(fmt::format("{} {}x{} is out of range (1..{} pixels a side, at most {} pixels)",
-                                            what, width, height, side, pixels));
+    throw std::invalid_argument(
+        fmt::format("{} {}x{} is out of range (1..{} pixels a side, at most {} pixels)", what, width, height,
+                    side, pixels));
 }
 }  // namespace
 

@@ -15,8 +15,8 @@ inline constexpr std::int64_t kMaxImagePixels = std::int64_t(1) << 28;
 
 // Panoramas rendered band by band (`omma render`, render/pano_render.h: the Giga-Eye's 17700 x 4650)
 // may be larger: at most 65536 pixels a side and 2^30 pixels in all, while each band (a map's
-// window, as wide as the panorama) holds at most kMaxImagePixels; 2^30 keeps every pixel index of the whole panorama
-// in a signed 32-bit int.
+// window, as wide as the panorama) holds at most kMaxImagePixels; 2^30 keeps every pixel index of the whole
+// panorama in a signed 32-bit int.
 inline constexpr int kMaxBandedSide = 65536;
 inline constexpr std::int64_t kMaxBandedPixels = std::int64_t(1) << 30;
 

@@ -10,7 +10,8 @@
 namespace omma {
 
 bool Photometric::is_identity() const {
-  return vignetting == std::array<double, 3>{0, 0, 0} && center_px.isZero(0) && gains == std::array<double, 3>{1, 1, 1};
+  return vignetting == std::array<double, 3>{0, 0, 0} && center_px.isZero(0) &&
+         gains == std::array<double, 3>{1, 1, 1};
 }
 
 bool Photometric::operator==(const Photometric& o) const {
@@ -61,8 +62,10 @@ double min_vignetting_falloff(const Photometric& p, int width, int height) {
   return lo;
 }
 
-std::array<double, 3> fit_vignetting(const std::vector<double>& s, const std::vector<double>& v, double* max_rel_error) {
-  if (s.size() != v.size() || s.size() < 3) throw std::invalid_argument("fit_vignetting: need >= 3 samples (s, v)");
+std::array<double, 3> fit_vignetting(const std::vector<double>& s, const std::vector<double>& v,
+                                     double* max_rel_error) {
+  if (s.size() != v.size() || s.size() < 3)
+    throw std::invalid_argument("fit_vignetting: need >= 3 samples (s, v)");
   const Eigen::Index n = static_cast<Eigen::Index>(s.size());
   // Relative residual (1 + b s + c s^2 + d s^3) / v - 1: linear in (b, c, d) with rows s^k / v.
   Eigen::MatrixXd a(n, 3);
@@ -92,28 +95,35 @@ std::array<double, 3> fit_vignetting(const std::vector<double>& s, const std::ve
 
 void validate_photometric(const Photometric& p, int width, int height, const std::string& where) {
   for (double v : p.vignetting)
-    if (!std::isfinite(v)) throw std::invalid_argument(where + ": photometric vignetting coefficient is not finite");
-  if (!p.center_px.allFinite()) throw std::invalid_argument(where + ": photometric vignetting centre is not finite");
+    if (!std::isfinite(v))
+      throw std::invalid_argument(where + ": photometric vignetting coefficient is not finite");
+  if (!p.center_px.allFinite())
+    throw std::invalid_argument(where + ": photometric vignetting centre is not finite");
   for (double g : p.gains)
     if (!std::isfinite(g) || g <= 0)
       throw std::invalid_argument(fmt::format("{}: photometric gain {} must be a positive number", where, g));
-  if (width <= 0 || height <= 0) throw std::invalid_argument(where + ": photometric model needs a positive image size");
+  if (width <= 0 || height <= 0)
+    throw std::invalid_argument(where + ": photometric model needs a positive image size");
   if (std::abs(p.center_px.x()) > width || std::abs(p.center_px.y()) > height)
-    throw std::invalid_argument(fmt::format("{}: photometric vignetting centre offset ({}, {}) px lies beyond the image",
-                                            where, p.center_px.x(), p.center_px.y()));
+    throw std::invalid_argument(
+        fmt::format("{}: photometric vignetting centre offset ({}, {}) px lies beyond the image", where,
+                    p.center_px.x(), p.center_px.y()));
   const double lo = min_vignetting_falloff(p, width, height);
   if (!(lo > 0.02))
-    throw std::invalid_argument(fmt::format(
-        "{}: photometric vignetting polynomial (b={}, c={}, d={}) falls to {:.3g} inside the image (must stay above "
-        "0.02: a falloff that reaches zero cannot be corrected)",
-        where, p.vignetting[0], p.vignetting[1], p.vignetting[2], lo));
+    throw std::invalid_argument(
+        fmt::format("{}: photometric vignetting polynomial (b={}, c={}, d={}) falls to {:.3g} inside the "
+                    "image (must stay above "
+                    "0.02: a falloff that reaches zero cannot be corrected)",
+                    where, p.vignetting[0], p.vignetting[1], p.vignetting[2], lo));
   // The largest V: the polynomial must not blow up either (a correction gain below 1/50).
   Photometric neg = p;
   for (double& v : neg.vignetting) v = -v;
   const double hi = 2 - min_vignetting_falloff(neg, width, height);  // max V = 2 - min(2 - V)
   if (hi > 50)
-    throw std::invalid_argument(fmt::format("{}: photometric vignetting polynomial reaches {:.3g} inside the image "
-                                            "(at most 50)", where, hi));
+    throw std::invalid_argument(
+        fmt::format("{}: photometric vignetting polynomial reaches {:.3g} inside the image "
+                    "(at most 50)",
+                    where, hi));
 }
 
 }  // namespace omma

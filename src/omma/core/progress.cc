@@ -1,8 +1,9 @@
 #include "omma/core/progress.h"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <cstdio>
-#include <unistd.h>
 
 namespace omma {
 namespace {

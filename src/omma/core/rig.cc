@@ -53,7 +53,8 @@ int64_t integer(const json& obj, const std::string& key, const std::string& wher
 }
 
 // An optional string field: absent gives `def`, any other type is an error.
-std::string text(const json& obj, const std::string& key, const std::string& where, const std::string& def = "") {
+std::string text(const json& obj, const std::string& key, const std::string& where,
+                 const std::string& def = "") {
   if (!obj.contains(key)) return def;
   const json& v = obj[key];
   if (!v.is_string()) throw RigError(where + ": field '" + key + "' must be a string");
@@ -96,7 +97,8 @@ Photometric photometric_from_json(const json& j, const std::string& where) {
   if (!j.is_object()) throw RigError(where + ": expected a JSON object");
   for (auto it = j.begin(); it != j.end(); ++it)
     if (it.key() != "vignetting" && it.key() != "vignetting_center_px" && it.key() != "gains_bgr")
-      throw RigError(where + ": unknown field '" + it.key() + "' (use vignetting, vignetting_center_px, gains_bgr)");
+      throw RigError(where + ": unknown field '" + it.key() +
+                     "' (use vignetting, vignetting_center_px, gains_bgr)");
   Photometric p;
   if (j.contains("vignetting")) p.vignetting = numbers<3>(j, "vignetting", where);
   if (j.contains("vignetting_center_px")) {
@@ -117,15 +119,15 @@ void validate_camera(const RigCamera& c) {
   const FrameError e = frame_error(c.frame);
   constexpr double tol = 1e-3;
   if (e.max_norm_error > tol)
-    throw RigError(fmt::format("{}: t, u, v must be unit vectors (length off by {:.3g})", where,
-                               e.max_norm_error));
+    throw RigError(
+        fmt::format("{}: t, u, v must be unit vectors (length off by {:.3g})", where, e.max_norm_error));
   if (e.max_dot > tol)
-    throw RigError(fmt::format("{}: t, u, v must be orthogonal (largest dot product {:.3g})", where,
-                               e.max_dot));
-  if (e.handedness_error > 10 * tol)
-    throw RigError(where + ": frame must be right-handed (u x v = t)");
+    throw RigError(
+        fmt::format("{}: t, u, v must be orthogonal (largest dot product {:.3g})", where, e.max_dot));
+  if (e.handedness_error > 10 * tol) throw RigError(where + ": frame must be right-handed (u x v = t)");
   if (c.position_mm.cwiseAbs().maxCoeff() > kMaxPositionMm)
-    throw RigError(fmt::format("{}: position_mm is more than {} mm from the dome centre", where, kMaxPositionMm));
+    throw RigError(
+        fmt::format("{}: position_mm is more than {} mm from the dome centre", where, kMaxPositionMm));
   const Intrinsics& in = c.in;
   try {
     check_image_size(in.width, in.height, "image size");
@@ -137,16 +139,17 @@ void validate_camera(const RigCamera& c) {
   const double side = std::max(in.width, in.height);
   for (const double f : {in.fu, in.fv})
     if (!(f >= kMinFocalRel * side && f <= kMaxFocalRel * side))
-      throw RigError(fmt::format("{}: focal length (fu={}, fv={}) must be positive, between {} and {} x the larger "
-                                 "image side ({} px)",
-                                 where, in.fu, in.fv, kMinFocalRel, kMaxFocalRel, side));
+      throw RigError(
+          fmt::format("{}: focal length (fu={}, fv={}) must be positive, between {} and {} x the larger "
+                      "image side ({} px)",
+                      where, in.fu, in.fv, kMinFocalRel, kMaxFocalRel, side));
   if (!(std::abs(in.cu) <= kMaxCentreRel * side && std::abs(in.cv) <= kMaxCentreRel * side))
-    throw RigError(fmt::format("{}: principal point ({}, {}) is not finite or more than {} image sides away", where,
-                               in.cu, in.cv, kMaxCentreRel));
+    throw RigError(fmt::format("{}: principal point ({}, {}) is not finite or more than {} image sides away",
+                               where, in.cu, in.cv, kMaxCentreRel));
   for (double k : in.k)
     if (!(std::abs(k) <= kMaxDistortion))
-      throw RigError(fmt::format("{}: distortion coefficient {} is not finite or larger than {} in magnitude", where,
-                                 k, kMaxDistortion));
+      throw RigError(fmt::format("{}: distortion coefficient {} is not finite or larger than {} in magnitude",
+                                 where, k, kMaxDistortion));
   if (!std::isfinite(in.aov) || in.aov <= 0 || in.aov >= kPi)
     throw RigError(fmt::format("{}: angle of view {} deg must be in (0, 180)", where, rad2deg(in.aov)));
   if (c.photometric) {
@@ -159,13 +162,15 @@ void validate_camera(const RigCamera& c) {
 }
 
 bool has_photometric(const Rig& rig) {
-  return std::any_of(rig.cameras.begin(), rig.cameras.end(), [](const RigCamera& c) { return c.photometric.has_value(); });
+  return std::any_of(rig.cameras.begin(), rig.cameras.end(),
+                     [](const RigCamera& c) { return c.photometric.has_value(); });
 }
 
 void Rig::validate() const {
   if (cameras.empty()) throw RigError("rig has no cameras");
   if (cameras.size() > size_t(kMaxCameras))
-    throw RigError(fmt::format("rig has {} cameras; the limit is {} (core/limits.h)", cameras.size(), kMaxCameras));
+    throw RigError(
+        fmt::format("rig has {} cameras; the limit is {} (core/limits.h)", cameras.size(), kMaxCameras));
   if (!(dome.radius_mm >= 0 && dome.radius_mm <= kMaxPositionMm))
     throw RigError(fmt::format("dome radius_mm must be a number in [0, {}]", kMaxPositionMm));
   std::unordered_set<int> ids;
@@ -181,8 +186,7 @@ json rig_to_json(const Rig& rig) {
   j["format"] = "omma-rig";
   j["version"] = kRigFormatVersion;
   j["name"] = rig.name;
-  j["dome"] = {{"radius_mm", rig.dome.radius_mm}, {"sphere", rig.dome.sphere},
-               {"method", rig.dome.method}};
+  j["dome"] = {{"radius_mm", rig.dome.radius_mm}, {"sphere", rig.dome.sphere}, {"method", rig.dome.method}};
   json cams = json::array();
   for (const auto& c : rig.cameras) {
     const YawPitchRoll a = ypr_from_frame(c.frame);
@@ -193,9 +197,9 @@ json rig_to_json(const Rig& rig) {
     jc["v"] = to_array(c.frame.v);
     jc["ypr_deg"] = json::array({rad2deg(a.yaw), rad2deg(a.pitch), rad2deg(a.roll)});
     jc["position_mm"] = to_array(c.position_mm);
-    jc["intrinsics"] = {{"width", c.in.width}, {"height", c.in.height}, {"fu", c.in.fu},
-                        {"fv", c.in.fv},       {"cu", c.in.cu},         {"cv", c.in.cv},
-                        {"k", c.in.k},         {"aov_deg", rad2deg(c.in.aov)}};
+    jc["intrinsics"] = {
+        {"width", c.in.width}, {"height", c.in.height}, {"fu", c.in.fu}, {"fv", c.in.fv},
+        {"cu", c.in.cu},       {"cv", c.in.cv},         {"k", c.in.k},   {"aov_deg", rad2deg(c.in.aov)}};
     if (c.photometric) {
       const Photometric& p = *c.photometric;
       jc["photometric"] = {{"vignetting", p.vignetting},
@@ -214,8 +218,8 @@ Rig rig_from_json(const json& j) {
   if (text(j, "format", "rig", "omma-rig") != "omma-rig")
     throw RigError("not an omma rig file (format is not 'omma-rig')");
   if (j.contains("version") && integer(j, "version", "rig", INT64_MIN, INT64_MAX) != kRigFormatVersion)
-    throw RigError(fmt::format("rig file version {} is not supported (this omma reads version {})", j["version"].dump(),
-                               kRigFormatVersion));
+    throw RigError(fmt::format("rig file version {} is not supported (this omma reads version {})",
+                               j["version"].dump(), kRigFormatVersion));
   Rig rig;
   rig.name = text(j, "name", "rig");
   const json& dome = field(j, "dome", "rig");
@@ -228,7 +232,8 @@ Rig rig_from_json(const json& j) {
   const json& cams = field(j, "cameras", "rig");
   if (!cams.is_array()) throw RigError("rig: field 'cameras' must be an array");
   if (cams.size() > size_t(kMaxCameras))
-    throw RigError(fmt::format("rig has {} cameras; the limit is {} (core/limits.h)", cams.size(), kMaxCameras));
+    throw RigError(
+        fmt::format("rig has {} cameras; the limit is {} (core/limits.h)", cams.size(), kMaxCameras));
   for (size_t i = 0; i < cams.size(); ++i) {
     const json& jc = cams[i];
     const std::string where = cam_name(jc, i);
@@ -273,7 +278,8 @@ Rig rig_from_json(const json& j) {
         c.in.k[n] = k[n].get<double>();
       }
     }
-    if (jc.contains("photometric")) c.photometric = photometric_from_json(jc["photometric"], where + " photometric");
+    if (jc.contains("photometric"))
+      c.photometric = photometric_from_json(jc["photometric"], where + " photometric");
     if (c.in.field == Intrinsics::Field::kImage && c.in.width > 0 && c.in.height > 0 && c.in.fu > 0 &&
         c.in.fv > 0)
       c.in.aov = c.in.bounding_aov();

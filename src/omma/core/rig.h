@@ -39,9 +39,9 @@ class RigError : public std::runtime_error {
 };
 
 struct DomeInfo {
-  double radius_mm = 5.0;    // outer radius of the dome the cameras sit on
-  bool sphere = false;       // full sphere (true) or hemisphere around +z (false)
-  std::string method;        // how the rig was designed (free text, e.g. "max-volume")
+  double radius_mm = 5.0;  // outer radius of the dome the cameras sit on
+  bool sphere = false;     // full sphere (true) or hemisphere around +z (false)
+  std::string method;      // how the rig was designed (free text, e.g. "max-volume")
 };
 
 struct RigCamera {
@@ -70,7 +70,7 @@ struct Rig {
 void validate_camera(const RigCamera& cam);
 
 nlohmann::json rig_to_json(const Rig& rig);
-Rig rig_from_json(const nlohmann::json& j);  // validates
+Rig rig_from_json(const nlohmann::json& j);       // validates
 Rig load_rig(const std::filesystem::path& path);  // validates; RigError with the path on failure
 // Does any camera carry a photometric model?
 bool has_photometric(const Rig& rig);

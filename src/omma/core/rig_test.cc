@@ -94,8 +94,7 @@ TEST(Rig, RejectsBadInputWithClearMessages) {
   EXPECT_NE(with([](auto& j) { j["cameras"][0]["t"] = {0, 0, 2}; }).find("unit"), std::string::npos);
   EXPECT_NE(with([](auto& j) { j["cameras"][0]["u"] = j["cameras"][0]["t"]; }).find("orthogonal"),
             std::string::npos);
-  EXPECT_NE(with([](auto& j) { j["cameras"][1]["intrinsics"]["fu"] = -3; }).find("focal"),
-            std::string::npos);
+  EXPECT_NE(with([](auto& j) { j["cameras"][1]["intrinsics"]["fu"] = -3; }).find("focal"), std::string::npos);
   EXPECT_NE(with([](auto& j) { j["cameras"][1]["intrinsics"]["aov_deg"] = 180; }).find("angle of view"),
             std::string::npos);
   EXPECT_NE(with([](auto& j) { j["cameras"][1]["intrinsics"].erase("cv"); }).find("missing field 'cv'"),
@@ -117,16 +116,20 @@ TEST(Rig, RejectsBadInputWithClearMessages) {
 TEST(Rig, RejectsOutOfRangeNumbersWrongTypesAndVersions) {
   auto has = [](const std::string& msg, const char* part) { return msg.find(part) != std::string::npos; };
   // 4294967546 = 2^32 + 250 used to become 250, 4294967297 -> 1, 4294967296 -> 0.
-  EXPECT_TRUE(has(with([](auto& j) { j["cameras"][0]["intrinsics"]["width"] = 4294967546ull; }), "out of range"));
-  EXPECT_TRUE(has(with([](auto& j) { j["cameras"][0]["intrinsics"]["height"] = 4294967297ll; }), "out of range"));
+  EXPECT_TRUE(
+      has(with([](auto& j) { j["cameras"][0]["intrinsics"]["width"] = 4294967546ull; }), "out of range"));
+  EXPECT_TRUE(
+      has(with([](auto& j) { j["cameras"][0]["intrinsics"]["height"] = 4294967297ll; }), "out of range"));
   EXPECT_TRUE(has(with([](auto& j) { j["cameras"][1]["id"] = 4294967296ll; }), "out of range"));
   EXPECT_TRUE(has(with([](auto& j) { j["cameras"][1]["id"] = 18446744073709551615ull; }), "out of range"));
   EXPECT_TRUE(has(with([](auto& j) { j["cameras"][1]["id"] = -1; }), "out of range"));
   EXPECT_TRUE(has(with([](auto& j) { j["cameras"][0]["intrinsics"]["width"] = 16385; }), "out of range"));
-  EXPECT_TRUE(has(with([](auto& j) { j["cameras"][0]["intrinsics"]["width"] = 250.5; }), "must be an integer"));
+  EXPECT_TRUE(
+      has(with([](auto& j) { j["cameras"][0]["intrinsics"]["width"] = 250.5; }), "must be an integer"));
   // Integers beyond 64 bits are parsed as floating point: not an integer.
-  EXPECT_TRUE(has(with([](auto& j) { j["cameras"][0]["id"] = nlohmann::json::parse("100000000000000000000000"); }),
-                  "must be an integer"));
+  EXPECT_TRUE(
+      has(with([](auto& j) { j["cameras"][0]["id"] = nlohmann::json::parse("100000000000000000000000"); }),
+          "must be an integer"));
   // Focal lengths: 1e-320 (a denormal) made 1/f infinite and crashed the simulator.
   for (double f : {1e-320, 0.0, -200.0, 0.2, 1e300})
     EXPECT_TRUE(has(with([f](auto& j) { j["cameras"][1]["intrinsics"]["fv"] = f; }), "focal")) << f;
@@ -136,7 +139,8 @@ TEST(Rig, RejectsOutOfRangeNumbersWrongTypesAndVersions) {
   EXPECT_TRUE(has(with([](auto& j) { j["dome"]["radius_mm"] = 1e300; }), "radius_mm"));
   // Wrong types are errors, not silently dropped; unknown versions are refused.
   EXPECT_TRUE(has(with([](auto& j) { j["name"] = 5; }), "'name' must be a string"));
-  EXPECT_TRUE(has(with([](auto& j) { j["dome"]["method"] = nlohmann::json::array(); }), "'method' must be a string"));
+  EXPECT_TRUE(
+      has(with([](auto& j) { j["dome"]["method"] = nlohmann::json::array(); }), "'method' must be a string"));
   EXPECT_TRUE(has(with([](auto& j) { j["format"] = 1; }), "'format' must be a string"));
   EXPECT_TRUE(has(with([](auto& j) { j["version"] = 99; }), "version 99 is not supported"));
   EXPECT_TRUE(has(with([](auto& j) { j["version"] = "1"; }), "'version' must be an integer"));

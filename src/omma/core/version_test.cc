@@ -1,10 +1,10 @@
 #include "omma/core/version.h"
 
-#include <gtest/gtest.h>
-
 #include <fstream>
 #include <regex>
 #include <string>
+
+#include <gtest/gtest.h>
 
 namespace omma {
 namespace {

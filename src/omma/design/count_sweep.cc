@@ -18,7 +18,8 @@ bool CountSweepOptions::IsValid(std::string* why) const {
   };
   if (!(r_phys_mm > 0)) return fail("r_phys must be positive");
   for (double rv : r_virtual_mm)
-    if (!(rv > 0) || !std::isfinite(rv)) return fail(fmt::format("R_vir {} mm must be a positive number", rv));
+    if (!(rv > 0) || !std::isfinite(rv))
+      return fail(fmt::format("R_vir {} mm must be a positive number", rv));
   // The ranges are walked from min to max in steps: a step <= 0 would never end.
   if (!(aov_min_deg > 0 && aov_max_deg >= aov_min_deg && aov_max_deg < 360 && aov_step_deg > 0))
     return fail("angle of view range: need 0 < aov_min_deg <= aov_max_deg < 360 and aov_step_deg > 0");
@@ -41,20 +42,28 @@ std::vector<double> range(double lo, double hi, double step) {
 
 std::string method_color(Method m) {
   switch (m) {
-    case Method::kLayered: return "#1f5fd6";     // the earlier method, blue as in Fig. 3.7
-    case Method::kMinCameras: return "#d62728";  // the proposed method, red as in Fig. 3.7
-    case Method::kCvt: return "#2ca02c";
-    case Method::kMaxVolume: return "#9467bd";
+    case Method::kLayered:
+      return "#1f5fd6";  // the earlier method, blue as in Fig. 3.7
+    case Method::kMinCameras:
+      return "#d62728";  // the proposed method, red as in Fig. 3.7
+    case Method::kCvt:
+      return "#2ca02c";
+    case Method::kMaxVolume:
+      return "#9467bd";
   }
   return "black";
 }
 
 std::string method_label(Method m) {
   switch (m) {
-    case Method::kLayered: return "layered [65]";
-    case Method::kMinCameras: return "min-cameras";
-    case Method::kCvt: return "CVT";
-    case Method::kMaxVolume: return "max-volume";
+    case Method::kLayered:
+      return "layered [65]";
+    case Method::kMinCameras:
+      return "min-cameras";
+    case Method::kCvt:
+      return "CVT";
+    case Method::kMaxVolume:
+      return "max-volume";
   }
   return "?";
 }
@@ -94,8 +103,8 @@ std::vector<SweepRow> run_sweep(const CountSweepOptions& p) {
 std::string sweep_csv(const std::vector<SweepRow>& rows) {
   std::string s = "figure,method,aov_deg,r_virtual_mm,r_virtual_over_r_phys,cameras\n";
   for (const SweepRow& r : rows)
-    s += fmt::format("{},{},{:g},{:g},{:g},{}\n", r.figure, to_string(r.method), r.aov_deg,
-                     r.r_virtual_mm, r.ratio, r.cameras < 0 ? std::string() : std::to_string(r.cameras));
+    s += fmt::format("{},{},{:g},{:g},{:g},{}\n", r.figure, to_string(r.method), r.aov_deg, r.r_virtual_mm,
+                     r.ratio, r.cameras < 0 ? std::string() : std::to_string(r.cameras));
   return s;
 }
 
@@ -105,8 +114,7 @@ std::string sweep_aov_svg(const std::vector<SweepRow>& rows, const CountSweepOpt
   for (size_t k = 0; k < p.r_virtual_mm.size(); ++k) {
     const double rv = p.r_virtual_mm[k];
     Plot plot;
-    plot.title = fmt::format("({}) R_vir = {:g} mm, R_phy = {:g} mm", letters[k % 26], rv,
-                             p.r_phys_mm);
+    plot.title = fmt::format("({}) R_vir = {:g} mm, R_phy = {:g} mm", letters[k % 26], rv, p.r_phys_mm);
     plot.x_label = "angle of view of each camera (deg)";
     plot.y_label = "cameras needed";
     for (Method m : p.aov_methods) {
@@ -125,8 +133,7 @@ std::string sweep_aov_svg(const std::vector<SweepRow>& rows, const CountSweepOpt
 
 std::string sweep_ratio_svg(const std::vector<SweepRow>& rows, const CountSweepOptions& p) {
   Plot plot;
-  plot.title = fmt::format("Cameras vs R_vir / R_phy at AOV = {:g} deg (thesis Fig. 3.7)",
-                           p.fixed_aov_deg);
+  plot.title = fmt::format("Cameras vs R_vir / R_phy at AOV = {:g} deg (thesis Fig. 3.7)", p.fixed_aov_deg);
   plot.x_label = fmt::format("R_vir / R_phy   (R_phy = {:g} mm)", p.r_phys_mm);
   plot.y_label = "cameras needed";
   for (Method m : p.ratio_methods) {

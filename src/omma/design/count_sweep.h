@@ -14,7 +14,7 @@ struct CountSweepOptions {
   std::vector<double> r_virtual_mm = {8, 10, 12, 25, 30, 40};  // Fig. 3.3 / 3.9 panels
   double aov_min_deg = 40, aov_max_deg = 120, aov_step_deg = 4;
   std::vector<Method> aov_methods = {Method::kLayered, Method::kCvt, Method::kMinCameras};
-  double fixed_aov_deg = 64;                                  // Fig. 3.7
+  double fixed_aov_deg = 64;                                   // Fig. 3.7
   double ratio_min = 1.6, ratio_max = 10.0, ratio_step = 0.2;  // R_vir / R_phy: 8/5 .. 50/5
   std::vector<Method> ratio_methods = {Method::kLayered, Method::kMinCameras};
   double check_step_deg = 0.5;
@@ -27,7 +27,7 @@ struct SweepRow {
   std::string figure;  // "aov" (Fig. 3.3/3.9) or "ratio" (Fig. 3.7)
   Method method = Method::kLayered;
   double aov_deg = 0, r_virtual_mm = 0, ratio = 0;
-  int cameras = -1;    // -1: no design (R_vir too close for this AOV)
+  int cameras = -1;  // -1: no design (R_vir too close for this AOV)
 };
 
 // Runs every design (in parallel, oneTBB), with a progress bar on stderr.

@@ -22,8 +22,8 @@ struct Cone {
   double c2 = 0;
   bool radial = false;  // p = rho t with rho >= 0
   double rho = 0;
-  bool image = false;   // rectangular field (Intrinsics::Field::kImage): the pyramid below
-  Vec3 n[4];            // inward normals of the planes through p and the image edges
+  bool image = false;  // rectangular field (Intrinsics::Field::kImage): the pyramid below
+  Vec3 n[4];           // inward normals of the planes through p and the image edges
 };
 
 // at_infinity: the cameras' positions do not matter (the pinholes collapse to the centre).
@@ -81,9 +81,12 @@ int cone_intervals(const Cone& k, const Vec3& w, std::array<Interval, 3>& out) {
     double lo = 0, hi = kInfinity;
     auto half = [&](const Vec3& n, bool strict) {
       const double an = n.dot(w), bn = n.dot(k.p);
-      if (an > 0) lo = std::max(lo, bn / an);
-      else if (an < 0) hi = std::min(hi, bn / an);
-      else if (bn > 0 || (strict && bn >= 0)) hi = -1;  // never (or only at R where it is 0)
+      if (an > 0)
+        lo = std::max(lo, bn / an);
+      else if (an < 0)
+        hi = std::min(hi, bn / an);
+      else if (bn > 0 || (strict && bn >= 0))
+        hi = -1;  // never (or only at R where it is 0)
     };
     half(k.t, true);
     for (const Vec3& n : k.n) half(n, false);
@@ -170,9 +173,7 @@ double covered_from_cones(const std::vector<Cone>& cones, const Vec3& w) {
 
 double Sampling::theta(int row) const { return std::min(row * step_rad, theta_max()); }
 
-Vec3 Sampling::direction(int row, int col) const {
-  return direction_from_spherical(theta(row), phi(col));
-}
+Vec3 Sampling::direction(int row, int col) const { return direction_from_spherical(theta(row), phi(col)); }
 
 double Sampling::weight(int row) const {
   const double lo = row == 0 ? 0.0 : 0.5 * (theta(row - 1) + theta(row));
@@ -233,8 +234,7 @@ struct RowResult {
 };
 
 // One pass over the sampling: counts at `distance` (if count) and R_vir (if rvir).
-std::vector<RowResult> scan(const Rig& rig, const Sampling& s, double distance, bool count,
-                            bool rvir) {
+std::vector<RowResult> scan(const Rig& rig, const Sampling& s, double distance, bool count, bool rvir) {
   const bool inf = std::isinf(distance);
   const std::vector<Cone> cones = make_cones(rig, inf && !rvir);
   const std::vector<double>& cphi = s.cos_phi;
@@ -409,8 +409,8 @@ cv::Mat render_coverage_map(const cv::Mat& counts, const std::string& title) {
     for (int c = 0; c < counts.cols; ++c)
       out.at<cv::Vec3b>(r, c) = coverage_color(counts.at<int>(r, c), max_count);
   const int y0 = counts.rows;
-  cv::putText(out, title, {line / 2, y0 + line}, cv::FONT_HERSHEY_SIMPLEX, font,
-              cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
+  cv::putText(out, title, {line / 2, y0 + line}, cv::FONT_HERSHEY_SIMPLEX, font, cv::Scalar(255, 255, 255), 1,
+              cv::LINE_AA);
   int x = line / 2;
   const int sw = static_cast<int>(0.7 * line);
   cv::putText(out, "cameras:", {x, y0 + 2 * line + sw / 2}, cv::FONT_HERSHEY_SIMPLEX, font,
@@ -418,8 +418,8 @@ cv::Mat render_coverage_map(const cv::Mat& counts, const std::string& title) {
   x += static_cast<int>(5.5 * line * font / 0.6 * 0.6) + line;
   for (int n = 0; n <= max_count && x + 3 * line < W; ++n) {
     const cv::Vec3b col = coverage_color(n, max_count);
-    cv::rectangle(out, cv::Rect(x, y0 + 2 * line - sw / 2, sw, sw),
-                  cv::Scalar(col[0], col[1], col[2]), cv::FILLED);
+    cv::rectangle(out, cv::Rect(x, y0 + 2 * line - sw / 2, sw, sw), cv::Scalar(col[0], col[1], col[2]),
+                  cv::FILLED);
     cv::rectangle(out, cv::Rect(x, y0 + 2 * line - sw / 2, sw, sw), cv::Scalar(200, 200, 200), 1);
     const std::string label = n == 0 ? "0 (gap)" : std::to_string(n);
     cv::putText(out, label, {x + sw + 4, y0 + 2 * line + sw / 2}, cv::FONT_HERSHEY_SIMPLEX, font,
@@ -463,8 +463,7 @@ inline int find_cover(const std::vector<Vec3>& axes, const Vec3& w, double cos_r
 }
 
 // First row (from the pole) with an uncovered sample, or s.rows; rows scanned in order.
-int first_uncovered_row(const std::vector<Vec3>& axes, const Sampling& s, double reach,
-                        int from_row) {
+int first_uncovered_row(const std::vector<Vec3>& axes, const Sampling& s, double reach, int from_row) {
   if (axes.empty()) return 0;
   const double cr = std::cos(reach);
   int hint = -1;
@@ -488,8 +487,7 @@ bool covers(const std::vector<Vec3>& axes, const Sampling& s, double reach) {
 
 double first_uncovered_theta(const std::vector<Vec3>& axes, const Sampling& s, double reach,
                              double from_theta) {
-  const int from = std::isinf(from_theta) ? s.rows
-                                          : static_cast<int>(std::floor(from_theta / s.step_rad));
+  const int from = std::isinf(from_theta) ? s.rows : static_cast<int>(std::floor(from_theta / s.step_rad));
   const int j = first_uncovered_row(axes, s, reach, std::min(from, s.rows));
   return j == s.rows ? kInfinity : s.theta(j);
 }

@@ -5,8 +5,8 @@
 // X - p_i and t_i is at most aov_i / 2; for a camera with a rectangular field
 // (Intrinsics::Field::kImage) when X - p_i projects inside its image (the fast path uses the four
 // planes through p_i and the image edges: exact without distortion, the undistorted edges with it).
-// At distance +infinity only directions count (X - p_i -> X). The field of view of the dome is the hemisphere theta in
-// [0, 90 deg] around +z, or the full sphere when rig.dome.sphere is true. A distance R is covered
+// At distance +infinity only directions count (X - p_i -> X). The field of view of the dome is the hemisphere
+// theta in [0, 90 deg] around +z, or the full sphere when rig.dome.sphere is true. A distance R is covered
 // when every direction w of the field of view has its point R w seen by at least one camera.
 // R_vir (the virtual radius, "overlap distance") is the smallest R from which on there is no gap.
 //
@@ -27,8 +27,8 @@ namespace omma::design {
 struct Sampling {
   double step_rad = deg2rad(0.1);
   bool sphere = false;
-  double theta_limit = 0;  // if > 0: the field of view ends at this polar angle (radians)
-  int rows = 0, cols = 0;  // theta samples (pole and rim included), phi samples
+  double theta_limit = 0;                // if > 0: the field of view ends at this polar angle (radians)
+  int rows = 0, cols = 0;                // theta samples (pole and rim included), phi samples
   std::vector<double> cos_phi, sin_phi;  // per column (filled by make_sampling)
   double theta_max() const { return theta_limit > 0 ? theta_limit : sphere ? kPi : kPi / 2; }
   double theta(int row) const;  // row * step, the last row clamped to theta_max
@@ -56,13 +56,13 @@ struct PolarBand {
 };
 
 struct CoverageSummary {
-  double distance_mm = 0;       // may be +infinity
+  double distance_mm = 0;  // may be +infinity
   double step_deg = 0;
   double theta_max_deg = 0;     // the sampled field of view: polar 0..theta_max
   double covered_fraction = 0;  // solid-angle fraction of the FOV seen by >= 1 camera
   int min_cameras = 0, max_cameras = 0;
-  double mean_cameras = 0;      // solid-angle weighted mean count
-  double r_virtual_mm = 0;      // R_vir (max over the samples of covered_from); inf if never
+  double mean_cameras = 0;                   // solid-angle weighted mean count
+  double r_virtual_mm = 0;                   // R_vir (max over the samples of covered_from); inf if never
   std::vector<double> solid_angle_by_count;  // [n]: steradians seen by exactly n cameras
   std::vector<double> row_theta_rad;         // per sample row: polar angle,
   std::vector<int> row_min, row_max;         // and the fewest / most cameras along it
@@ -75,13 +75,12 @@ struct CoverageSummary {
 // theta_max_rad > 0 limits the field of view to polar 0..theta_max (default: the dome's hemisphere
 // or sphere). Parallel (oneTBB).
 CoverageSummary analyze_coverage(const Rig& rig, double distance_mm, double step_rad,
-                               double theta_max_rad = 0);
+                                 double theta_max_rad = 0);
 // R_vir only (fast closed form, parallel).
 double virtual_radius(const Rig& rig, double step_rad);
 // Reference R_vir: bisection on "every sample is covered at R" between lo and hi (mm), to tol_mm.
 // Plain and slow; agrees with virtual_radius for rigs whose coverage grows with distance.
-double virtual_radius_bisection(const Rig& rig, double step_rad, double tol_mm = 1e-3,
-                                double hi_mm = 1e4);
+double virtual_radius_bisection(const Rig& rig, double step_rad, double tol_mm = 1e-3, double hi_mm = 1e4);
 
 // Per-pixel number of cameras that see distance_mm * grid.pixel_direction(col, row): CV_32SC1,
 // grid.height x grid.width. Parallel.

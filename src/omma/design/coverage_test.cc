@@ -104,7 +104,7 @@ TEST(Coverage, RenderedMapHasLegendAndColours) {
   counts(cv::Rect(80, 0, 80, 40)).setTo(3);
   const cv::Mat img = render_coverage_map(counts, "test");
   ASSERT_EQ(img.type(), CV_8UC3);
-  EXPECT_GT(img.rows, counts.rows);  // legend strip below
+  EXPECT_GT(img.rows, counts.rows);                          // legend strip below
   EXPECT_EQ(img.at<cv::Vec3b>(10, 10), cv::Vec3b(0, 0, 0));  // a gap is black
   EXPECT_EQ(img.at<cv::Vec3b>(10, 50), coverage_color(1, 3));
   EXPECT_EQ(img.at<cv::Vec3b>(10, 100), coverage_color(3, 3));

@@ -23,10 +23,14 @@ Method parse_method(const std::string& name) {
 
 std::string to_string(Method m) {
   switch (m) {
-    case Method::kLayered: return "layered";
-    case Method::kMinCameras: return "min-cameras";
-    case Method::kMaxVolume: return "max-volume";
-    case Method::kCvt: return "cvt";
+    case Method::kLayered:
+      return "layered";
+    case Method::kMinCameras:
+      return "min-cameras";
+    case Method::kMaxVolume:
+      return "max-volume";
+    case Method::kCvt:
+      return "cvt";
   }
   return "?";
 }
@@ -49,14 +53,14 @@ MaxVolumeLayout max_volume_layout(double r_phys_mm, const CameraSize& cam) {
   l.r_in_mm = r_phys_mm - cam.length_mm;  // r_in = r_out - l_cam (Fig. 3.4a)
   if (!(l.r_in_mm > 0))
     throw std::invalid_argument("max-volume: the camera length must be smaller than the radius");
-  l.d_cam_mm = std::hypot(cam.width_mm, cam.height_mm);                                // eq. 3.7
+  l.d_cam_mm = std::hypot(cam.width_mm, cam.height_mm);                                  // eq. 3.7
   const int nv = static_cast<int>(std::floor(kPi / 2 * l.r_in_mm / l.d_cam_mm + 1e-9));  // eq. 3.8
   if (nv < 1) throw std::invalid_argument("max-volume: not even one camera fits on the dome");
-  l.beta_rad = (kPi / 2) / (2 * nv);                                                   // eq. 3.9
+  l.beta_rad = (kPi / 2) / (2 * nv);  // eq. 3.9
   for (int i = 1; i <= nv; ++i) {
-    const double polar = (2 * i - 1) * l.beta_rad;                                     // eq. 3.10
-    const int nh = static_cast<int>(
-        std::floor(2 * kPi * l.r_in_mm * std::sin(polar) / l.d_cam_mm + 1e-9));           // eq. 3.11
+    const double polar = (2 * i - 1) * l.beta_rad;  // eq. 3.10
+    const int nh =
+        static_cast<int>(std::floor(2 * kPi * l.r_in_mm * std::sin(polar) / l.d_cam_mm + 1e-9));  // eq. 3.11
     l.polar_rad.push_back(polar);
     l.per_layer.push_back(std::max(nh, 1));
   }
@@ -77,14 +81,13 @@ void check_params(const DesignParams& p, bool needs_rvir) {
 
 // Directions of one layer: n cameras at polar angle `polar`, the first at azimuth `offset`.
 void add_layer(std::vector<Vec3>& axes, int n, double polar, double offset) {
-  for (int k = 0; k < n; ++k)
-    axes.push_back(direction_from_spherical(polar, offset + 2 * kPi * k / n));
+  for (int k = 0; k < n; ++k) axes.push_back(direction_from_spherical(polar, offset + 2 * kPi * k / n));
 }
 
 }  // namespace
 
-std::vector<double> search_layer_offsets(const std::vector<int>& counts,
-                                         const std::vector<double>& polar, bool sphere) {
+std::vector<double> search_layer_offsets(const std::vector<int>& counts, const std::vector<double>& polar,
+                                         bool sphere) {
   // Coordinate descent on the layers' azimuth offsets (the first layer stays at phi = 0): each
   // round scans every other layer's offset over one camera spacing in 1 deg steps and keeps the
   // one with the smallest covering radius (0.5 deg sampling); stops when a round improves nothing.
@@ -148,8 +151,8 @@ namespace {
 // What the designers check: the cap model of coverage.h with a conservative margin.
 struct Checker {
   Sampling s;
-  double beta = 0;  // eq. 3.2 reach at r_virtual
-  double reach = 0; // beta minus the sampling radius
+  double beta = 0;   // eq. 3.2 reach at r_virtual
+  double reach = 0;  // beta minus the sampling radius
   Checker(const DesignParams& p, bool sphere) : s(make_sampling(p.check_step_rad, sphere)) {
     beta = reach_angle(p.aov_rad, p.r_phys_mm, p.r_virtual_mm);
     reach = beta - sampling_radius(s);
@@ -197,8 +200,8 @@ std::vector<Vec3> panoptic_floors(int floors, std::vector<int>& layers) {
     const double th = 2 * i * a;
     const double st2 = std::sin(th) * std::sin(th);
     const double cos_dphi = (std::cos(2 * a) - std::cos(th) * std::cos(th)) / st2;
-    const int n = std::max(1, static_cast<int>(std::floor(2 * kPi / std::acos(std::clamp(
-                                                   cos_dphi, -1.0, 1.0)) + 1e-9)));
+    const int n = std::max(
+        1, static_cast<int>(std::floor(2 * kPi / std::acos(std::clamp(cos_dphi, -1.0, 1.0)) + 1e-9)));
     add_layer(axes, n, th, 0.0);
     layers.push_back(n);
   }
@@ -297,8 +300,8 @@ namespace {
 // §3.4.1 with a given number of layers nl: layer i nominally at (2i+1) beta_fine, beta_fine =
 // (pi/2) / (2 nl) (eq. 3.5). Returns false if no design was found.
 // Gives up (returns false) as soon as the design would reach `limit` cameras.
-bool min_cameras_with_layers(const Checker& chk, int nl, bool trim, size_t limit,
-                             std::vector<Vec3>& axes, std::vector<int>& layers) {
+bool min_cameras_with_layers(const Checker& chk, int nl, bool trim, size_t limit, std::vector<Vec3>& axes,
+                             std::vector<int>& layers) {
   const double beta = chk.reach;
   const double beta_fine = (kPi / 2) / (2 * nl);  // eq. 3.5
   const double trim_step = deg2rad(0.5);
@@ -394,10 +397,14 @@ Design design_cvt(const DesignParams& p) {
 
 Design design_rig(Method m, const DesignParams& p) {
   switch (m) {
-    case Method::kLayered: return design_layered(p);
-    case Method::kMinCameras: return design_min_cameras(p);
-    case Method::kMaxVolume: return design_max_volume(p);
-    case Method::kCvt: return design_cvt(p);
+    case Method::kLayered:
+      return design_layered(p);
+    case Method::kMinCameras:
+      return design_min_cameras(p);
+    case Method::kMaxVolume:
+      return design_max_volume(p);
+    case Method::kCvt:
+      return design_cvt(p);
   }
   throw std::invalid_argument("unknown method");
 }

@@ -32,11 +32,11 @@ struct CameraSize {
 CameraSize parse_camera_size(const std::string& text);
 
 struct DesignParams {
-  double aov_rad = deg2rad(64);  // full angle of view of every camera (Table 3.1)
-  double r_phys_mm = 5.0;        // outer dome radius, where the pinholes sit
-  double r_virtual_mm = 18.0;    // overlap distance to reach (not used by max-volume)
-  CameraSize cam;                // used by max-volume only
-  bool sphere = false;           // full sphere instead of the hemisphere around +z
+  double aov_rad = deg2rad(64);   // full angle of view of every camera (Table 3.1)
+  double r_phys_mm = 5.0;         // outer dome radius, where the pinholes sit
+  double r_virtual_mm = 18.0;     // overlap distance to reach (not used by max-volume)
+  CameraSize cam;                 // used by max-volume only
+  bool sphere = false;            // full sphere instead of the hemisphere around +z
   int width = 250, height = 250;  // pixels of every camera (Table 3.1)
   // Angular sampling (radians) of the field of view used by the designers' coverage checks. The
   // checks are conservative: a design passes only if the largest sampled gap plus the sampling
@@ -58,8 +58,8 @@ struct Design {
 // For a sphere the southern layers mirror the northern ones.
 struct MaxVolumeLayout {
   double r_in_mm = 0, d_cam_mm = 0, beta_rad = 0;
-  std::vector<int> per_layer;            // N_h,i
-  std::vector<double> polar_rad;         // (2i-1) beta
+  std::vector<int> per_layer;     // N_h,i
+  std::vector<double> polar_rad;  // (2i-1) beta
 };
 MaxVolumeLayout max_volume_layout(double r_phys_mm, const CameraSize& cam);
 

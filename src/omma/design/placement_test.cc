@@ -40,14 +40,10 @@ TEST(MaxVolume, TableLengthGivesThirteenInTheThirdLayer) {
   // Table 3.1's 1.85 mm length: r_in = 3.15 mm, third layer 13.
   EXPECT_EQ(max_volume_layout(5, CameraSize{1, 1, 1.85}).per_layer, (std::vector<int>{3, 9, 13}));
   // 3, 9, 12 holds for r_in between about 2.87 and 3.03 mm only.
-  EXPECT_EQ(max_volume_layout(5, CameraSize{1, 1, 5 - 2.88}).per_layer,
-            (std::vector<int>{3, 9, 12}));
-  EXPECT_EQ(max_volume_layout(5, CameraSize{1, 1, 5 - 3.02}).per_layer,
-            (std::vector<int>{3, 9, 12}));
-  EXPECT_NE(max_volume_layout(5, CameraSize{1, 1, 5 - 2.85}).per_layer,
-            (std::vector<int>{3, 9, 12}));
-  EXPECT_NE(max_volume_layout(5, CameraSize{1, 1, 5 - 3.05}).per_layer,
-            (std::vector<int>{3, 9, 12}));
+  EXPECT_EQ(max_volume_layout(5, CameraSize{1, 1, 5 - 2.88}).per_layer, (std::vector<int>{3, 9, 12}));
+  EXPECT_EQ(max_volume_layout(5, CameraSize{1, 1, 5 - 3.02}).per_layer, (std::vector<int>{3, 9, 12}));
+  EXPECT_NE(max_volume_layout(5, CameraSize{1, 1, 5 - 2.85}).per_layer, (std::vector<int>{3, 9, 12}));
+  EXPECT_NE(max_volume_layout(5, CameraSize{1, 1, 5 - 3.05}).per_layer, (std::vector<int>{3, 9, 12}));
 }
 
 TEST(Layered, PanopticFloorsAtFifteenMillimetres) {

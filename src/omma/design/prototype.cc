@@ -25,8 +25,8 @@ Rig thesis_prototype_rig() {
   for (size_t i = 0; i < l.per_layer.size(); ++i) {
     const int n = l.per_layer[i];
     for (int k = 0; k < n; ++k)
-      axes.push_back(direction_from_spherical(
-          l.polar_rad[i], deg2rad(kPrototypeLayerOffsetsDeg[i]) + 2 * kPi * k / n));
+      axes.push_back(
+          direction_from_spherical(l.polar_rad[i], deg2rad(kPrototypeLayerOffsetsDeg[i]) + 2 * kPi * k / n));
   }
   return radial_rig(axes, 5.0, ideal_intrinsics(deg2rad(64)), false, "max-volume", "thesis-24");
 }
@@ -39,11 +39,11 @@ Rig thesis_prototype_rig() {
 namespace omma::design {
 namespace {
 
-constexpr int kGigaLayerCount[4] = {1, 6, 15, 22};            // top to bottom, thesis L6429-6433
+constexpr int kGigaLayerCount[4] = {1, 6, 15, 22};               // top to bottom, thesis L6429-6433
 constexpr double kGigaLayerPolarDeg[4] = {0, 39.6, 59.3, 80.8};  // thesis L6435-6437
-constexpr double kGigaRadiusMm = 200;                          // thesis L6574
-constexpr int kGigaWidth = 2592, kGigaHeight = 1944;           // 5 MP (L6427 "1926" is a typo)
-constexpr double kGigaAovHDeg = 53, kGigaAovVDeg = 43;         // thesis L6425, Table 7.1
+constexpr double kGigaRadiusMm = 200;                            // thesis L6574
+constexpr int kGigaWidth = 2592, kGigaHeight = 1944;             // 5 MP (L6427 "1926" is a typo)
+constexpr double kGigaAovHDeg = 53, kGigaAovVDeg = 43;           // thesis L6425, Table 7.1
 
 // The layout chosen by coverage: search_gigaeye_layout(1000 mm, 1 deg) (prototype_test checks that
 // no single step of the search improves it). Portrait ring cameras (53 deg along the meridian, 43
@@ -143,7 +143,8 @@ std::string SensorMode::name() const {
 }
 
 Rig derive_sensor_mode(const Rig& full, const SensorMode& mode) {
-  if (mode.skip < 0 || mode.skip > 7) throw std::invalid_argument(fmt::format("skip {} must be 0..7", mode.skip));
+  if (mode.skip < 0 || mode.skip > 7)
+    throw std::invalid_argument(fmt::format("skip {} must be 0..7", mode.skip));
   if (mode.bin && mode.skip == 0) throw std::invalid_argument("binning needs skipping (skip >= 1)");
   const bool window = mode.window_width > 0 || mode.window_height > 0;
   if (window && mode.skip != 0) throw std::invalid_argument("a sub-window is read without skipping");
@@ -153,8 +154,8 @@ Rig derive_sensor_mode(const Rig& full, const SensorMode& mode) {
     if (window) {
       if (mode.window_width <= 0 || mode.window_height <= 0 || mode.window_width > in.width ||
           mode.window_height > in.height)
-        throw std::invalid_argument(fmt::format("sub-window {}x{} must fit the {}x{} sensor", mode.window_width,
-                                                mode.window_height, in.width, in.height));
+        throw std::invalid_argument(fmt::format("sub-window {}x{} must fit the {}x{} sensor",
+                                                mode.window_width, mode.window_height, in.width, in.height));
       // A centred window of even offset (the Bayer phase is kept): same focal length.
       const int x0 = (in.width - mode.window_width) / 2 & ~1, y0 = (in.height - mode.window_height) / 2 & ~1;
       in.cu -= x0;
@@ -167,8 +168,8 @@ Rig derive_sensor_mode(const Rig& full, const SensorMode& mode) {
       // shift of at most half an input pixel, 0.01 deg here).
       const int n = mode.skip + 1;
       if (in.width % n || in.height % n || (in.width / n) % 2 || (in.height / n) % 2)
-        throw std::invalid_argument(fmt::format("{}x{} sub-sampled by {} is not an even size (RGGB Bayer cells)",
-                                                in.width, in.height, n));
+        throw std::invalid_argument(fmt::format(
+            "{}x{} sub-sampled by {} is not an even size (RGGB Bayer cells)", in.width, in.height, n));
       in.width /= n;
       in.height /= n;
       in.fu /= n;
@@ -192,20 +193,21 @@ std::optional<Rig> builtin_rig(const std::string& name) {
     return r;
   }
   const std::string prefix = "gigaeye-44-skip";
-  if (name.size() == prefix.size() + 1 && name.compare(0, prefix.size(), prefix) == 0 &&
-      name.back() >= '1' && name.back() <= '5')
+  if (name.size() == prefix.size() + 1 && name.compare(0, prefix.size(), prefix) == 0 && name.back() >= '1' &&
+      name.back() <= '5')
     return derive_sensor_mode(gigaeye_rig(), SensorMode{name.back() - '0', false});
   return std::nullopt;
 }
 
 std::vector<std::string> builtin_rig_names() {
-  return {"thesis-24", "gigaeye-44", "gigaeye-44-skip1", "gigaeye-44-skip2", "gigaeye-44-skip3", "gigaeye-44-skip5",
-          "gigaeye-44-window"};
+  return {"thesis-24",        "gigaeye-44",       "gigaeye-44-skip1", "gigaeye-44-skip2",
+          "gigaeye-44-skip3", "gigaeye-44-skip5", "gigaeye-44-window"};
 }
 
 Rig load_rig_or_builtin(const std::string& spec) {
   // A path (a folder separator or a .json name) is a file: its own error if it cannot be read.
-  const bool path_like = spec.find('/') != std::string::npos || std::filesystem::path(spec).extension() == ".json";
+  const bool path_like =
+      spec.find('/') != std::string::npos || std::filesystem::path(spec).extension() == ".json";
   if (path_like || std::filesystem::exists(spec)) return load_rig(spec);
   if (auto r = builtin_rig(spec)) return *r;
   throw RigError(fmt::format("'{}' is neither a rig file nor a built-in rig ({})", spec,

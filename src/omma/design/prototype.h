@@ -51,10 +51,10 @@ GigaEyeLayout search_gigaeye_layout(double distance_mm, double step_rad);
 // resolution by skip + 1 (binning adds the skipped pixels: same geometry); a sub-window keeps the
 // focal length and crops a centred window (1024 x 768 gives 22.4 x 17.7 deg; thesis "21 x 16").
 struct SensorMode {
-  int skip = 0;                      // register value n: sub-sampling by n + 1 (0..7; even sizes)
-  bool bin = false;                  // binning with the skipping (geometry unchanged)
+  int skip = 0;                             // register value n: sub-sampling by n + 1 (0..7; even sizes)
+  bool bin = false;                         // binning with the skipping (geometry unchanged)
   int window_width = 0, window_height = 0;  // centred sub-window of the full sensor; 0 = full
-  std::string name() const;          // "full", "skip1", "skip1-bin", "window1024x768", ...
+  std::string name() const;                 // "full", "skip1", "skip1-bin", "window1024x768", ...
 };
 // The rig as seen in a sensor mode (every camera; validated). Throws std::invalid_argument.
 Rig derive_sensor_mode(const Rig& full, const SensorMode& mode);

@@ -1,15 +1,15 @@
 // The thesis prototype rig (§3.4.2, Fig. 3.8, Table 3.1).
 #include "omma/design/prototype.h"
 
+#include <cmath>
+#include <cstdio>
+
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
 #include "omma/design/coverage.h"
 #include "omma/design/dome.h"
 #include "omma/design/placement.h"
-
-#include <cmath>
-#include <cstdio>
 
 namespace omma::design {
 namespace {
@@ -122,7 +122,8 @@ TEST(GigaEye, FastCoverageMatchesTheReferenceOnTheImageBounds) {
     const PanoGrid g{Projection::kEquirect100, 120, 40};
     int differ = 0;
     for (int r = 0; r < g.height; ++r)
-      for (int c = 0; c < g.width; ++c) differ += counts.at<int>(r, c) != cameras_seeing(rig, g.pixel_direction(c, r), d);
+      for (int c = 0; c < g.width; ++c)
+        differ += counts.at<int>(r, c) != cameras_seeing(rig, g.pixel_direction(c, r), d);
     EXPECT_EQ(differ, 0) << d;
   }
 }
@@ -144,7 +145,8 @@ TEST(GigaEye, SensorModesOfTable71) {
   EXPECT_NEAR(rad2deg(2 * std::atan(512 / win.cameras[5].in.fu)), 22.3, 0.1);
   EXPECT_NEAR(rad2deg(2 * std::atan(384 / win.cameras[5].in.fv)), 17.7, 0.1);
   // The same direction lands on the same place of the sensor in every mode.
-  const Vec3 w = (full.cameras[9].frame.t + 0.2 * full.cameras[9].frame.u - 0.1 * full.cameras[9].frame.v).normalized();
+  const Vec3 w =
+      (full.cameras[9].frame.t + 0.2 * full.cameras[9].frame.u - 0.1 * full.cameras[9].frame.v).normalized();
   const Vec2 p = *full.cameras[9].model().project(w);
   EXPECT_NEAR((*s2.cameras[9].model().project(w) * 3 - p).norm(), 0, 1e-9);
   EXPECT_NEAR((*win.cameras[9].model().project(w) + Vec2(784, 588) - p).norm(), 0, 1e-9);

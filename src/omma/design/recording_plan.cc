@@ -58,19 +58,22 @@ RecordingPlan make_plan(const RecordingPlanInput& in) {
   p.rig_bytes_per_s = in.cameras * p.camera_bytes_per_s;
   p.rig_bytes = p.rig_bytes_per_s * seconds;
   p.max_minutes = in.device_bytes / p.device_bytes_per_s / 60;
-  p.checks.push_back({"pixel-clock", in.clock_mhz < in.max_clock_mhz,
-                      fmt::format("{:g} MHz {} the {:g} MHz limit of long camera cables", in.clock_mhz,
-                                  in.clock_mhz < in.max_clock_mhz ? "is below" : "is not below", in.max_clock_mhz)});
-  p.checks.push_back({"pixel-rate", in.clock_mhz * 1e6 >= pixels_per_s,
-                      fmt::format("{:.2f} Mpixel/s needed, {:g} MHz clock", pixels_per_s / 1e6, in.clock_mhz)});
-  p.checks.push_back({"device-write-rate", p.device_bytes_per_s <= in.device_rate,
-                      fmt::format("{} camera(s) per device write {:.1f} MB/s ({:.1f} MiB/s), the device sustains "
-                                  "{:.1f} MB/s",
-                                  in.cameras_per_device, p.device_bytes_per_s / 1e6,
-                                  p.device_bytes_per_s / (1 << 20), in.device_rate / 1e6)});
+  p.checks.push_back(
+      {"pixel-clock", in.clock_mhz < in.max_clock_mhz,
+       fmt::format("{:g} MHz {} the {:g} MHz limit of long camera cables", in.clock_mhz,
+                   in.clock_mhz < in.max_clock_mhz ? "is below" : "is not below", in.max_clock_mhz)});
+  p.checks.push_back(
+      {"pixel-rate", in.clock_mhz * 1e6 >= pixels_per_s,
+       fmt::format("{:.2f} Mpixel/s needed, {:g} MHz clock", pixels_per_s / 1e6, in.clock_mhz)});
+  p.checks.push_back(
+      {"device-write-rate", p.device_bytes_per_s <= in.device_rate,
+       fmt::format("{} camera(s) per device write {:.1f} MB/s ({:.1f} MiB/s), the device sustains "
+                   "{:.1f} MB/s",
+                   in.cameras_per_device, p.device_bytes_per_s / 1e6, p.device_bytes_per_s / (1 << 20),
+                   in.device_rate / 1e6)});
   p.checks.push_back({"device-capacity", p.device_bytes <= in.device_bytes,
-                      fmt::format("{:g} min need {:.1f} GB per device, it holds {:.1f} GB ({:.2f} min)", in.minutes,
-                                  p.device_bytes / 1e9, in.device_bytes / 1e9, p.max_minutes)});
+                      fmt::format("{:g} min need {:.1f} GB per device, it holds {:.1f} GB ({:.2f} min)",
+                                  in.minutes, p.device_bytes / 1e9, in.device_bytes / 1e9, p.max_minutes)});
   return p;
 }
 
@@ -114,7 +117,8 @@ std::vector<Table71Check> check_table71() {
         RecordingPlanInput in = plan_input(row);
         in.bits = b;
         const RecordingPlan p = make_plan(in);
-        if (round_half_up(p.camera_mib_per_s) == row.bandwidth_mb_s && round_half_up(p.camera_gib) == row.memory_gb)
+        if (round_half_up(p.camera_mib_per_s) == row.bandwidth_mb_s &&
+            round_half_up(p.camera_gib) == row.memory_gb)
           c.fits_bits = b;
       }
     out.push_back(c);
@@ -135,17 +139,27 @@ double parse_bytes(const std::string& text) {
     if (!std::isspace(static_cast<unsigned char>(text[i]))) unit += text[i];
   if (unit.size() >= 2 && unit.compare(unit.size() - 2, 2, "/s") == 0) unit.resize(unit.size() - 2);
   double scale = 0;
-  if (unit.empty() || unit == "B") scale = 1;
-  else if (unit == "kB" || unit == "KB") scale = 1e3;
-  else if (unit == "MB") scale = 1e6;
-  else if (unit == "GB") scale = 1e9;
-  else if (unit == "TB") scale = 1e12;
-  else if (unit == "KiB") scale = 1024.0;
-  else if (unit == "MiB") scale = 1024.0 * 1024;
-  else if (unit == "GiB") scale = 1024.0 * 1024 * 1024;
-  else if (unit == "TiB") scale = 1024.0 * 1024 * 1024 * 1024;
+  if (unit.empty() || unit == "B")
+    scale = 1;
+  else if (unit == "kB" || unit == "KB")
+    scale = 1e3;
+  else if (unit == "MB")
+    scale = 1e6;
+  else if (unit == "GB")
+    scale = 1e9;
+  else if (unit == "TB")
+    scale = 1e12;
+  else if (unit == "KiB")
+    scale = 1024.0;
+  else if (unit == "MiB")
+    scale = 1024.0 * 1024;
+  else if (unit == "GiB")
+    scale = 1024.0 * 1024 * 1024;
+  else if (unit == "TiB")
+    scale = 1024.0 * 1024 * 1024 * 1024;
   if (scale == 0 || !(v > 0) || !std::isfinite(v))
-    throw std::invalid_argument("'" + text + "' is not a positive size (units B, kB, MB, GB, TB, KiB, MiB, GiB, TiB)");
+    throw std::invalid_argument("'" + text +
+                                "' is not a positive size (units B, kB, MB, GB, TB, KiB, MiB, GiB, TiB)");
   return v * scale;
 }
 

@@ -18,37 +18,37 @@
 namespace omma::design {
 
 struct RecordingPlanInput {
-  int width = 2592, height = 1944;   // output resolution per camera (after skip / window), pixels
-  int bits = 12;                     // bits per pixel as stored
+  int width = 2592, height = 1944;  // output resolution per camera (after skip / window), pixels
+  int bits = 12;                    // bits per pixel as stored
   double fps = 9.5;
-  double clock_mhz = 66;             // pixel clock
-  double max_clock_mhz = 80;         // exclusive limit
+  double clock_mhz = 66;      // pixel clock
+  double max_clock_mhz = 80;  // exclusive limit
   int cameras = 44;
   int cameras_per_device = 2;
-  double device_bytes = 128e9;       // capacity of one storage device
-  double device_rate = 150e6;        // its sustained write rate, bytes/s
-  double minutes = 14;               // planned duration
+  double device_bytes = 128e9;  // capacity of one storage device
+  double device_rate = 150e6;   // its sustained write rate, bytes/s
+  double minutes = 14;          // planned duration
   bool IsValid(std::string* why = nullptr) const;
 };
 
 struct PlanCheck {
-  std::string name;    // "pixel-clock", "pixel-rate", "device-write-rate", "device-capacity"
+  std::string name;  // "pixel-clock", "pixel-rate", "device-write-rate", "device-capacity"
   bool ok = false;
   std::string detail;  // the numbers compared, in words
 };
 
 struct RecordingPlan {
   RecordingPlanInput in;
-  double camera_bytes_per_s = 0;  // exact
-  double camera_mib_per_s = 0;    // Table 7.1's "BW (MB/s)"
-  double camera_gib = 0;          // Table 7.1's "Memory (GB)" for in.minutes
+  double camera_bytes_per_s = 0;                    // exact
+  double camera_mib_per_s = 0;                      // Table 7.1's "BW (MB/s)"
+  double camera_gib = 0;                            // Table 7.1's "Memory (GB)" for in.minutes
   double device_bytes_per_s = 0, device_bytes = 0;  // per device for in.minutes
   int devices = 0;                                  // ceil(cameras / cameras_per_device)
   double rig_bytes_per_s = 0, rig_bytes = 0;        // the whole rig for in.minutes
-  double max_minutes = 0;         // what one device holds at this rate
+  double max_minutes = 0;                           // what one device holds at this rate
   std::vector<PlanCheck> checks;
   bool feasible() const;
-  std::string failed() const;     // the failed checks' names and details, "; "-separated
+  std::string failed() const;  // the failed checks' names and details, "; "-separated
 };
 
 RecordingPlan make_plan(const RecordingPlanInput& in);  // throws std::invalid_argument if !IsValid

@@ -1,9 +1,9 @@
 // The recording planner against Table 7.1 and the text of §7.1 (../shared/notes/gigaeye-spec.md §3).
 #include "omma/design/recording_plan.h"
 
-#include <gtest/gtest.h>
-
 #include <cmath>
+
+#include <gtest/gtest.h>
 
 namespace omma::design {
 namespace {
@@ -69,7 +69,8 @@ TEST(RecordingPlan, ParsesUnitsAndRejectsBadInput) {
   EXPECT_DOUBLE_EQ(parse_bytes("128 GiB"), 128.0 * (1 << 30));
   EXPECT_DOUBLE_EQ(parse_bytes("150MB/s"), 150e6);
   EXPECT_DOUBLE_EQ(parse_bytes("2e3"), 2000);
-  for (const char* bad : {"", "GB", "-1GB", "12 parsecs", "nan"}) EXPECT_THROW(parse_bytes(bad), std::invalid_argument) << bad;
+  for (const char* bad : {"", "GB", "-1GB", "12 parsecs", "nan"})
+    EXPECT_THROW(parse_bytes(bad), std::invalid_argument) << bad;
   RecordingPlanInput in;
   in.cameras_per_device = 0;
   EXPECT_THROW(make_plan(in), std::invalid_argument);

@@ -13,11 +13,20 @@ std::string escape(const std::string& s) {
   std::string out;
   for (char c : s) {
     switch (c) {
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '&': out += "&amp;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '&':
+        out += "&amp;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      default:
+        out += c;
     }
   }
   return out;
@@ -53,28 +62,43 @@ std::string plot_body(const Plot& p, double x0, double y0, double w, double h) {
   auto X = [&](double v) { return px + (v - xmin) / (xmax - xmin) * pw; };
   auto Y = [&](double v) { return py + ph - (v - ymin) / (ymax - ymin) * ph; };
   std::string o;
-  o += fmt::format("<g>\n<rect x=\"{:.1f}\" y=\"{:.1f}\" width=\"{:.1f}\" height=\"{:.1f}\" "
-                   "fill=\"white\" stroke=\"#333\"/>\n", px, py, pw, ph);
+  o += fmt::format(
+      "<g>\n<rect x=\"{:.1f}\" y=\"{:.1f}\" width=\"{:.1f}\" height=\"{:.1f}\" "
+      "fill=\"white\" stroke=\"#333\"/>\n",
+      px, py, pw, ph);
   const double xstep = xt.size() > 1 ? xt[1] - xt[0] : 1, ystep = yt.size() > 1 ? yt[1] - yt[0] : 1;
   for (double v : xt) {
-    o += fmt::format("<line x1=\"{0:.1f}\" y1=\"{1:.1f}\" x2=\"{0:.1f}\" y2=\"{2:.1f}\" "
-                     "stroke=\"#ddd\"/>\n", X(v), py, py + ph);
-    o += fmt::format("<text x=\"{:.1f}\" y=\"{:.1f}\" font-size=\"11\" text-anchor=\"middle\">{}"
-                     "</text>\n", X(v), py + ph + 15, tick_label(v, xstep));
+    o += fmt::format(
+        "<line x1=\"{0:.1f}\" y1=\"{1:.1f}\" x2=\"{0:.1f}\" y2=\"{2:.1f}\" "
+        "stroke=\"#ddd\"/>\n",
+        X(v), py, py + ph);
+    o += fmt::format(
+        "<text x=\"{:.1f}\" y=\"{:.1f}\" font-size=\"11\" text-anchor=\"middle\">{}"
+        "</text>\n",
+        X(v), py + ph + 15, tick_label(v, xstep));
   }
   for (double v : yt) {
-    o += fmt::format("<line x1=\"{0:.1f}\" y1=\"{1:.1f}\" x2=\"{2:.1f}\" y2=\"{1:.1f}\" "
-                     "stroke=\"#ddd\"/>\n", px, Y(v), px + pw);
-    o += fmt::format("<text x=\"{:.1f}\" y=\"{:.1f}\" font-size=\"11\" text-anchor=\"end\">{}"
-                     "</text>\n", px - 5, Y(v) + 4, tick_label(v, ystep));
+    o += fmt::format(
+        "<line x1=\"{0:.1f}\" y1=\"{1:.1f}\" x2=\"{2:.1f}\" y2=\"{1:.1f}\" "
+        "stroke=\"#ddd\"/>\n",
+        px, Y(v), px + pw);
+    o += fmt::format(
+        "<text x=\"{:.1f}\" y=\"{:.1f}\" font-size=\"11\" text-anchor=\"end\">{}"
+        "</text>\n",
+        px - 5, Y(v) + 4, tick_label(v, ystep));
   }
-  o += fmt::format("<text x=\"{:.1f}\" y=\"{:.1f}\" font-size=\"14\" font-weight=\"bold\" "
-                   "text-anchor=\"middle\">{}</text>\n", px + pw / 2, y0 + 20, escape(p.title));
-  o += fmt::format("<text x=\"{:.1f}\" y=\"{:.1f}\" font-size=\"12\" text-anchor=\"middle\">{}"
-                   "</text>\n", px + pw / 2, y0 + h - 10, escape(p.x_label));
-  o += fmt::format("<text x=\"{0:.1f}\" y=\"{1:.1f}\" font-size=\"12\" text-anchor=\"middle\" "
-                   "transform=\"rotate(-90 {0:.1f} {1:.1f})\">{2}</text>\n",
-                   x0 + 16, py + ph / 2, escape(p.y_label));
+  o += fmt::format(
+      "<text x=\"{:.1f}\" y=\"{:.1f}\" font-size=\"14\" font-weight=\"bold\" "
+      "text-anchor=\"middle\">{}</text>\n",
+      px + pw / 2, y0 + 20, escape(p.title));
+  o += fmt::format(
+      "<text x=\"{:.1f}\" y=\"{:.1f}\" font-size=\"12\" text-anchor=\"middle\">{}"
+      "</text>\n",
+      px + pw / 2, y0 + h - 10, escape(p.x_label));
+  o += fmt::format(
+      "<text x=\"{0:.1f}\" y=\"{1:.1f}\" font-size=\"12\" text-anchor=\"middle\" "
+      "transform=\"rotate(-90 {0:.1f} {1:.1f})\">{2}</text>\n",
+      x0 + 16, py + ph / 2, escape(p.y_label));
   // Series.
   for (const auto& s : p.series) {
     std::string path;
@@ -91,8 +115,7 @@ std::string plot_body(const Plot& p, double x0, double y0, double w, double h) {
       last_y = s.y[i];
     }
     if (!path.empty())
-      o += fmt::format("<path d=\"{}\" fill=\"none\" stroke=\"{}\" stroke-width=\"2\"/>\n", path,
-                       s.color);
+      o += fmt::format("<path d=\"{}\" fill=\"none\" stroke=\"{}\" stroke-width=\"2\"/>\n", path, s.color);
     for (size_t i = 0; i < s.x.size() && i < s.y.size(); ++i)
       if (std::isfinite(s.x[i]) && std::isfinite(s.y[i]))
         o += fmt::format("<circle cx=\"{:.1f}\" cy=\"{:.1f}\" r=\"2.2\" fill=\"{}\"/>\n", X(s.x[i]),
@@ -101,12 +124,16 @@ std::string plot_body(const Plot& p, double x0, double y0, double w, double h) {
   // Legend (top right inside the plot area).
   const double lw = 150, lh = 8 + 18.0 * p.series.size();
   const double lx = px + pw - lw - 8, ly = py + 8;
-  o += fmt::format("<rect x=\"{:.1f}\" y=\"{:.1f}\" width=\"{:.1f}\" height=\"{:.1f}\" "
-                   "fill=\"white\" fill-opacity=\"0.85\" stroke=\"#999\"/>\n", lx, ly, lw, lh);
+  o += fmt::format(
+      "<rect x=\"{:.1f}\" y=\"{:.1f}\" width=\"{:.1f}\" height=\"{:.1f}\" "
+      "fill=\"white\" fill-opacity=\"0.85\" stroke=\"#999\"/>\n",
+      lx, ly, lw, lh);
   for (size_t i = 0; i < p.series.size(); ++i) {
     const double yy = ly + 16 + 18.0 * i;
-    o += fmt::format("<line x1=\"{:.1f}\" y1=\"{:.1f}\" x2=\"{:.1f}\" y2=\"{:.1f}\" stroke=\"{}\" "
-                     "stroke-width=\"3\"/>\n", lx + 8, yy - 4, lx + 32, yy - 4, p.series[i].color);
+    o += fmt::format(
+        "<line x1=\"{:.1f}\" y1=\"{:.1f}\" x2=\"{:.1f}\" y2=\"{:.1f}\" stroke=\"{}\" "
+        "stroke-width=\"3\"/>\n",
+        lx + 8, yy - 4, lx + 32, yy - 4, p.series[i].color);
     o += fmt::format("<text x=\"{:.1f}\" y=\"{:.1f}\" font-size=\"12\">{}</text>\n", lx + 38, yy,
                      escape(p.series[i].name));
   }
@@ -115,10 +142,12 @@ std::string plot_body(const Plot& p, double x0, double y0, double w, double h) {
 }
 
 std::string header(int w, int h) {
-  return fmt::format("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<svg xmlns=\"http://www.w3.org/"
-                     "2000/svg\" version=\"1.1\" width=\"{0}\" height=\"{1}\" viewBox=\"0 0 {0} {1}\" "
-                     "font-family=\"sans-serif\">\n<rect width=\"100%\" height=\"100%\" "
-                     "fill=\"#f7f7f7\"/>\n", w, h);
+  return fmt::format(
+      "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<svg xmlns=\"http://www.w3.org/"
+      "2000/svg\" version=\"1.1\" width=\"{0}\" height=\"{1}\" viewBox=\"0 0 {0} {1}\" "
+      "font-family=\"sans-serif\">\n<rect width=\"100%\" height=\"100%\" "
+      "fill=\"#f7f7f7\"/>\n",
+      w, h);
 }
 
 }  // namespace
@@ -149,8 +178,10 @@ std::string svg_plot_grid(const std::vector<Plot>& plots, int columns, const std
   const int rows = (static_cast<int>(plots.size()) + columns - 1) / columns;
   const int top = 36;
   std::string o = header(columns * cell_width, rows * cell_height + top);
-  o += fmt::format("<text x=\"{}\" y=\"24\" font-size=\"17\" font-weight=\"bold\" "
-                   "text-anchor=\"middle\">{}</text>\n", columns * cell_width / 2, escape(title));
+  o += fmt::format(
+      "<text x=\"{}\" y=\"24\" font-size=\"17\" font-weight=\"bold\" "
+      "text-anchor=\"middle\">{}</text>\n",
+      columns * cell_width / 2, escape(title));
   for (size_t i = 0; i < plots.size(); ++i)
     o += plot_body(plots[i], static_cast<double>(i % columns) * cell_width,
                    top + static_cast<double>(i / columns) * cell_height, cell_width, cell_height);

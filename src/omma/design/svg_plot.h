@@ -8,10 +8,10 @@
 namespace omma::design {
 
 struct PlotSeries {
-  std::string name;   // legend text
-  std::string color;  // any SVG colour, e.g. "#d62728"
+  std::string name;          // legend text
+  std::string color;         // any SVG colour, e.g. "#d62728"
   std::vector<double> x, y;  // same length; non-finite y values break the line
-  bool step = false;  // draw as a staircase (a count that holds until the next x)
+  bool step = false;         // draw as a staircase (a count that holds until the next x)
 };
 
 struct Plot {

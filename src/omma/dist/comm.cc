@@ -128,8 +128,8 @@ class MpiComm : public Comm {
       }
       all.resize(total);
     }
-    MPI_Igatherv(data.data(), n, MPI_BYTE, all.data(), counts.data(), displs.data(), MPI_BYTE, 0, MPI_COMM_WORLD,
-                 &req);
+    MPI_Igatherv(data.data(), n, MPI_BYTE, all.data(), counts.data(), displs.data(), MPI_BYTE, 0,
+                 MPI_COMM_WORLD, &req);
     wait_polling(&req);
     std::vector<std::string> out;
     for (size_t r = 0; r < counts.size(); ++r) out.push_back(all.substr(displs[r], counts[r]));

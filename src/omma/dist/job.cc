@@ -10,8 +10,8 @@
 #include <csignal>
 #include <cstring>
 #include <deque>
-#include <functional>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <mutex>
 #include <optional>
@@ -21,10 +21,10 @@
 
 #include <fmt/format.h>
 
+#include "omma/core/checksum.h"
 #include "omma/core/io.h"
 #include "omma/core/log.h"
 #include "omma/core/progress.h"
-#include "omma/core/checksum.h"
 #include "omma/dist/worker_thread.h"
 
 namespace omma::dist {
@@ -41,10 +41,19 @@ ItemTimes& ItemTimes::operator+=(const ItemTimes& o) {
 }
 
 json ItemRecord::to_json() const {
-  return {{"item", item},         {"output", output},     {"size", size},
-          {"checksum", checksum}, {"rank", rank},         {"host", host},
-          {"seconds", seconds},   {"cpu_seconds", cpu_seconds}, {"read", times.read},   {"develop", times.develop},
-          {"render", times.render}, {"write", times.write}, {"checksum_seconds", checksum_seconds},
+  return {{"item", item},
+          {"output", output},
+          {"size", size},
+          {"checksum", checksum},
+          {"rank", rank},
+          {"host", host},
+          {"seconds", seconds},
+          {"cpu_seconds", cpu_seconds},
+          {"read", times.read},
+          {"develop", times.develop},
+          {"render", times.render},
+          {"write", times.write},
+          {"checksum_seconds", checksum_seconds},
           {"reused", reused}};
 }
 
@@ -116,7 +125,8 @@ bool is_temporary_of(const fs::path& file, const fs::path& output) {
   // core/io.h: "." + stem + ".tmp" + digits + extension
   const std::string a = "." + output.stem().string() + ".tmp", ext = output.extension().string();
   if (name.size() > a.size() + ext.size() && name.compare(0, a.size(), a) == 0 &&
-      name.compare(name.size() - ext.size(), ext.size(), ext) == 0 && digits_between(a.size(), name.size() - ext.size()))
+      name.compare(name.size() - ext.size(), ext.size(), ext) == 0 &&
+      digits_between(a.size(), name.size() - ext.size()))
     return true;
   // streaming writers: filename + ".tmp" + digits
   const std::string b = output.filename().string() + ".tmp";
@@ -130,7 +140,7 @@ enum Tag : int { kTagRequest = 1, kTagAssign = 2 };
 double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 double process_cpu_seconds() {
-  rusage u {};
+  rusage u{};
   getrusage(RUSAGE_SELF, &u);
   return u.ru_utime.tv_sec + u.ru_stime.tv_sec + 1e-6 * (u.ru_utime.tv_usec + u.ru_stime.tv_usec);
 }
@@ -202,10 +212,13 @@ void check_writable(const fs::path& dir, int rank) {
   std::error_code ec;
   fs::create_directories(dir, ec);
   if (!fs::is_directory(dir))
-    throw IoError(fmt::format("cannot create the output folder '{}'{}", dir.string(), ec ? ": " + ec.message() : ""));
+    throw IoError(
+        fmt::format("cannot create the output folder '{}'{}", dir.string(), ec ? ": " + ec.message() : ""));
   const fs::path probe = dir / fmt::format(".omma-write-probe-{}-{}", rank, ::getpid());
   const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL, 0644);
-  if (fd < 0) throw IoError(fmt::format("cannot write in the output folder '{}': {}", dir.string(), std::strerror(errno)));
+  if (fd < 0)
+    throw IoError(
+        fmt::format("cannot write in the output folder '{}': {}", dir.string(), std::strerror(errno)));
   ::close(fd);
   fs::remove(probe, ec);
 }
@@ -218,7 +231,8 @@ class Journal {
   void open(const fs::path& path, const json& header) {
     path_ = path;
     fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    if (fd_ < 0) throw IoError(fmt::format("cannot create the journal '{}': {}", path.string(), std::strerror(errno)));
+    if (fd_ < 0)
+      throw IoError(fmt::format("cannot create the journal '{}': {}", path.string(), std::strerror(errno)));
     append(json{{"parameters", header}});
   }
   void append(const json& line) {
@@ -306,7 +320,8 @@ void on_stop_signal(int sig) {  // C++ linkage: file-local (anonymous namespace)
 }
 
 struct SignalGuard {
-  struct sigaction old_term {}, old_int {};
+  struct sigaction old_term {
+  }, old_int{};
   bool on = false;
   void install(const fs::path& journal) {
     const std::string m = fmt::format(
@@ -377,10 +392,10 @@ std::string prepare_root(Comm& comm, Job& job, const RunOptions& options, const 
     const int workers = size - (sum.rank0 == Rank0::kServes ? 1 : 0);
     own = workers > n;
     if (own)
-      throw std::invalid_argument(fmt::format(
-          "{} ranks{} for {} {}: start at most {} (mpirun -np {})", size,
-          sum.rank0 == Rank0::kServes ? " (rank 0 only serves)" : "", n, options.label,
-          n + (sum.rank0 == Rank0::kServes ? 1 : 0), n + (sum.rank0 == Rank0::kServes ? 1 : 0)));
+      throw std::invalid_argument(fmt::format("{} ranks{} for {} {}: start at most {} (mpirun -np {})", size,
+                                              sum.rank0 == Rank0::kServes ? " (rank 0 only serves)" : "", n,
+                                              options.label, n + (sum.rank0 == Rank0::kServes ? 1 : 0),
+                                              n + (sum.rank0 == Rank0::kServes ? 1 : 0)));
     for (const auto& d : output_folders(job, options.manifest)) check_writable(d, 0);
     job.setup();
     params = job.parameters();
@@ -611,8 +626,9 @@ RunSummary run_job(Comm& comm, Job& job, const RunOptions& options) {
       failure = e.what();
     }
   } else {
-    failure += fmt::format(" ({} of {} {} are finished and recorded in {}: run the same command again to make the rest)",
-                           sum.records.size(), sum.items, options.label, jpath.string());
+    failure += fmt::format(
+        " ({} of {} {} are finished and recorded in {}: run the same command again to make the rest)",
+        sum.records.size(), sum.items, options.label, jpath.string());
   }
   broadcast_verdict(comm, failure);
   return sum;

@@ -3,8 +3,8 @@
 //
 // Scheduling: dynamic. Rank 0 hands out items in order, one at a time, as ranks ask for work (items
 // differ in cost: frame sets with more cameras, slower files); by default rank 0 also works, on a
-// second thread, while its main thread serves the others (RunOptions::rank0; docs/results/mpi_bench.md "Rendering on
-// a cluster" has the measurement).
+// second thread, while its main thread serves the others (RunOptions::rank0; docs/results/mpi_bench.md
+// "Rendering on a cluster" has the measurement).
 //
 // Outputs: each item writes its output under its final name atomically (temporary name, rename:
 // core/io.h). After each item its rank hashes the file (checksum.h) and reports to rank 0, which
@@ -54,17 +54,17 @@ struct ItemTimes {
 // One output: the manifest's line for an item.
 struct ItemRecord {
   int64_t item = -1;
-  std::string output;          // the path as Job::output names it
-  uint64_t size = 0;           // bytes
-  std::string checksum;        // "xxh3:<16 hex>" (checksum.h)
+  std::string output;    // the path as Job::output names it
+  uint64_t size = 0;     // bytes
+  std::string checksum;  // "xxh3:<16 hex>" (checksum.h)
   int rank = -1;
   std::string host;
-  double seconds = 0;          // wall time of the item on its rank, checksum included
-  double cpu_seconds = 0;      // CPU time of its process meanwhile (all threads): the work itself,
-                               // whatever else shares the machine
+  double seconds = 0;      // wall time of the item on its rank, checksum included
+  double cpu_seconds = 0;  // CPU time of its process meanwhile (all threads): the work itself,
+                           // whatever else shares the machine
   ItemTimes times;
   double checksum_seconds = 0;
-  bool reused = false;         // made by an earlier run and verified, not made again
+  bool reused = false;  // made by an earlier run and verified, not made again
   nlohmann::json to_json() const;
   static ItemRecord from_json(const nlohmann::json& j);  // throws nlohmann::json::exception
 };
@@ -91,7 +91,7 @@ class Job {
   virtual ItemTimes run(int64_t item) = 0;
 };
 
-enum class Rank0 { kWorks, kServes };  // rank 0 makes items too, or only hands them out
+enum class Rank0 { kWorks, kServes };     // rank 0 makes items too, or only hands them out
 Rank0 parse_rank0(const std::string& s);  // "works" | "serves"
 const char* rank0_name(Rank0 r);
 
@@ -110,16 +110,16 @@ struct RunSummary {
   bool mpi = false;
   Rank0 rank0 = Rank0::kWorks;
   int64_t items = 0;
-  int64_t made = 0;                // by this run
-  int64_t reused = 0;              // verified outputs of an earlier run
-  double seconds = 0;              // wall time of the whole run (setup included)
-  double setup_seconds = 0;        // until the first item was handed out
-  ItemTimes totals;                // sums over the items made by this run
+  int64_t made = 0;          // by this run
+  int64_t reused = 0;        // verified outputs of an earlier run
+  double seconds = 0;        // wall time of the whole run (setup included)
+  double setup_seconds = 0;  // until the first item was handed out
+  ItemTimes totals;          // sums over the items made by this run
   double checksum_seconds = 0;
   double cpu_seconds = 0;
   nlohmann::json parameters;
-  std::vector<ItemRecord> records; // rank 0: every item, item order; other ranks: empty
-  nlohmann::json to_json() const;  // the manifest
+  std::vector<ItemRecord> records;  // rank 0: every item, item order; other ranks: empty
+  nlohmann::json to_json() const;   // the manifest
 };
 
 class JobError : public std::runtime_error {

@@ -10,8 +10,8 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
-#include "omma/core/io.h"
 #include "omma/core/checksum.h"
+#include "omma/core/io.h"
 
 namespace omma::dist {
 namespace {
@@ -35,7 +35,8 @@ fs::path fresh_dir(const std::string& tag) {
 // Item i writes "item i of <salt>" repeated (i + 1) times; counts the items it made.
 class TextJob : public Job {
  public:
-  TextJob(fs::path dir, int64_t n, std::string salt = "a") : dir_(std::move(dir)), n_(n), salt_(std::move(salt)) {}
+  TextJob(fs::path dir, int64_t n, std::string salt = "a")
+      : dir_(std::move(dir)), n_(n), salt_(std::move(salt)) {}
   int64_t items() const override { return n_; }
   fs::path output(int64_t i) const override { return dir_ / fmt::format("out_{:03d}.txt", i); }
   json parameters() const override { return {{"salt", salt_}}; }

@@ -16,7 +16,8 @@ namespace omma::dist {
 template <class Result>
 class WorkerThread {
  public:
-  explicit WorkerThread(std::function<Result(int64_t)> work) : work_(std::move(work)), thread_([this] { loop(); }) {}
+  explicit WorkerThread(std::function<Result(int64_t)> work)
+      : work_(std::move(work)), thread_([this] { loop(); }) {}
   ~WorkerThread() {
     {
       std::lock_guard l(m_);

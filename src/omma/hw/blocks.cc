@@ -34,7 +34,7 @@ AngleRegs angle_regs(const HwConfig& cfg, const PanoGrid& grid) {
   r.rows = grid.height;
   r.cols = grid.width;
   r.axes = vr180 ? AxisMap::kVr180 : AxisMap::kDome;
-  r.wrap_cols = !vr180;  // 360-degree grids wrap
+  r.wrap_cols = !vr180;                                                  // 360-degree grids wrap
   const int64_t col_step = round_half_up(turn * col_span / grid.width);  // |k_phi|, codes per column
   r.k_theta = static_cast<uint32_t>(round_half_up(turn * row_span / grid.height)) & mask;
   r.k_phi = static_cast<uint32_t>(-col_step) & mask;  // -|k_phi| mod 2^M
@@ -66,10 +66,14 @@ SinCos sincos_lookup(const HwConfig& cfg, const SinCosRom& rom, uint32_t angle) 
   const int32_t s = static_cast<int32_t>(rom.sin_rom[i]);  // uQ1.(W-1)
   const int32_t c = static_cast<int32_t>(rom.cos_rom[i]);
   switch (quadrant) {  // sQ1.(W-1) after the sign
-    case 0: return {s, c};
-    case 1: return {c, -s};
-    case 2: return {-s, -c};
-    default: return {-c, s};
+    case 0:
+      return {s, c};
+    case 1:
+      return {c, -s};
+    case 2:
+      return {-s, -c};
+    default:
+      return {-c, s};
   }
 }
 
@@ -82,9 +86,9 @@ Omega cartesian(const HwConfig& cfg, const SinCosRom& rom, const Angles& ang, Ax
   const SinCos t = sincos_lookup(cfg, rom, ang.theta);
   // sQ1.(W-1) + sQ1.(W-1) = 2 * value in sQ1.(W-1) = value in sQ1.W: the /2 of eq. 5.16-5.17 is a
   // change of format, not a shift (exact).
-  const int32_t a = p.s + m.s;      // sin t cos p = [sin(t+p) + sin(t-p)] / 2        (5.16)
-  const int32_t b = m.c - p.c;      // sin t sin p = [cos(t-p) - cos(t+p)] / 2        (5.17, corrected)
-  const int32_t c = 2 * t.c;        // cos t, sQ1.(W-1) -> sQ1.W (exact)              (5.18)
+  const int32_t a = p.s + m.s;  // sin t cos p = [sin(t+p) + sin(t-p)] / 2        (5.16)
+  const int32_t b = m.c - p.c;  // sin t sin p = [cos(t-p) - cos(t+p)] / 2        (5.17, corrected)
+  const int32_t c = 2 * t.c;    // cos t, sQ1.(W-1) -> sQ1.W (exact)              (5.18)
   Omega o;
   if (axes == AxisMap::kDome)
     o.w = {a, b, c};
@@ -150,8 +154,9 @@ PixelPos project(const HwConfig& cfg, const CameraRegs& cam, const Omega& o, int
   int64_t xd = x, yd = y;
   const auto& k = cam.k;
   if (k[0] || k[1] || k[2] || k[3] || k[4]) {  // with every k = 0 the lines below give x' = x exactly
-    const int64_t xx = rshift_round(x * x, P), yy = rshift_round(y * y, P), xy = rshift_round(x * y, P);  // sQ.P
-    const int64_t R2 = xx + yy;                                                // eq. 5.23, sQ.P
+    const int64_t xx = rshift_round(x * x, P), yy = rshift_round(y * y, P),
+                  xy = rshift_round(x * y, P);                                   // sQ.P
+    const int64_t R2 = xx + yy;                                                  // eq. 5.23, sQ.P
     const int64_t R4 = rshift_round(R2 * R2, P), R6 = rshift_round(R4 * R2, P);  // sQ.P
     // eq. 5.24: k sQ.K x sQ.P -> sQ.(K+P), summed, -> sQ.P (round half up), + 1.0
     const int64_t p = (int64_t{1} << P) + rshift_round(k[0] * R2 + k[1] * R4 + k[4] * R6, K);
@@ -201,13 +206,16 @@ FrameMemory::FrameMemory(const HwConfig& cfg, int cameras)
     : addr_bits_(cfg.frame_addr_bits), addr_mask_(mask_bits(cfg.frame_addr_bits)), mem_(cameras) {}
 
 void FrameMemory::load(int cam, std::vector<uint16_t> words) {
-  if (cam < 0 || cam >= static_cast<int>(mem_.size())) throw std::out_of_range("frame memory: no such camera");
+  if (cam < 0 || cam >= static_cast<int>(mem_.size()))
+    throw std::out_of_range("frame memory: no such camera");
   if (words.size() > (size_t{1} << addr_bits_))
     throw std::invalid_argument("frame memory: frame larger than the address space");
   mem_[cam] = std::move(words);
 }
 
-std::array<uint32_t, 3> rgb565_fields(uint16_t w) { return {uint32_t{w} >> 11, (uint32_t{w} >> 5) & 63u, w & 31u}; }
+std::array<uint32_t, 3> rgb565_fields(uint16_t w) {
+  return {uint32_t{w} >> 11, (uint32_t{w} >> 5) & 63u, w & 31u};
+}
 
 std::array<uint32_t, 3> rgb565_to_rgb888(uint16_t w) {
   const auto f = rgb565_fields(w);

@@ -42,9 +42,9 @@ enum class AxisMap : int { kDome = 0, kVr180 = 1 };
 
 struct AngleRegs {
   uint32_t theta_min = 0, k_theta = 0, phi_min = 0, k_phi = 0;
-  int rows = 0, cols = 0;        // panorama_row_cnt, panorama_col_cnt
+  int rows = 0, cols = 0;  // panorama_row_cnt, panorama_col_cnt
   AxisMap axes = AxisMap::kDome;
-  bool wrap_cols = false;        // 360-degree grids: the left/right neighbours wrap (MRF, §5.4.2)
+  bool wrap_cols = false;  // 360-degree grids: the left/right neighbours wrap (MRF, §5.4.2)
 };
 
 // Registers of one camera (Table 6.7 arrays plus the extensions documented in docs/hw-model.md).
@@ -72,8 +72,8 @@ struct SinCosRom {
 // radius into the table index. Unit tables (every gain 1.0) make the correction an exact no-op.
 struct VignettingTables {
   int vig_shift = 0;
-  std::vector<std::vector<uint32_t>> radial;        // [camera][index]
-  std::vector<std::array<uint32_t, 3>> channel;     // [camera][R, G, B]
+  std::vector<std::vector<uint32_t>> radial;     // [camera][index]
+  std::vector<std::array<uint32_t, 3>> channel;  // [camera][R, G, B]
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -92,17 +92,17 @@ struct Omega {
 // max_contributors of them in camera order (the priority encoder's outputs), and the dot products
 // omega . t the projection reuses.
 struct SearchResult {
-  int count = 0;                    // contributors passed on (<= max_contributors)
-  int cone_count = 0;               // cameras that passed the cone test (>= count)
-  std::array<int, 8> camera{};      // camera indices, ascending (camera_bits each)
-  std::array<int64_t, 8> dot_t{};   // omega . t, sQ3.(W+V)
+  int count = 0;                   // contributors passed on (<= max_contributors)
+  int cone_count = 0;              // cameras that passed the cone test (>= count)
+  std::array<int, 8> camera{};     // camera indices, ascending (camera_bits each)
+  std::array<int64_t, 8> dot_t{};  // omega . t, sQ3.(W+V)
 };
 
 // Projection result for one camera (B4).
 struct PixelPos {
-  bool valid = false;   // omega . t > 0 and the point lies inside [0, W) x [0, H)
-  int32_t col = 0;      // uQ.F, centres at +0.5 (conventions.h)
-  int32_t row = 0;      // uQ.F
+  bool valid = false;  // omega . t > 0 and the point lies inside [0, W) x [0, H)
+  int32_t col = 0;     // uQ.F, centres at +0.5 (conventions.h)
+  int32_t row = 0;     // uQ.F
 };
 
 // Block-floating unsigned value m * 2^e (the distance product of the weight unit).
@@ -196,9 +196,7 @@ class FrameMemory {
   FrameMemory(const HwConfig& cfg, int cameras);
   // Words of camera `cam` (W*H RGB565, row-major from address 0: line 1 pixel 1 first, eq. 5.27).
   void load(int cam, std::vector<uint16_t> words);
-  uint16_t read(uint32_t frame_addr) const {
-    return mem_[frame_addr >> addr_bits_][frame_addr & addr_mask_];
-  }
+  uint16_t read(uint32_t frame_addr) const { return mem_[frame_addr >> addr_bits_][frame_addr & addr_mask_]; }
 
  private:
   int addr_bits_;

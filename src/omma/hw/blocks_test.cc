@@ -1,10 +1,10 @@
 // Unit tests of the integer blocks against the floating-point camera model they implement.
 #include "omma/hw/blocks.h"
 
-#include <gtest/gtest.h>
-
 #include <cmath>
 #include <random>
+
+#include <gtest/gtest.h>
 
 #include "omma/core/camera.h"
 #include "omma/design/prototype.h"
@@ -78,13 +78,15 @@ double cartesian_error(const HwConfig& cfg, bool printed_eq_5_17 = false) {
   double worst = 0;
   const double turn = std::ldexp(1.0, cfg.angle_bits), unit = std::ldexp(1.0, cfg.sincos_word_bits);
   for (int i = 0; i < 20000; ++i) {
-    Angles a{static_cast<uint32_t>(rng() % static_cast<uint64_t>(turn)), static_cast<uint32_t>(rng() % static_cast<uint64_t>(turn))};
+    Angles a{static_cast<uint32_t>(rng() % static_cast<uint64_t>(turn)),
+             static_cast<uint32_t>(rng() % static_cast<uint64_t>(turn))};
     const Omega o = cartesian(cfg, rom, a, AxisMap::kDome);
     const double th = 2 * kPi * a.theta / turn, ph = 2 * kPi * a.phi / turn;
     const Vec3 w = direction_from_spherical(th, ph);
     double wy = o.w[1] / unit;
     if (printed_eq_5_17) wy = (std::cos(th - ph) - std::sin(th + ph)) / 2;  // as printed
-    worst = std::max({worst, std::abs(o.w[0] / unit - w.x()), std::abs(wy - w.y()), std::abs(o.w[2] / unit - w.z())});
+    worst = std::max(
+        {worst, std::abs(o.w[0] / unit - w.x()), std::abs(wy - w.y()), std::abs(o.w[2] / unit - w.z())});
   }
   return worst;
 }
@@ -115,8 +117,9 @@ TEST(Cartesian, Vr180AxisMapMatchesTheGrid) {
     }
   // Every longitude-latitude grid (conventions.h (G1): phi decreases to the right, the column step
   // held as its two's complement).
-  for (const PanoGrid& eq : {PanoGrid{Projection::kEquirect, 96, 24}, PanoGrid{Projection::kEquirectFull, 96, 48},
-                             PanoGrid{Projection::kEquirect100, 90, 25}}) {
+  for (const PanoGrid& eq :
+       {PanoGrid{Projection::kEquirect, 96, 24}, PanoGrid{Projection::kEquirectFull, 96, 48},
+        PanoGrid{Projection::kEquirect100, 90, 25}}) {
     const AngleRegs r2 = angle_regs(cfg, eq);
     for (int row = 0; row < eq.height; row += 5)
       for (int col = 0; col < eq.width; col += 7) {
@@ -158,15 +161,16 @@ TEST(Blocks, SearchDistanceProjectionMatchTheFloatModel) {
       const double F = std::ldexp(1.0, cfg.pix_frac_bits);
       worst_px = std::max({worst_px, std::abs(p.col / F - f->x()), std::abs(p.row / F - f->y())});
       const double d = distance_unit(cfg, cams[c].c, o) * std::ldexp(1.0, -cfg.dist_frac_bits);
-      worst_d = std::max(worst_d, std::abs(d - pano::orthographic_distance(Vec3::Zero(), rig.cameras[c].position_mm, w)));
+      worst_d = std::max(
+          worst_d, std::abs(d - pano::orthographic_distance(Vec3::Zero(), rig.cameras[c].position_mm, w)));
       ++checked;
     }
   }
   EXPECT_GT(checked, 4000);
   EXPECT_LT(cone_disagree, 10);
-  EXPECT_LT(worst_px, 0.05);   // register quantisation + 1/64 px rounding
-  EXPECT_LT(worst_d, 2e-3);    // mm
-  EXPECT_GT(worst_px, 1e-4);   // the test sees the quantisation at all
+  EXPECT_LT(worst_px, 0.05);  // register quantisation + 1/64 px rounding
+  EXPECT_LT(worst_d, 2e-3);   // mm
+  EXPECT_GT(worst_px, 1e-4);  // the test sees the quantisation at all
 }
 
 TEST(Blocks, DistortedProjectionMatchesTheFloatModel) {

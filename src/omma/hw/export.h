@@ -63,11 +63,11 @@ ImportSummary import_chip(const std::filesystem::path& dir);
 
 // Largest differences between two rigs with the same cameras (the round trip's error).
 struct RigDifference {
-  double axis_deg = 0;      // angle between t, u or v vectors
+  double axis_deg = 0;  // angle between t, u or v vectors
   double position_mm = 0;
   double focal_px = 0;
   double centre_px = 0;
-  double k = 0;             // any distortion coefficient
+  double k = 0;  // any distortion coefficient
   double aov_deg = 0;
 };
 RigDifference rig_difference(const Rig& a, const Rig& b);

@@ -20,9 +20,7 @@
 namespace omma::hw {
 
 // Round half up, arithmetic shift; s >= 0 (s == 0 returns v).
-constexpr int64_t rshift_round(int64_t v, int s) {
-  return s <= 0 ? v : (v + (int64_t{1} << (s - 1))) >> s;
-}
+constexpr int64_t rshift_round(int64_t v, int s) { return s <= 0 ? v : (v + (int64_t{1} << (s - 1))) >> s; }
 
 // Changes the number of fractional bits of v from `from` to `to`: exact left shift when widening,
 // rshift_round when narrowing.

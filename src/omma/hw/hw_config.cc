@@ -1,10 +1,10 @@
 #include "omma/hw/hw_config.h"
 
-#include <fmt/format.h>
-
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+
+#include <fmt/format.h>
 
 namespace omma::hw {
 namespace {
@@ -19,20 +19,23 @@ bool HwConfig::IsValid(std::string* error) const {
     return false;
   };
   auto range = [&](const char* name, int v, int lo, int hi) {
-    return in_range(v, lo, hi) ? true : fail(fmt::format("{} = {} is out of range [{}, {}]", name, v, lo, hi));
+    return in_range(v, lo, hi) ? true
+                               : fail(fmt::format("{} = {} is out of range [{}, {}]", name, v, lo, hi));
   };
   if (!range("angle_bits", angle_bits, 4, 32)) return false;
   if (!range("sincos_addr_bits", sincos_addr_bits, 2, 20)) return false;
   if (!range("sincos_word_bits", sincos_word_bits, 4, 24)) return false;
   if (angle_bits < sincos_addr_bits + 2)
-    return fail(fmt::format("sincos_addr_bits = {} needs angle_bits >= {} (quadrant + table address), "
-                            "angle_bits is {}",
-                            sincos_addr_bits, sincos_addr_bits + 2, angle_bits));
+    return fail(
+        fmt::format("sincos_addr_bits = {} needs angle_bits >= {} (quadrant + table address), "
+                    "angle_bits is {}",
+                    sincos_addr_bits, sincos_addr_bits + 2, angle_bits));
   if (!range("vec_frac_bits", vec_frac_bits, 2, 14)) return false;
   if (!range("pos_frac_bits", pos_frac_bits, 0, 14)) return false;
   if (!range("dist_frac_bits", dist_frac_bits, 2, 16)) return false;
   if (dist_frac_bits < pos_frac_bits)
-    return fail(fmt::format("dist_frac_bits = {} must be >= pos_frac_bits = {}", dist_frac_bits, pos_frac_bits));
+    return fail(
+        fmt::format("dist_frac_bits = {} must be >= pos_frac_bits = {}", dist_frac_bits, pos_frac_bits));
   if (!range("camera_bits", camera_bits, 1, 8)) return false;
   if (!range("max_contributors", max_contributors, 1, 8)) return false;
   if (!range("proj_bits", proj_bits, 8, 24)) return false;
@@ -47,9 +50,10 @@ bool HwConfig::IsValid(std::string* error) const {
   if (!range("frame_addr_bits", frame_addr_bits, 4, 24)) return false;
   if (!range("sample_frac_bits", sample_frac_bits, 0, 8)) return false;
   if (sample_frac_bits > 2 * pix_frac_bits)
-    return fail(fmt::format("sample_frac_bits = {} exceeds the {} fraction bits of a bilinear product "
-                            "(2 * pix_frac_bits)",
-                            sample_frac_bits, 2 * pix_frac_bits));
+    return fail(
+        fmt::format("sample_frac_bits = {} exceeds the {} fraction bits of a bilinear product "
+                    "(2 * pix_frac_bits)",
+                    sample_frac_bits, 2 * pix_frac_bits));
   if (!range("weight_mant_bits", weight_mant_bits, 4, 24)) return false;
   if (!range("recip_bits", recip_bits, 2, 24)) return false;
   if (!range("vig_addr_bits", vig_addr_bits, 1, 12)) return false;
@@ -68,7 +72,7 @@ HwConfig thesis_config() {
   c.angle_bits = 13;        // Table 6.7: 13-bit angle registers
   c.sincos_addr_bits = 11;  // Table 6.4/6.8: 2048 x 16-bit sin and cos ROMs (quarter wave)
   c.sincos_word_bits = 16;
-  c.proj_bits = 16;         // "a 16-bit precision is used for the variables in (5.21) to (5.27)"
+  c.proj_bits = 16;  // "a 16-bit precision is used for the variables in (5.21) to (5.27)"
   c.proj_frac_bits = 13;
   return c;
 }
@@ -78,9 +82,9 @@ void check_rig(const HwConfig& cfg, const Rig& rig) {
   const size_t max_cams = size_t{1} << cfg.camera_bits;
   if (rig.cameras.empty()) throw std::invalid_argument("the rig has no cameras");
   if (rig.cameras.size() > max_cams)
-    throw std::invalid_argument(fmt::format(
-        "the rig has {} cameras, the camera search priority encoder holds {} (camera_bits = {})",
-        rig.cameras.size(), max_cams, cfg.camera_bits));
+    throw std::invalid_argument(
+        fmt::format("the rig has {} cameras, the camera search priority encoder holds {} (camera_bits = {})",
+                    rig.cameras.size(), max_cams, cfg.camera_bits));
   for (const RigCamera& cam : rig.cameras) {
     const Intrinsics& in = cam.in;
     const int64_t pixels = int64_t{in.width} * in.height;
@@ -93,16 +97,16 @@ void check_rig(const HwConfig& cfg, const Rig& rig) {
     auto fits16u = [&](const char* field, double value, int frac) {
       const double q = std::floor(value * std::ldexp(1.0, frac) + 0.5);
       if (!(q >= 0 && q <= 65535))
-        throw std::invalid_argument(fmt::format(
-            "camera {}: {} = {} does not fit a 16-bit register with {} fraction bits (max {})", cam.id, field,
-            value, frac, 65535 / std::ldexp(1.0, frac)));
+        throw std::invalid_argument(
+            fmt::format("camera {}: {} = {} does not fit a 16-bit register with {} fraction bits (max {})",
+                        cam.id, field, value, frac, 65535 / std::ldexp(1.0, frac)));
     };
     auto fits16s = [&](const char* field, double value, int frac) {
       const double q = std::floor(value * std::ldexp(1.0, frac) + 0.5);
       if (!(q >= -32768 && q <= 32767))
         throw std::invalid_argument(fmt::format(
-            "camera {}: {} = {} does not fit a signed 16-bit register with {} fraction bits (|x| < {})", cam.id,
-            field, value, frac, 32768 / std::ldexp(1.0, frac)));
+            "camera {}: {} = {} does not fit a signed 16-bit register with {} fraction bits (|x| < {})",
+            cam.id, field, value, frac, 32768 / std::ldexp(1.0, frac)));
     };
     fits16u("fu", in.fu, cfg.focal_frac_bits);
     fits16u("fv", in.fv, cfg.focal_frac_bits);
@@ -115,9 +119,9 @@ void check_rig(const HwConfig& cfg, const Rig& rig) {
     // |r| <= |c| must fit the 18-bit uQ(17-D).D distance.
     const double dmax = std::ldexp(1.0, 18 - cfg.dist_frac_bits);
     if (cam.position_mm.norm() >= dmax)
-      throw std::invalid_argument(fmt::format(
-          "camera {}: |position| = {} mm does not fit the 18-bit distance uQ{}.{} (< {} mm)", cam.id,
-          cam.position_mm.norm(), 18 - cfg.dist_frac_bits, cfg.dist_frac_bits, dmax));
+      throw std::invalid_argument(
+          fmt::format("camera {}: |position| = {} mm does not fit the 18-bit distance uQ{}.{} (< {} mm)",
+                      cam.id, cam.position_mm.norm(), 18 - cfg.dist_frac_bits, cfg.dist_frac_bits, dmax));
     // Normalised coordinates inside the cone: |x|, |y| <= tan(aov/2); x' adds the distortion.
     const double t = std::tan(std::min(in.aov / 2, deg2rad(89.9)));
     double r2 = 2 * t * t, p = 1 + in.k[0] * r2 + in.k[1] * r2 * r2 + in.k[4] * r2 * r2 * r2;
@@ -141,9 +145,9 @@ void check_grid(const HwConfig& cfg, const PanoGrid& grid) {
   const AngularSpan span = angular_span(grid.projection);
   const double col_span = span.width / (2 * kPi), row_span = span.height / (2 * kPi);
   if (turn * col_span / grid.width < 1 || turn * row_span / grid.height < 1)
-    throw std::invalid_argument(fmt::format(
-        "angle_bits = {} gives less than one angle code per pixel step of a {}x{} {} panorama", cfg.angle_bits,
-        grid.width, grid.height, to_string(grid.projection)));
+    throw std::invalid_argument(
+        fmt::format("angle_bits = {} gives less than one angle code per pixel step of a {}x{} {} panorama",
+                    cfg.angle_bits, grid.width, grid.height, to_string(grid.projection)));
 }
 
 }  // namespace omma::hw

@@ -32,40 +32,40 @@ namespace omma::hw {
 
 struct HwConfig {
   // --- B1 angle generation (eq. 5.11-5.14) ---
-  int angle_bits = 24;        // M: angle accumulator / register width; a full turn = 2^M
+  int angle_bits = 24;  // M: angle accumulator / register width; a full turn = 2^M
 
   // --- B2 Cartesian unit (eq. 5.15-5.18) ---
   int sincos_addr_bits = 12;  // T: quarter-wave sin and cos ROMs of 2^T words each (thesis 2048 -> 11)
   int sincos_word_bits = 16;  // W: ROM word width, uQ1.(W-1) (thesis 16)
 
   // --- B3 camera search + distance (eq. 2.3, 5.19-5.20) ---
-  int vec_frac_bits = 14;     // V: t, u, v and cos(aov/2) registers, sQ1.V in 16 bits (V <= 14)
-  int pos_frac_bits = 10;     // Pp: camera centre registers, sQ(16-Pp).Pp mm
-  int dist_frac_bits = 12;    // D: |r| in uQ(17-D).D mm, 18 bits
-  int camera_bits = 5;        // ceil(log2 N) of the N-to-log2 N priority encoder (24 cameras -> 5)
-  int max_contributors = 4;   // cameras the priority encoder passes on per direction (thesis: 4)
+  int vec_frac_bits = 14;    // V: t, u, v and cos(aov/2) registers, sQ1.V in 16 bits (V <= 14)
+  int pos_frac_bits = 10;    // Pp: camera centre registers, sQ(16-Pp).Pp mm
+  int dist_frac_bits = 12;   // D: |r| in uQ(17-D).D mm, 18 bits
+  int camera_bits = 5;       // ceil(log2 N) of the N-to-log2 N priority encoder (24 cameras -> 5)
+  int max_contributors = 4;  // cameras the priority encoder passes on per direction (thesis: 4)
 
   // --- B4 projection + address (eq. 5.21-5.27) ---
-  int proj_bits = 18;         // total width of x, y, R^2, p, x', y' (thesis: "16-bit precision")
-  int proj_frac_bits = 14;    // P
-  int k_frac_bits = 12;       // K: distortion coefficients, sQ(16-K).K
-  int focal_frac_bits = 4;    // Ff: fu, fv, uQ(16-Ff).Ff
-  int centre_frac_bits = 6;   // Fc: cu, cv, uQ(16-Fc).Fc
-  int pix_frac_bits = 6;      // F: pixel coordinates / bilinear weights
-  int frame_addr_bits = 16;   // address bits of one camera's frame memory (250 x 250 = 62500 < 2^16)
+  int proj_bits = 18;        // total width of x, y, R^2, p, x', y' (thesis: "16-bit precision")
+  int proj_frac_bits = 14;   // P
+  int k_frac_bits = 12;      // K: distortion coefficients, sQ(16-K).K
+  int focal_frac_bits = 4;   // Ff: fu, fv, uQ(16-Ff).Ff
+  int centre_frac_bits = 6;  // Fc: cu, cv, uQ(16-Fc).Fc
+  int pix_frac_bits = 6;     // F: pixel coordinates / bilinear weights
+  int frame_addr_bits = 16;  // address bits of one camera's frame memory (250 x 250 = 62500 < 2^16)
 
   // --- B5/B6 frame memory and pixel value unit ---
-  bool bilinear = true;       // 2x2 reads per tap (the float reference samples bilinearly); false: the
-                              // thesis's single read at the pixel containing the point (eq. 5.27)
-  int sample_frac_bits = 4;   // S: fraction bits kept of a bilinear sample, uQ8.S
-  int weight_mant_bits = 18;  // Mw: mantissa of the block-floating distance product (MRF: 5 factors)
-  int recip_bits = 16;        // R: reciprocal (weight) width
+  bool bilinear = true;           // 2x2 reads per tap (the float reference samples bilinearly); false: the
+                                  // thesis's single read at the pixel containing the point (eq. 5.27)
+  int sample_frac_bits = 4;       // S: fraction bits kept of a bilinear sample, uQ8.S
+  int weight_mant_bits = 18;      // Mw: mantissa of the block-floating distance product (MRF: 5 factors)
+  int recip_bits = 16;            // R: reciprocal (weight) width
   bool expand_at_output = false;  // true: the thesis's order (blend 5/6/5-bit channels, RGB565 ->
                                   // RGB888 at the output); false: expand at the memory read
 
   // --- vignetting memory (Table 6.4/6.8 lut_vig 8192 x 16) ---
-  int vig_addr_bits = 8;      // radial entries per camera (index = min(2^bits-1, (dx^2+dy^2) >> vig_shift))
-  int vig_frac_bits = 14;     // gains uQ2.14 (1.0 = 16384)
+  int vig_addr_bits = 8;   // radial entries per camera (index = min(2^bits-1, (dx^2+dy^2) >> vig_shift))
+  int vig_frac_bits = 14;  // gains uQ2.14 (1.0 = 16384)
 
   // --- B7 object boundary unit (§5.4.5, eq. 4.12-4.16) ---
   int boundary_threshold = 51;  // th_ob on the 8-bit gray scale, compared as |dY| > th (0.2 * 255)
@@ -77,9 +77,9 @@ struct HwConfig {
   void Check() const;
 
   // Derived widths (documented in docs/hw-model.md; the RTL uses the same expressions).
-  int omega_bits() const { return sincos_word_bits + 2; }                    // sQ1.W
-  int sample_bits() const { return 8 + sample_frac_bits; }                  // uQ8.S
-  int acc_bits() const { return sample_bits() + recip_bits + 2; }           // sum of <= 4 products
+  int omega_bits() const { return sincos_word_bits + 2; }          // sQ1.W
+  int sample_bits() const { return 8 + sample_frac_bits; }         // uQ8.S
+  int acc_bits() const { return sample_bits() + recip_bits + 2; }  // sum of <= 4 products
   int quarter_entries() const { return 1 << sincos_addr_bits; }
   int vig_entries() const { return 1 << vig_addr_bits; }
 };

@@ -1,11 +1,11 @@
 #include "omma/hw/memory.h"
 
-#include <fmt/format.h>
-
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+
+#include <fmt/format.h>
 
 namespace omma::hw {
 namespace {
@@ -52,9 +52,12 @@ int next_pow2(long v) {
 
 std::string to_string(MacroKind k) {
   switch (k) {
-    case MacroKind::kDualPortSram: return "Dual Port SRAM";
-    case MacroKind::kSinglePortSram: return "Single Port SRAM";
-    case MacroKind::kRom: return "ROM";
+    case MacroKind::kDualPortSram:
+      return "Dual Port SRAM";
+    case MacroKind::kSinglePortSram:
+      return "Single Port SRAM";
+    case MacroKind::kRom:
+      return "ROM";
   }
   return "?";
 }
@@ -70,7 +73,8 @@ bool MemoryOptions::IsValid(std::string* error) const {
   if (bits_per_pixel < 1 || bits_per_pixel > 64) return fail("bits_per_pixel must be in [1, 64]");
   if (pano_width < 1 || pano_height < 1 || pano_width > 65535 || pano_height > 65535)
     return fail("panorama size must be in [1, 65535]");
-  if (sincos_words < 1 || sincos_bits < 1 || vig_rom_words < 1 || vig_bits < 1) return fail("table sizes must be positive");
+  if (sincos_words < 1 || sincos_bits < 1 || vig_rom_words < 1 || vig_bits < 1)
+    return fail("table sizes must be positive");
   if (cartesian_units < 1) return fail("cartesian_units must be >= 1");
   if (!(fps > 0) || th_sys < 1) return fail("fps must be > 0 and th_sys >= 1");
   return true;
@@ -106,7 +110,11 @@ MemoryReport memory_report(const MemoryOptions& o) {
              {"row_fifo249", 4 * line, 10, "Single-clock"},
              {"cam_int_fifo", line, 10, "Dual-clock"}};
   auto kb = [](int words, int bits) { return double(words) * bits / 8 / 1000; };
-  auto log2i = [](int v) { int b = 0; while ((1 << b) < v) ++b; return b; };
+  auto log2i = [](int v) {
+    int b = 0;
+    while ((1 << b) < v) ++b;
+    return b;
+  };
   r.wrappers = {
       {fmt::format("fifo_memory_single_w10a{}", log2i(line)), 1, "DP SRAM", kb(line, 10)},
       {fmt::format("fifo_memory_single_w10a{}", log2i(4 * line)), 1, "DP SRAM", kb(4 * line, 10)},
@@ -120,13 +128,12 @@ MemoryReport memory_report(const MemoryOptions& o) {
       {"vig_memory_wrapper (ROM)", 1, "ROM", kb(o.vig_rom_words, o.vig_bits)},
   };
   const int sel = std::max(1, log2i(N));
-  r.pins = {{"clk_in", 1, 1},           {"rst_in", 1, 1},         {"serial_data_in", N, 2 * N},
-            {"I2C_data_in", 1, 1},      {"I2C_clock", 1, 1},      {"spi_sclk", N, 0},
-            {"spi_sdata", N, 0},        {"I2C_data_out", 1, 0},   {"I2C_direction", 1, 0},
-            {"DE_out", 1, 1},           {"data_out", 30, 30},     {"vblank_out", 1, 1},
-            {"hblank_out", 1, 1},       {"clock_out", 1, 1},      {"selected_cam", sel, sel},
-            {"DE_out_0", 1, 1},         {"data_out_0", 30, 30},   {"vblank_out_0", 1, 1},
-            {"hblank_out_0", 1, 1},     {"clock_out_0", 1, 1}};
+  r.pins = {
+      {"clk_in", 1, 1},        {"rst_in", 1, 1},       {"serial_data_in", N, 2 * N}, {"I2C_data_in", 1, 1},
+      {"I2C_clock", 1, 1},     {"spi_sclk", N, 0},     {"spi_sdata", N, 0},          {"I2C_data_out", 1, 0},
+      {"I2C_direction", 1, 0}, {"DE_out", 1, 1},       {"data_out", 30, 30},         {"vblank_out", 1, 1},
+      {"hblank_out", 1, 1},    {"clock_out", 1, 1},    {"selected_cam", sel, sel},   {"DE_out_0", 1, 1},
+      {"data_out_0", 30, 30},  {"vblank_out_0", 1, 1}, {"hblank_out_0", 1, 1},       {"clock_out_0", 1, 1}};
   for (const auto& p : r.pins) r.pins_initial += p.initial, r.pins_with_io += p.with_io;
   r.frame_memory_bits = frame_bits * N;
   return r;
@@ -156,8 +163,9 @@ FpgaPlan plan_fpga(const MemoryOptions& o, const FpgaDevice& dev) {
   p.frame_blocks_per_camera = bram36_blocks(long(o.frame_width) * o.frame_height, o.bits_per_pixel);
   p.frame_blocks = p.frame_blocks_per_camera * o.cameras;
   const int line = next_pow2(o.frame_width);
-  p.table_blocks = o.cameras * (2 * bram36_blocks(line, 24) + 2 * bram36_blocks(4 * line, 10) + bram36_blocks(line, 10)) +
-                   2 * bram36_blocks(next_pow2(o.pano_width), 16) + bram36_blocks(o.vig_rom_words, o.vig_bits);
+  p.table_blocks =
+      o.cameras * (2 * bram36_blocks(line, 24) + 2 * bram36_blocks(4 * line, 10) + bram36_blocks(line, 10)) +
+      2 * bram36_blocks(next_pow2(o.pano_width), 16) + bram36_blocks(o.vig_rom_words, o.vig_bits);
   p.total_blocks = p.frame_blocks + p.table_blocks;
   p.utilisation = double(p.total_blocks) / dev.bram36;
   p.fits = p.total_blocks <= dev.bram36;

@@ -16,13 +16,13 @@ namespace omma::hw {
 struct MemoryOptions {
   int cameras = 24;
   int frame_width = 250, frame_height = 250;
-  int bits_per_pixel = 16;       // RGB565 (§5.2); 30 for 10-bit RGB
+  int bits_per_pixel = 16;  // RGB565 (§5.2); 30 for 10-bit RGB
   int pano_width = 1080, pano_height = 1080;
   int sincos_words = 2048, sincos_bits = 16;  // per ROM (thesis: quarter wave 2^11 x 16)
-  int cartesian_units = 5;       // centre + 4 MRF neighbours (§5.4.2); 3 table sets each
+  int cartesian_units = 5;                    // centre + 4 MRF neighbours (§5.4.2); 3 table sets each
   int vig_rom_words = 8192, vig_bits = 16;
   double fps = 25;
-  int th_sys = 4;                // cycles per panorama pixel (throughput.h)
+  int th_sys = 4;  // cycles per panorama pixel (throughput.h)
 
   bool IsValid(std::string* error = nullptr) const;
 };
@@ -31,13 +31,13 @@ enum class MacroKind { kDualPortSram, kSinglePortSram, kRom };
 std::string to_string(MacroKind k);
 
 struct MemoryRow {
-  std::string block;   // which block uses it (Table 6.10 macro name)
+  std::string block;  // which block uses it (Table 6.10 macro name)
   MacroKind kind;
   int count = 0;
   int words = 0;
   int bits = 0;
-  double kbytes = 0;   // count * words * bits / 8 / 1000 (the thesis's KBytes)
-  double area_mm2 = 0; // count * per-macro area (compiler table or estimate)
+  double kbytes = 0;    // count * words * bits / 8 / 1000 (the thesis's KBytes)
+  double area_mm2 = 0;  // count * per-macro area (compiler table or estimate)
   bool area_estimated = false;
 };
 
@@ -67,7 +67,7 @@ struct MemoryReport {
   std::vector<WrapperRow> wrappers;
   std::vector<PinRow> pins;
   int pins_initial = 0, pins_with_io = 0;
-  double frame_memory_bits = 0;   // cameras x W x H x bpp (the FPGA's 24 Mbit)
+  double frame_memory_bits = 0;  // cameras x W x H x bpp (the FPGA's 24 Mbit)
   double macro_area_percent_of_core(double core_mm2, const std::string& block) const;
 };
 
@@ -84,11 +84,11 @@ int bram36_blocks(long depth, int width);
 struct FpgaPlan {
   int frame_blocks_per_camera = 0;
   int frame_blocks = 0;
-  int table_blocks = 0;       // line buffers, vignetting memory (sin/cos in distributed RAM, as §6.4)
+  int table_blocks = 0;  // line buffers, vignetting memory (sin/cos in distributed RAM, as §6.4)
   int total_blocks = 0;
-  double utilisation = 0;     // total / device
+  double utilisation = 0;  // total / device
   bool fits = false;
-  double clock_mhz = 0;       // F_min = fps * pano pixels * Th_sys
+  double clock_mhz = 0;  // F_min = fps * pano pixels * Th_sys
 };
 FpgaPlan plan_fpga(const MemoryOptions& options, const FpgaDevice& device = {});
 

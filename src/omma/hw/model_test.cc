@@ -1,10 +1,10 @@
 // The thesis's numbers (§5.4.3-5.4.4, ch. 6) from the throughput and memory models, the register
 // map of Table 6.7 / 6.6, export/import round trips and bad-input errors.
-#include <gtest/gtest.h>
-
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+
+#include <gtest/gtest.h>
 
 #include "omma/core/io.h"
 #include "omma/design/prototype.h"
@@ -72,11 +72,12 @@ TEST(ThesisTables, WhereThePrintedNumbersDisagree) {
   // §5.4.2: the probabilistic (MRF) hardware is "4x the hardware resources shown in Table 5.5"
   // (dot product 5 + vector magnitude 296 + pipeline registers 78 slices) = 1,516 slices, which is
   // 2.6 % of the 58,568-slice system, not "less than 1 %".
-  const int table55_slices = 5 + 296 + 78, table55_regs = 18 + 528 + 352, table55_luts = 16 + 960 + 0, table55_dsp = 3 + 3;
+  const int table55_slices = 5 + 296 + 78, table55_regs = 18 + 528 + 352, table55_luts = 16 + 960 + 0,
+            table55_dsp = 3 + 3;
   EXPECT_EQ(4 * table55_slices, 1516);
-  EXPECT_EQ(4 * table55_regs, 3592);   // "3600 Slice registers"
-  EXPECT_EQ(4 * table55_luts, 3904);   // "roughly 4000 LUTs"
-  EXPECT_EQ(4 * table55_dsp, 24);      // "24 DSP blocks"
+  EXPECT_EQ(4 * table55_regs, 3592);  // "3600 Slice registers"
+  EXPECT_EQ(4 * table55_luts, 3904);  // "roughly 4000 LUTs"
+  EXPECT_EQ(4 * table55_dsp, 24);     // "24 DSP blocks"
   EXPECT_NEAR(100.0 * 4 * table55_slices / 58568, 2.59, 0.01);
   // Table 5.6/5.7 DSP totals are the row sums; slices and LUTs exceed them by 202 / 369.
   EXPECT_EQ(0 + 0 + 43 + 27 + 16, 86);
@@ -170,7 +171,8 @@ TEST(RegisterMap, Table67Defaults) {
 
 TEST(RegisterMap, ThesisAngleRegistersFromTheGrid) {
   // With 13-bit angles a 1080-column vr180 grid needs k = 8192 / 2160 = 3.79 -> 4: the chip then
-  // covers 190 deg, not 180 (../shared/notes/hw-spec.md: "M = 11 is sufficient" does not hold for 1080 over 180 deg).
+  // covers 190 deg, not 180 (../shared/notes/hw-spec.md: "M = 11 is sufficient" does not hold for 1080 over
+  // 180 deg).
   HwConfig cfg = thesis_config();
   const AngleRegs r = angle_regs(cfg, {Projection::kVr180, 1080, 1080});
   EXPECT_EQ(r.k_phi, 8192u - 4u);  // -4 mod 2^13: the longitude decreases to the right (conventions.h (G2))
@@ -203,8 +205,8 @@ TEST(Export, RoundTripWithinQuantisation) {
   EXPECT_EQ(s.pix_pos_words, 24u * 15u);
   EXPECT_EQ(s.cam_search_words, 24u * 7u);
   EXPECT_EQ(s.pix_val_words, 24u * (256u + 3u));
-  for (const char* f : {"config.json", "regs.hex", "pix_pos.hex", "cam_search.hex", "pix_val.hex", "sin_rom.hex",
-                        "cos_rom.coe", "vig_mem.hex", "omma_hw_config.h", "config_stream.txt"})
+  for (const char* f : {"config.json", "regs.hex", "pix_pos.hex", "cam_search.hex", "pix_val.hex",
+                        "sin_rom.hex", "cos_rom.coe", "vig_mem.hex", "omma_hw_config.h", "config_stream.txt"})
     EXPECT_TRUE(std::filesystem::exists(dir / f)) << f;
   const ImportSummary im = import_chip(dir);
   EXPECT_EQ(im.chip.method, pano::Method::kMrf);
@@ -319,8 +321,9 @@ TEST(Options, ExportOptionsRefuseBadValues) {
   o.grid.height = 0;
   EXPECT_FALSE(o.IsValid());
   const Rig rig = design::thesis_prototype_rig();
-  EXPECT_EQ(refusal([&] { export_chip(rig, o, std::filesystem::temp_directory_path() / "omma_never_written"); }),
-            "panorama size must be positive");
+  EXPECT_EQ(
+      refusal([&] { export_chip(rig, o, std::filesystem::temp_directory_path() / "omma_never_written"); }),
+      "panorama size must be positive");
 }
 
 TEST(Options, WidthSweepOptionsRefuseBadValues) {

@@ -1,13 +1,13 @@
 #include "omma/hw/pipeline.h"
 
-#include <fmt/format.h>
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-
 #include <algorithm>
 #include <atomic>
-#include <opencv2/imgproc.hpp>
 #include <stdexcept>
+
+#include <fmt/format.h>
+#include <opencv2/imgproc.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 #include "omma/core/progress.h"
 #include "omma/hw/fixed.h"
@@ -31,7 +31,8 @@ std::vector<uint16_t> frame_to_rgb565(const cv::Mat& frame) {
   std::vector<uint16_t> words(static_cast<size_t>(f.rows) * f.cols);
   for (int r = 0; r < f.rows; ++r) {
     const cv::Vec3b* p = f.ptr<cv::Vec3b>(r);
-    for (int c = 0; c < f.cols; ++c) words[static_cast<size_t>(r) * f.cols + c] = rgb888_to_rgb565(p[c][2], p[c][1], p[c][0]);
+    for (int c = 0; c < f.cols; ++c)
+      words[static_cast<size_t>(r) * f.cols + c] = rgb888_to_rgb565(p[c][2], p[c][1], p[c][0]);
   }
   return words;
 }
@@ -51,7 +52,8 @@ std::vector<cv::Mat> rgb565_frames(const std::vector<cv::Mat>& frames) {
   return out;
 }
 
-Pipeline::Pipeline(const HwConfig& cfg, const Rig& rig, const PanoGrid& grid, const VignettingTables* vignetting)
+Pipeline::Pipeline(const HwConfig& cfg, const Rig& rig, const PanoGrid& grid,
+                   const VignettingTables* vignetting)
     : cfg_(cfg), grid_(grid), mem_(cfg, static_cast<int>(rig.cameras.size())) {
   check_rig(cfg_, rig);
   check_grid(cfg_, grid_);
@@ -63,13 +65,14 @@ Pipeline::Pipeline(const HwConfig& cfg, const Rig& rig, const PanoGrid& grid, co
     throw std::invalid_argument("vignetting tables: one table per camera needed");
   for (const auto& t : vig_.radial)
     if (static_cast<int>(t.size()) != cfg_.vig_entries())
-      throw std::invalid_argument(fmt::format("vignetting tables: {} entries per camera needed (vig_addr_bits)",
-                                              cfg_.vig_entries()));
+      throw std::invalid_argument(
+          fmt::format("vignetting tables: {} entries per camera needed (vig_addr_bits)", cfg_.vig_entries()));
 }
 
 void Pipeline::load_frames(const std::vector<cv::Mat>& frames) {
   if (frames.size() != cams_.size())
-    throw std::invalid_argument(fmt::format("{} frames for a rig of {} cameras", frames.size(), cams_.size()));
+    throw std::invalid_argument(
+        fmt::format("{} frames for a rig of {} cameras", frames.size(), cams_.size()));
   for (size_t i = 0; i < frames.size(); ++i) {
     if (frames[i].cols != cams_[i].width || frames[i].rows != cams_[i].height)
       throw std::invalid_argument(fmt::format("frame {} is {}x{}, the rig says {}x{}", i, frames[i].cols,
@@ -109,21 +112,22 @@ Omega omega_at(const Ctx& x, int64_t col, int64_t row) {
 
 // One output pixel through every block. Fills `tr` when given.
 std::array<uint32_t, 3> process(const Ctx& x, int col, int row, pano::Method method, bool boundary_on,
-                                PixelTrace* tr, bool* boundary_hit, bool* fallback, int* n_out, int* cone_out) {
+                                PixelTrace* tr, bool* boundary_hit, bool* fallback, int* n_out,
+                                int* cone_out) {
   const HwConfig& cfg = x.cfg;
-  const Omega o = omega_at(x, col, row);                        // B1 + B2
-  const SearchResult sr = camera_search(cfg, x.cams, o);        // B3
+  const Omega o = omega_at(x, col, row);                  // B1 + B2
+  const SearchResult sr = camera_search(cfg, x.cams, o);  // B3
   int n = 0;
   std::array<int, 8> cam{};
   std::array<PixelPos, 8> pos{};
   std::array<uint32_t, 8> dist{};
   for (int i = 0; i < sr.count; ++i) {
     const CameraRegs& c = x.cams[sr.camera[i]];
-    const PixelPos p = project(cfg, c, o, sr.dot_t[i]);       // B4
+    const PixelPos p = project(cfg, c, o, sr.dot_t[i]);  // B4
     if (!p.valid) continue;
     cam[n] = sr.camera[i];
     pos[n] = p;
-    dist[n] = distance_unit(cfg, c.c, o);                      // B3 distance
+    dist[n] = distance_unit(cfg, c.c, o);  // B3 distance
     ++n;
   }
   *n_out = n;
@@ -154,8 +158,8 @@ std::array<uint32_t, 3> process(const Ctx& x, int col, int row, pano::Method met
       const uint32_t g = vignetting_gain(cfg, x.vig, x.cams[cam[i]], cam[i], ta.pixel_x, ta.pixel_y, ch);
       if (g != (1u << 14)) {
         const uint32_t chmax = cfg.expand_at_output ? (ch == 1 ? 63u : 31u) : max8;
-        s = static_cast<uint32_t>(std::min<int64_t>(rshift_round(int64_t{s} * g, 14),
-                                                    int64_t{chmax} << cfg.sample_frac_bits));
+        s = static_cast<uint32_t>(
+            std::min<int64_t>(rshift_round(int64_t{s} * g, 14), int64_t{chmax} << cfg.sample_frac_bits));
       }
       smp[i][ch] = s;
     }
@@ -173,7 +177,8 @@ std::array<uint32_t, 3> process(const Ctx& x, int col, int row, pano::Method met
     bool used_mrf = false;
     if (method == pano::Method::kMrf) {
       // Neighbours (left, right, up, down) that exist on the grid.
-      const std::array<std::array<int, 2>, 4> nb{{{col - 1, row}, {col + 1, row}, {col, row - 1}, {col, row + 1}}};
+      const std::array<std::array<int, 2>, 4> nb{
+          {{col - 1, row}, {col + 1, row}, {col, row - 1}, {col, row + 1}}};
       std::array<bool, 4> exists{};
       std::array<Omega, 4> onb{};
       for (int k = 0; k < 4; ++k) {
@@ -261,7 +266,8 @@ PipelineSummary Pipeline::render(pano::Method method, bool boundary, bool progre
         bool hit = false, fb = false;
         int n = 0, cone = 0;
         const auto rgb = process(x, col, row, method, boundary, nullptr, &hit, &fb, &n, &cone);
-        out[col] = cv::Vec3b(static_cast<uchar>(rgb[2]), static_cast<uchar>(rgb[1]), static_cast<uchar>(rgb[0]));
+        out[col] =
+            cv::Vec3b(static_cast<uchar>(rgb[2]), static_cast<uchar>(rgb[1]), static_cast<uchar>(rgb[0]));
         st.cycles += pixel_cycles(x.timing, n);
         ++st.contributors[std::min(n, 8)];
         ++st.cone_cameras[std::min(cone, 32)];
@@ -290,8 +296,8 @@ PipelineSummary Pipeline::render(pano::Method method, bool boundary, bool progre
 PixelTrace Pipeline::trace(int col, int row, pano::Method method, bool boundary) const {
   check_method(method);
   if (col < 0 || row < 0 || col >= grid_.width || row >= grid_.height)
-    throw std::invalid_argument(fmt::format("pixel ({}, {}) is outside the {}x{} panorama", col, row, grid_.width,
-                                            grid_.height));
+    throw std::invalid_argument(
+        fmt::format("pixel ({}, {}) is outside the {}x{} panorama", col, row, grid_.width, grid_.height));
   const Ctx x{cfg_, regs_, cams_, rom_, vig_, mem_, timing()};
   PixelTrace t;
   bool hit = false, fb = false;

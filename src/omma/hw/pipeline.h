@@ -9,8 +9,9 @@
 
 #include <array>
 #include <cstdint>
-#include <opencv2/core.hpp>
 #include <vector>
+
+#include <opencv2/core.hpp>
 
 #include "omma/core/grid.h"
 #include "omma/core/rig.h"
@@ -27,7 +28,7 @@ struct PipelineCounters {
   std::array<uint64_t, 33> cone_cameras{};  // histogram of cameras passing the cone test (0..32+)
   uint64_t dropped_by_encoder = 0;          // pixels where more cameras passed than max_contributors
   uint64_t boundary_pixels = 0;
-  uint64_t mrf_fallback_pixels = 0;         // MRF: no camera complete, prior alone
+  uint64_t mrf_fallback_pixels = 0;  // MRF: no camera complete, prior alone
 };
 
 struct PipelineSummary {
@@ -41,16 +42,16 @@ struct PixelTrace {
   Angles angles;
   Omega omega;
   SearchResult search;
-  int n = 0;                           // valid contributors
+  int n = 0;  // valid contributors
   std::array<int, 8> camera{};
   std::array<PixelPos, 8> pos{};
-  std::array<uint32_t, 8> dist{};      // uQ.D
+  std::array<uint32_t, 8> dist{};  // uQ.D
   std::array<TapAddress, 8> addr{};
   std::array<std::array<uint32_t, 3>, 8> sample{};  // R, G, B uQ8.S (after vignetting)
-  std::array<uint32_t, 8> weight{};    // uQ0.R
+  std::array<uint32_t, 8> weight{};                 // uQ0.R
   bool mrf_fallback = false;
   BoundaryResult boundary;
-  std::array<uint32_t, 3> rgb{};       // output R, G, B (8 bits)
+  std::array<uint32_t, 3> rgb{};  // output R, G, B (8 bits)
   int cycles = 0;
 };
 
@@ -58,7 +59,8 @@ class Pipeline {
  public:
   // Checks cfg (IsValid), the rig (check_rig) and the grid (check_grid); throws
   // std::invalid_argument naming the field. `vignetting` defaults to unit tables.
-  Pipeline(const HwConfig& cfg, const Rig& rig, const PanoGrid& grid, const VignettingTables* vignetting = nullptr);
+  Pipeline(const HwConfig& cfg, const Rig& rig, const PanoGrid& grid,
+           const VignettingTables* vignetting = nullptr);
 
   // Loads one frame per camera (rig order), checking sizes; stores RGB565.
   void load_frames(const std::vector<cv::Mat>& frames);

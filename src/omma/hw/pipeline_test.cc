@@ -4,24 +4,24 @@
 // widths (HwConfig).
 #include "omma/hw/pipeline.h"
 
-#include <gtest/gtest.h>
-
 #include <algorithm>
+
+#include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
 
 #include "omma/core/frames.h"
+#include "omma/core/photometric.h"
+#include "omma/core/srgb.h"
 #include "omma/design/prototype.h"
+#include "omma/hw/tables.h"
+#include "omma/isp/photometric.h"
 #include "omma/pano/contributors.h"
 #include "omma/pano/maps.h"
 #include "omma/pano/quality.h"
 #include "omma/pano/stitch.h"
-#include "omma/testing/test_scenes.h"
-#include "omma/sim/simulate.h"
 #include "omma/sim/render.h"
-#include "omma/core/photometric.h"
-#include "omma/core/srgb.h"
-#include "omma/hw/tables.h"
-#include "omma/isp/photometric.h"
+#include "omma/sim/simulate.h"
+#include "omma/testing/test_scenes.h"
 
 namespace omma::hw {
 namespace {
@@ -69,12 +69,14 @@ double hw_vs_float(const std::vector<cv::Mat>& frames, const PanoGrid& grid, pan
 }
 
 void expect_45db_everywhere(const std::vector<cv::Mat>& frames, const char* scene) {
-  for (const PanoGrid grid : {PanoGrid{Projection::kVr180, 360, 360}, PanoGrid{Projection::kEquirect, 720, 180}})
+  for (const PanoGrid grid :
+       {PanoGrid{Projection::kVr180, 360, 360}, PanoGrid{Projection::kEquirect, 720, 180}})
     for (pano::Method m : {pano::Method::kNearest, pano::Method::kLinear, pano::Method::kMrf}) {
       const double psnr = hw_vs_float(frames, grid, m);
       EXPECT_GE(psnr, 45.0) << scene << " " << to_string(grid.projection) << " " << pano::to_string(m);
       EXPECT_LT(psnr, 200.0);  // not bit-identical to a float pipeline: the test sees the rounding
-      std::printf("%s %s %s: %.2f dB\n", scene, to_string(grid.projection).c_str(), pano::to_string(m).c_str(), psnr);
+      std::printf("%s %s %s: %.2f dB\n", scene, to_string(grid.projection).c_str(),
+                  pano::to_string(m).c_str(), psnr);
     }
 }
 
@@ -98,26 +100,31 @@ TEST(Pipeline, PhotometricModelInTheVignettingMemory) {
       for (int col = 0; col < f.cols; ++col) {
         const double v = vignetting_falloff(*c.photometric, c.in.width, c.in.height, col + 0.5, r + 0.5);
         for (int k = 0; k < 3; ++k) {
-          const double lin = srgb_to_linear(f.at<cv::Vec3b>(r, col)[k] / 255.0f) * c.photometric->gains[k] * v;
-          out.at<cv::Vec3b>(r, col)[k] = cv::saturate_cast<uint8_t>(255.0 * linear_to_srgb(float(std::min(lin, 1.0))));
+          const double lin =
+              srgb_to_linear(f.at<cv::Vec3b>(r, col)[k] / 255.0f) * c.photometric->gains[k] * v;
+          out.at<cv::Vec3b>(r, col)[k] =
+              cv::saturate_cast<uint8_t>(255.0 * linear_to_srgb(float(std::min(lin, 1.0))));
         }
       }
     dark.push_back(out);
   }
   const HwConfig cfg;
   // The table holds (1/V)^(1/2.2) at each radius (uQ2.14), here checked at one entry of camera 5.
-  const VignettingTables vt = make_vignetting_tables(cfg, rig, vignetting_from_rig(rig, kSrgbVignettingExponent));
+  const VignettingTables vt =
+      make_vignetting_tables(cfg, rig, vignetting_from_rig(rig, kSrgbVignettingExponent));
   const VignettingTables unit = make_vignetting_tables(cfg, rig);
   {
     const RigCamera& c = rig.cameras[5];
     const double rmax = vignetting_rmax(c.in);
     const int e = cfg.vig_entries() / 2;
     const double rho = std::sqrt((e + 0.5) * std::ldexp(1.0, vt.vig_shift)) / rmax;
-    const double v = vignetting_falloff(*c.photometric, c.in.width, c.in.height,
-                                        c.in.width / 2.0 + c.photometric->center_px.x() + std::min(rho, 1.0) * rmax,
-                                        c.in.height / 2.0 + c.photometric->center_px.y());
+    const double v =
+        vignetting_falloff(*c.photometric, c.in.width, c.in.height,
+                           c.in.width / 2.0 + c.photometric->center_px.x() + std::min(rho, 1.0) * rmax,
+                           c.in.height / 2.0 + c.photometric->center_px.y());
     EXPECT_NEAR(vt.radial[5][e] / 16384.0, std::pow(1 / v, kSrgbVignettingExponent), 1.0 / 16384);
-    EXPECT_NEAR(vt.channel[5][0] / 16384.0, std::pow(1 / c.photometric->gains[2], kSrgbVignettingExponent), 1.0 / 16384);
+    EXPECT_NEAR(vt.channel[5][0] / 16384.0, std::pow(1 / c.photometric->gains[2], kSrgbVignettingExponent),
+                1.0 / 16384);
   }
   const PanoGrid grid{Projection::kVr180, 360, 360};
   pano::StitchOptions opt;
@@ -134,9 +141,10 @@ TEST(Pipeline, PhotometricModelInTheVignettingMemory) {
   const cv::Mat with = chip(vt), without = chip(unit);
   const double with_vs_corrected = pano::psnr_db(with, corrected), with_vs_clean = pano::psnr_db(with, clean);
   const double without_vs_clean = pano::psnr_db(without, clean);
-  std::printf("chip with the model's tables: %.2f dB vs the exactly corrected float stitch, %.2f dB vs the clean "
-              "frames; unit tables: %.2f dB vs the clean frames\n",
-              with_vs_corrected, with_vs_clean, without_vs_clean);
+  std::printf(
+      "chip with the model's tables: %.2f dB vs the exactly corrected float stitch, %.2f dB vs the clean "
+      "frames; unit tables: %.2f dB vs the clean frames\n",
+      with_vs_corrected, with_vs_clean, without_vs_clean);
   EXPECT_GE(with_vs_corrected, 30.0);
   EXPECT_GE(with_vs_clean, without_vs_clean + 5.0);
 }
@@ -187,7 +195,8 @@ TEST(Pipeline, BoundaryUnitAgreesWithTheFloatBoundaryMap) {
         // (then nearest / farthest may pick the other camera): hardware choices, counted apart.
         auto cs = pano::find_contributors(rig24(), grid.pixel_direction(x, y));
         std::sort(cs.begin(), cs.end(), [](const auto& p, const auto& q) { return p.r < q.r; });
-        const bool tie = cs.size() >= 2 && (cs[1].r - cs[0].r < 2e-3 || cs.back().r - cs[cs.size() - 2].r < 2e-3);
+        const bool tie =
+            cs.size() >= 2 && (cs[1].r - cs[0].r < 2e-3 || cs.back().r - cs[cs.size() - 2].r < 2e-3);
         if (static_cast<int>(cs.size()) > HwConfig{}.max_contributors)
           ++encoder;
         else if (tie)
@@ -199,8 +208,9 @@ TEST(Pipeline, BoundaryUnitAgreesWithTheFloatBoundaryMap) {
   const int ref_count = cv::countNonZero(ref);
   EXPECT_GT(ref_count, 100);
   EXPECT_EQ(static_cast<uint64_t>(cv::countNonZero(r.boundary)), r.stats.boundary_pixels);
-  EXPECT_LE(differ, ref_count / 100 + 2) << differ << " of " << ref_count << " (" << near_threshold << " near the threshold, " << encoder
-                                           << " with a fifth camera, " << ties << " distance ties)";
+  EXPECT_LE(differ, ref_count / 100 + 2)
+      << differ << " of " << ref_count << " (" << near_threshold << " near the threshold, " << encoder
+      << " with a fifth camera, " << ties << " distance ties)";
   EXPECT_LT(encoder + ties, ref_count / 10);
   EXPECT_LT(near_threshold, ref_count / 5);
   // Boundary pixels are pure green.

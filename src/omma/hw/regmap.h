@@ -24,9 +24,9 @@ namespace omma::hw {
 struct GlobalRegister {
   const char* name;
   uint32_t address;
-  int bits;              // value width (angle registers: angle_bits)
+  int bits;                 // value width (angle registers: angle_bits)
   uint32_t thesis_default;  // Table 6.7 default (0 where the thesis gives none / ext registers)
-  bool extension;        // not in Table 6.7
+  bool extension;           // not in Table 6.7
   const char* description;
   bool read_only = false;  // the chip's own value; a write is an error (decode refuses it)
 };

@@ -1,33 +1,37 @@
 #include "omma/hw/tables.h"
 
-#include "omma/core/photometric.h"
-
-#include <fmt/format.h>
-
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
+#include <fmt/format.h>
+
+#include "omma/core/photometric.h"
+
 namespace omma::hw {
 namespace {
 
-int64_t quantise(double v, int frac) { return static_cast<int64_t>(std::floor(v * std::ldexp(1.0, frac) + 0.5)); }
+int64_t quantise(double v, int frac) {
+  return static_cast<int64_t>(std::floor(v * std::ldexp(1.0, frac) + 0.5));
+}
 
 int32_t reg_s16(double v, int frac, int cam_id, const char* field) {
   const int64_t q = quantise(v, frac);
   if (q < -32768 || q > 32767)
-    throw std::invalid_argument(fmt::format("camera {}: {} = {} does not fit a signed 16-bit register with {} "
-                                            "fraction bits",
-                                            cam_id, field, v, frac));
+    throw std::invalid_argument(
+        fmt::format("camera {}: {} = {} does not fit a signed 16-bit register with {} "
+                    "fraction bits",
+                    cam_id, field, v, frac));
   return static_cast<int32_t>(q);
 }
 
 uint32_t reg_u16(double v, int frac, int cam_id, const char* field) {
   const int64_t q = quantise(v, frac);
   if (q < 0 || q > 65535)
-    throw std::invalid_argument(fmt::format("camera {}: {} = {} does not fit an unsigned 16-bit register with {} "
-                                            "fraction bits",
-                                            cam_id, field, v, frac));
+    throw std::invalid_argument(
+        fmt::format("camera {}: {} = {} does not fit an unsigned 16-bit register with {} "
+                    "fraction bits",
+                    cam_id, field, v, frac));
   return static_cast<uint32_t>(q);
 }
 

@@ -25,10 +25,10 @@ std::vector<CameraRegs> camera_regs(const HwConfig& cfg, const Rig& rig);
 RigCamera camera_from_regs(const HwConfig& cfg, const CameraRegs& r, int id);
 
 // A per-camera photometric model (radial vignetting and channel gains; vignetting_from_rig below
-// makes one from the rig's core/photometric.h model). Given camera index and the normalised radius rho = r / r_max in [0, 1] (r_max
-// = distance from the principal point to the farthest image corner), returns the gain that
-// CORRECTS the fall-off (>= 1 towards the corners); channel_gain returns the R, G, B correction.
-// The default (empty functions) gives unit tables: the correction is an exact no-op.
+// makes one from the rig's core/photometric.h model). Given camera index and the normalised radius rho = r /
+// r_max in [0, 1] (r_max = distance from the principal point to the farthest image corner), returns the gain
+// that CORRECTS the fall-off (>= 1 towards the corners); channel_gain returns the R, G, B correction. The
+// default (empty functions) gives unit tables: the correction is an exact no-op.
 struct VignettingModel {
   std::function<double(int camera, double rho)> radial;
   std::function<std::array<double, 3>(int camera)> channel_gain;
@@ -41,7 +41,8 @@ double vignetting_rmax(const Intrinsics& in);
 // Fills the vignetting memory: vig_shift = the smallest shift that maps the largest squared radius
 // of any camera (corner to principal point) below 2^vig_addr_bits; entry i holds the gain at
 // rho = sqrt((i + 0.5) * 2^vig_shift) / r_max (uQ2.14, saturated at 4 - 2^-14).
-VignettingTables make_vignetting_tables(const HwConfig& cfg, const Rig& rig, const VignettingModel& model = {});
+VignettingTables make_vignetting_tables(const HwConfig& cfg, const Rig& rig,
+                                        const VignettingModel& model = {});
 
 // The rig's photometric model (core/photometric.h) as a VignettingModel:
 //   radial(cam, rho)  = (1 / V(r))^e   at the pixel radius r = rho * r_max(cam) from the model's

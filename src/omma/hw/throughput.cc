@@ -1,10 +1,10 @@
 #include "omma/hw/throughput.h"
 
-#include <fmt/format.h>
-
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+
+#include <fmt/format.h>
 
 namespace omma::hw {
 
@@ -17,7 +17,8 @@ bool ThroughputOptions::IsValid(std::string* error) const {
   if (max_contributors < 1 || max_contributors > cameras)
     return fail(fmt::format("max_contributors = {} must be in [1, cameras = {}]", max_contributors, cameras));
   if (angle_th < 1 || memory_th < 1) return fail("angle_th and memory_th must be >= 1");
-  if (table_sets != 1 && table_sets != 3) return fail(fmt::format("table_sets = {} must be 1 or 3", table_sets));
+  if (table_sets != 1 && table_sets != 3)
+    return fail(fmt::format("table_sets = {} must be 1 or 3", table_sets));
   if (width < 1 || height < 1) return fail("width and height must be >= 1");
   if (!(fps > 0)) return fail("fps must be > 0");
   if (!(clock_mhz > 0)) return fail("clock_mhz must be > 0");

@@ -16,11 +16,11 @@ namespace omma::hw {
 
 struct ThroughputOptions {
   int cameras = 24;
-  int max_contributors = 4;     // N_cam_contr
+  int max_contributors = 4;  // N_cam_contr
   int angle_th = 2;
-  int table_sets = 3;           // sin/cos table sets in the Cartesian unit: Th = 9 / table_sets
+  int table_sets = 3;  // sin/cos table sets in the Cartesian unit: Th = 9 / table_sets
   int memory_th = 2;
-  bool unrolled = true;         // camera search: N parallel dot products (Th = N_cam_contr) or 1/camera
+  bool unrolled = true;  // camera search: N parallel dot products (Th = N_cam_contr) or 1/camera
   int width = 1080, height = 1080;
   double fps = 25;
   double clock_mhz = 120;
@@ -35,9 +35,9 @@ struct BlockTh {
 
 struct ThroughputSummary {
   std::vector<BlockTh> blocks;
-  int th_sys = 0;               // max over blocks
-  double fmin_mhz = 0;          // 25 N M Th_sys (at options.fps)
-  double fps_at_clock = 0;      // clock / (N M Th_sys)
+  int th_sys = 0;                        // max over blocks
+  double fmin_mhz = 0;                   // 25 N M Th_sys (at options.fps)
+  double fps_at_clock = 0;               // clock / (N M Th_sys)
   double pixels_per_frame_at_clock = 0;  // clock / (fps Th_sys): the largest panorama at the clock
   int square_side_at_clock = 0;          // floor(sqrt(that)): the largest square panorama
 };

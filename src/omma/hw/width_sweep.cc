@@ -1,10 +1,10 @@
 #include "omma/hw/width_sweep.h"
 
-#include <fmt/format.h>
-
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+
+#include <fmt/format.h>
 
 #include "omma/core/frames.h"
 #include "omma/design/svg_plot.h"
@@ -85,8 +85,8 @@ int get_param(const HwConfig& cfg, const std::string& name) {
   return *f;
 }
 
-double psnr_against(const HwConfig& cfg, const Rig& rig, const std::vector<cv::Mat>& frames, const PanoGrid& grid,
-                    pano::Method method, const cv::Mat& reference) {
+double psnr_against(const HwConfig& cfg, const Rig& rig, const std::vector<cv::Mat>& frames,
+                    const PanoGrid& grid, pano::Method method, const cv::Mat& reference) {
   Pipeline p(cfg, rig, grid);
   p.load_frames(frames);
   return pano::psnr_db(p.render(method, false).pano, reference);
@@ -160,7 +160,8 @@ WidthSweepSummary run_sweep(const Rig& rig, const std::vector<cv::Mat>& frames, 
     if (best_name.empty()) break;
     m = best_cfg;
     psnr += best_gain;
-    r.minimal_steps.push_back(fmt::format("raised {} to {}: {:.2f} dB", best_name, get_param(m, best_name), psnr));
+    r.minimal_steps.push_back(
+        fmt::format("raised {} to {}: {:.2f} dB", best_name, get_param(m, best_name), psnr));
   }
   // Then lower one width at a time (the one whose step down costs least) while the target holds.
   for (int iter = 0; iter < 64 && psnr >= o.target_db; ++iter) {
@@ -182,7 +183,8 @@ WidthSweepSummary run_sweep(const Rig& rig, const std::vector<cv::Mat>& frames, 
     if (best_name.empty()) break;
     m = best_cfg;
     psnr = best_q;
-    r.minimal_steps.push_back(fmt::format("lowered {} to {}: {:.2f} dB", best_name, get_param(m, best_name), psnr));
+    r.minimal_steps.push_back(
+        fmt::format("lowered {} to {}: {:.2f} dB", best_name, get_param(m, best_name), psnr));
   }
   r.minimal = m;
   r.minimal_psnr_db = psnr;
@@ -192,8 +194,9 @@ WidthSweepSummary run_sweep(const Rig& rig, const std::vector<cv::Mat>& frames, 
 std::string sweep_csv(const WidthSweepSummary& r, double target_db) {
   std::string s = "param,value,psnr_db,meets_target\n";
   for (const auto& p : r.points)
-    s += fmt::format("{},{},{},{}\n", p.param, p.value, p.valid ? fmt::format("{:.3f}", p.psnr_db) : "invalid",
-                     p.valid && p.psnr_db >= target_db ? 1 : 0);
+    s +=
+        fmt::format("{},{},{},{}\n", p.param, p.value, p.valid ? fmt::format("{:.3f}", p.psnr_db) : "invalid",
+                    p.valid && p.psnr_db >= target_db ? 1 : 0);
   return s;
 }
 
@@ -207,7 +210,8 @@ std::string sweep_svg(const WidthSweepSummary& r, double target_db) {
     pl.title = n;
     pl.x_label = "bits";
     pl.y_label = "PSNR vs float (dB)";
-    design::PlotSeries s{"pipeline", "#1f77b4", {}, {}, false}, t{fmt::format("{} dB", target_db), "#d62728", {}, {}, false};
+    design::PlotSeries s{"pipeline", "#1f77b4", {}, {}, false},
+        t{fmt::format("{} dB", target_db), "#d62728", {}, {}, false};
     for (const auto& p : r.points)
       if (p.param == n) {
         s.x.push_back(p.value);
@@ -217,7 +221,8 @@ std::string sweep_svg(const WidthSweepSummary& r, double target_db) {
     pl.series = {s, t};
     plots.push_back(pl);
   }
-  return design::svg_plot_grid(plots, 3, "omma hw sweep: PSNR of the bit-accurate pipeline against the float stitch");
+  return design::svg_plot_grid(plots, 3,
+                               "omma hw sweep: PSNR of the bit-accurate pipeline against the float stitch");
 }
 
 }  // namespace omma::hw

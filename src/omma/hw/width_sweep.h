@@ -46,7 +46,7 @@ struct SweepPoint {
 struct WidthSweepSummary {
   std::vector<SweepPoint> points;
   double base_psnr_db = 0;
-  HwConfig minimal;             // smallest widths that keep target_db together
+  HwConfig minimal;  // smallest widths that keep target_db together
   double minimal_psnr_db = 0;
   std::vector<std::string> minimal_steps;  // what the search did, for the report
 };
@@ -59,10 +59,11 @@ int get_param(const HwConfig& cfg, const std::string& name);
 
 // PSNR (dB) of the pipeline at `cfg` against `reference` (CV_8UC3, the float stitch of the same
 // RGB565 frames on `grid`).
-double psnr_against(const HwConfig& cfg, const Rig& rig, const std::vector<cv::Mat>& frames, const PanoGrid& grid,
-                    pano::Method method, const cv::Mat& reference);
+double psnr_against(const HwConfig& cfg, const Rig& rig, const std::vector<cv::Mat>& frames,
+                    const PanoGrid& grid, pano::Method method, const cv::Mat& reference);
 
-WidthSweepSummary run_sweep(const Rig& rig, const std::vector<cv::Mat>& frames, const WidthSweepOptions& options);
+WidthSweepSummary run_sweep(const Rig& rig, const std::vector<cv::Mat>& frames,
+                            const WidthSweepOptions& options);
 
 // CSV (param,value,psnr_db,meets_target) and an SVG grid of PSNR-vs-width plots.
 std::string sweep_csv(const WidthSweepSummary& r, double target_db);

@@ -1,7 +1,5 @@
 #include "omma/io/metadata.h"
 
-#include <zlib.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -11,6 +9,7 @@
 
 #include <fmt/format.h>
 #include <opencv2/imgcodecs.hpp>
+#include <zlib.h>
 
 #include "omma/core/io.h"
 
@@ -37,7 +36,9 @@ uint32_t get_u32(const std::string& s, size_t at) {
   for (int i = 0; i < 4; ++i) v = (v << 8) | uint8_t(s[at + i]);
   return v;
 }
-uint64_t get_u64(const std::string& s, size_t at) { return (uint64_t(get_u32(s, at)) << 32) | get_u32(s, at + 4); }
+uint64_t get_u64(const std::string& s, size_t at) {
+  return (uint64_t(get_u32(s, at)) << 32) | get_u32(s, at + 4);
+}
 void set_u32(std::string& s, size_t at, uint32_t v) {
   for (int i = 0; i < 4; ++i) s[at + i] = char((v >> (24 - 8 * i)) & 0xFF);
 }
@@ -135,9 +136,12 @@ std::optional<Box> child(const std::string& s, const Box& parent, const std::str
 }
 
 void grow(std::string& s, const Box& b, size_t delta) {
-  if (b.header == 16) set_u64(s, b.start + 8, b.size + delta);
-  else if (b.size + delta > 0xFFFFFFFFull) throw IoError("cannot add spherical metadata: box too large");
-  else set_u32(s, b.start, uint32_t(b.size + delta));
+  if (b.header == 16)
+    set_u64(s, b.start + 8, b.size + delta);
+  else if (b.size + delta > 0xFFFFFFFFull)
+    throw IoError("cannot add spherical metadata: box too large");
+  else
+    set_u32(s, b.start, uint32_t(b.size + delta));
 }
 
 std::string full_box(const std::string& type, const std::string& payload) {
@@ -241,11 +245,12 @@ void write_panorama(const fs::path& path, const cv::Mat& image, const PanoGrid& 
   if (!carries_xmp(path)) return write_image(path, image);
   if (image.empty()) throw IoError("refusing to write empty image '" + path.string() + "'");
   if (image.cols != grid.width || image.rows != grid.height)
-    throw IoError(fmt::format("panorama '{}' is {}x{} but its grid is {}x{}", path.string(), image.cols, image.rows,
-                              grid.width, grid.height));
+    throw IoError(fmt::format("panorama '{}' is {}x{} but its grid is {}x{}", path.string(), image.cols,
+                              image.rows, grid.width, grid.height));
   std::vector<uchar> buf;
   try {
-    if (!cv::imencode(lower_ext(path), image, buf)) throw IoError("cannot encode image '" + path.string() + "'");
+    if (!cv::imencode(lower_ext(path), image, buf))
+      throw IoError("cannot encode image '" + path.string() + "'");
   } catch (const cv::Exception& e) {
     throw IoError("cannot write image '" + path.string() + "': " + e.what());
   }
@@ -275,9 +280,12 @@ void add_spherical_video_metadata(const fs::path& path, const PanoGrid& grid) {
     in.clear();
     if (head.size() < 8) throw IoError(what + "not an MP4 file (damaged box structure)");
     Box b{size_t(at), 8, get_u32(head, 0), head.substr(4, 4)};
-    if (b.size == 1 && head.size() == 16) b.size = get_u64(head, 8), b.header = 16;
-    else if (b.size == 0) b.size = file_size - at;  // "to the end of the file"
-    if (b.size < b.header || b.size > file_size - at) throw IoError(what + "not an MP4 file (damaged box structure)");
+    if (b.size == 1 && head.size() == 16)
+      b.size = get_u64(head, 8), b.header = 16;
+    else if (b.size == 0)
+      b.size = file_size - at;  // "to the end of the file"
+    if (b.size < b.header || b.size > file_size - at)
+      throw IoError(what + "not an MP4 file (damaged box structure)");
     if (b.type == "moov") {
       if (moov) throw IoError(what + "two movie boxes");
       if (b.size > (uint64_t(1) << 30)) throw IoError(what + "movie box too large");
@@ -298,7 +306,8 @@ void add_spherical_video_metadata(const fs::path& path, const PanoGrid& grid) {
     const auto mdia = child(m, trak, "mdia");
     if (!mdia) continue;
     const auto hdlr = child(m, *mdia, "hdlr");
-    if (!hdlr || hdlr->size < hdlr->header + 12 || m.substr(hdlr->start + hdlr->header + 8, 4) != "vide") continue;
+    if (!hdlr || hdlr->size < hdlr->header + 12 || m.substr(hdlr->start + hdlr->header + 8, 4) != "vide")
+      continue;
     const auto minf = child(m, *mdia, "minf");
     const auto stbl = minf ? child(m, *minf, "stbl") : std::nullopt;
     const auto stsd = stbl ? child(m, *stbl, "stsd") : std::nullopt;
@@ -337,9 +346,12 @@ void add_spherical_video_metadata(const fs::path& path, const PanoGrid& grid) {
         const size_t at = first + i * width;
         const uint64_t off = co64 ? get_u64(m, at) : get_u32(m, at);
         if (off < moved_from) continue;
-        if (co64) set_u64(m, at, off + boxes.size());
-        else if (off + boxes.size() > 0xFFFFFFFFull) throw IoError(what + "chunk offset overflow");
-        else set_u32(m, at, uint32_t(off + boxes.size()));
+        if (co64)
+          set_u64(m, at, off + boxes.size());
+        else if (off + boxes.size() > 0xFFFFFFFFull)
+          throw IoError(what + "chunk offset overflow");
+        else
+          set_u32(m, at, uint32_t(off + boxes.size()));
       }
     }
   }

@@ -92,7 +92,8 @@ TEST(Xmp, GPanoFields) {
   const std::string x = gpano_xmp({Projection::kEquirect, 1920, 512});
   EXPECT_NE(x.find("<GPano:ProjectionType>equirectangular</GPano:ProjectionType>"), std::string::npos);
   EXPECT_NE(x.find("<GPano:FullPanoHeightPixels>1024</GPano:FullPanoHeightPixels>"), std::string::npos);
-  EXPECT_NE(x.find("<GPano:CroppedAreaImageHeightPixels>512</GPano:CroppedAreaImageHeightPixels>"), std::string::npos);
+  EXPECT_NE(x.find("<GPano:CroppedAreaImageHeightPixels>512</GPano:CroppedAreaImageHeightPixels>"),
+            std::string::npos);
   EXPECT_NE(x.find("<GPano:CroppedAreaTopPixels>0</GPano:CroppedAreaTopPixels>"), std::string::npos);
 }
 
@@ -105,8 +106,10 @@ TEST(Xmp, JpegAndPngStillDecodeToTheSamePixels) {
     write_image(plain, img);
     write_panorama(meta, img, grid);
     const std::string bytes = read_all(meta);
-    EXPECT_NE(bytes.find("<GPano:CroppedAreaLeftPixels>32</GPano:CroppedAreaLeftPixels>"), std::string::npos) << ext;
-    EXPECT_EQ(bytes.size(), read_all(plain).size() + (ext == ".png" ? 12 + 22 : 4 + 29) + gpano_xmp(grid).size());
+    EXPECT_NE(bytes.find("<GPano:CroppedAreaLeftPixels>32</GPano:CroppedAreaLeftPixels>"), std::string::npos)
+        << ext;
+    EXPECT_EQ(bytes.size(),
+              read_all(plain).size() + (ext == ".png" ? 12 + 22 : 4 + 29) + gpano_xmp(grid).size());
     const cv::Mat a = cv::imread(plain.string()), b = cv::imread(meta.string());
     ASSERT_FALSE(b.empty()) << ext;
     EXPECT_EQ(cv::norm(a, b, cv::NORM_INF), 0) << ext;
@@ -131,15 +134,18 @@ TEST(Xmp, JpegAndPngStillDecodeToTheSamePixels) {
 // containers omma's writer uses), or "" if there is none.
 std::string find_box(const std::string& s, size_t from, size_t to, const std::string& type) {
   for (size_t at = from; at + 8 <= to;) {
-    const size_t size = (uint8_t(s[at]) << 24) | (uint8_t(s[at + 1]) << 16) | (uint8_t(s[at + 2]) << 8) | uint8_t(s[at + 3]);
+    const size_t size =
+        (uint8_t(s[at]) << 24) | (uint8_t(s[at + 1]) << 16) | (uint8_t(s[at + 2]) << 8) | uint8_t(s[at + 3]);
     if (size < 8 || at + size > to) return "";
     const std::string t = s.substr(at + 4, 4);
     if (t == type) return s.substr(at + 8, size - 8);
     size_t skip = 0;
-    if (t == "stsd") skip = 8;
-    else if (t == "mp4v" || t == "avc1") skip = 78;
-    if (t == "moov" || t == "trak" || t == "mdia" || t == "minf" || t == "stbl" || t == "stsd" || t == "mp4v" ||
-        t == "avc1" || t == "sv3d" || t == "proj") {
+    if (t == "stsd")
+      skip = 8;
+    else if (t == "mp4v" || t == "avc1")
+      skip = 78;
+    if (t == "moov" || t == "trak" || t == "mdia" || t == "minf" || t == "stbl" || t == "stsd" ||
+        t == "mp4v" || t == "avc1" || t == "sv3d" || t == "proj") {
       const std::string r = find_box(s, at + 8 + skip, at + size, type);
       if (!r.empty()) return r;
     }
@@ -152,7 +158,8 @@ TEST(SphericalVideo, Mp4GetsSv3dAndStillPlays) {
   const fs::path d = temp_dir("mp4");
   const fs::path mp4 = d / "v.mp4";
   {
-    cv::VideoWriter w(mp4.string(), cv::CAP_FFMPEG, cv::VideoWriter::fourcc('m', 'p', '4', 'v'), 10, {128, 32});
+    cv::VideoWriter w(mp4.string(), cv::CAP_FFMPEG, cv::VideoWriter::fourcc('m', 'p', '4', 'v'), 10,
+                      {128, 32});
     ASSERT_TRUE(w.isOpened());
     for (int i = 0; i < 5; ++i) w.write(test_image(128, 32));
   }

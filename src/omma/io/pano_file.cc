@@ -30,14 +30,16 @@ double render_to_file(render::PanoRenderer& renderer, const std::filesystem::pat
     if ((ext == ".jpg" || ext == ".jpeg") && (g.width > 65535 || g.height > 65535))
       throw IoError(fmt::format("JPEG cannot hold {}x{}; write a .tif (BigTIFF)", g.width, g.height));
     cv::Mat img(g.height, g.width, CV_8UC3);
-    renderer.render(timed([&](int row0, const cv::Mat& band) { band.copyTo(img.rowRange(row0, row0 + band.rows)); }));
+    renderer.render(
+        timed([&](int row0, const cv::Mat& band) { band.copyTo(img.rowRange(row0, row0 + band.rows)); }));
     write_image(path, img);
   }
   return seconds;
 }
 
 render::FrameSetTimes render_frame_set(const render::FrameSetReader& recording, int64_t set,
-                                       render::PanoRenderer& renderer, isp::IspOptions iso, const std::filesystem::path& path) {
+                                       render::PanoRenderer& renderer, isp::IspOptions iso,
+                                       const std::filesystem::path& path) {
   using clock = std::chrono::steady_clock;
   render::FrameSetTimes t;
   std::vector<cv::Mat> frames = render::develop_frame_set(recording, set, iso, &t);

@@ -1,15 +1,15 @@
 #include "omma/io/recording.h"
 
+#include <sys/resource.h>
+#include <sys/statvfs.h>
+
 #include <algorithm>
 #include <chrono>
 #include <mutex>
 
-#include <opencv2/imgproc.hpp>
-
 #include <fmt/format.h>
 #include <hdf5.h>
-#include <sys/resource.h>
-#include <sys/statvfs.h>
+#include <opencv2/imgproc.hpp>
 
 #include "omma/core/frames.h"
 #include "omma/core/io.h"
@@ -47,12 +47,23 @@ struct Hid {
   void reset() {
     if (id >= 0) {
       switch (H5Iget_type(id)) {
-        case H5I_FILE: H5Fclose(id); break;
-        case H5I_DATASET: H5Dclose(id); break;
-        case H5I_DATASPACE: H5Sclose(id); break;
-        case H5I_GENPROP_LST: H5Pclose(id); break;
-        case H5I_ATTR: H5Aclose(id); break;
-        default: break;
+        case H5I_FILE:
+          H5Fclose(id);
+          break;
+        case H5I_DATASET:
+          H5Dclose(id);
+          break;
+        case H5I_DATASPACE:
+          H5Sclose(id);
+          break;
+        case H5I_GENPROP_LST:
+          H5Pclose(id);
+          break;
+        case H5I_ATTR:
+          H5Aclose(id);
+          break;
+        default:
+          break;
       }
     }
     id = -1;
@@ -94,10 +105,18 @@ json RecordingManifest::to_json() const {
                        {"file", files[c]},
                        {"width", rig.cameras[c].in.width},
                        {"height", rig.cameras[c].in.height}});
-  return {{"format", "omma-recording"}, {"version", 1},       {"container", "hdf5"},
-          {"rig", rig_to_json(rig)},     {"sensor_mode", sensor_mode}, {"clock_mhz", clock_mhz},
-          {"fps", fps},                  {"bits", bits},      {"bayer", "RGGB"},
-          {"start_unix_ns", start_unix_ns}, {"complete", complete}, {"streams", streams}};
+  return {{"format", "omma-recording"},
+          {"version", 1},
+          {"container", "hdf5"},
+          {"rig", rig_to_json(rig)},
+          {"sensor_mode", sensor_mode},
+          {"clock_mhz", clock_mhz},
+          {"fps", fps},
+          {"bits", bits},
+          {"bayer", "RGGB"},
+          {"start_unix_ns", start_unix_ns},
+          {"complete", complete},
+          {"streams", streams}};
 }
 
 RecordingManifest RecordingManifest::from_json(const json& j) {
@@ -124,10 +143,12 @@ RecordingManifest RecordingManifest::from_json(const json& j) {
       const std::string f = s.at("file").get<std::string>();
       if (f.empty() || f.find('/') != std::string::npos || f == "." || f == "..")
         throw RecordingError("manifest: stream file names must be plain names");
-      if (s.at("width").get<int>() != m.rig.cameras[c].in.width || s.at("height").get<int>() != m.rig.cameras[c].in.height)
-        throw RecordingError(fmt::format("manifest: stream {} is {}x{} but camera {} is {}x{} (mismatched sensor mode)", f,
-                                         s.at("width").get<int>(), s.at("height").get<int>(), m.rig.cameras[c].id,
-                                         m.rig.cameras[c].in.width, m.rig.cameras[c].in.height));
+      if (s.at("width").get<int>() != m.rig.cameras[c].in.width ||
+          s.at("height").get<int>() != m.rig.cameras[c].in.height)
+        throw RecordingError(
+            fmt::format("manifest: stream {} is {}x{} but camera {} is {}x{} (mismatched sensor mode)", f,
+                        s.at("width").get<int>(), s.at("height").get<int>(), m.rig.cameras[c].id,
+                        m.rig.cameras[c].in.width, m.rig.cameras[c].in.height));
       m.files.push_back(f);
     }
     return m;
@@ -146,15 +167,21 @@ cv::Mat to_raw_mosaic(const cv::Mat& frame, int bits) {
   if (frame.channels() == 1 && frame.depth() == CV_16U) {
     double mx = 0;
     cv::minMaxLoc(frame, nullptr, &mx);
-    if (mx > top) throw std::invalid_argument(fmt::format("raw frame value {} does not fit {} bits", mx, bits));
+    if (mx > top)
+      throw std::invalid_argument(fmt::format("raw frame value {} does not fit {} bits", mx, bits));
     return frame.clone();
   }
   cv::Mat bgr;
-  if (frame.channels() == 3) bgr = frame;
-  else if (frame.channels() == 4) cv::cvtColor(frame, bgr, cv::COLOR_BGRA2BGR);
-  else if (frame.channels() == 1) cv::cvtColor(frame, bgr, cv::COLOR_GRAY2BGR);
-  else throw std::invalid_argument("frames must have 1, 3 or 4 channels");
-  if (bgr.depth() != CV_8U && bgr.depth() != CV_16U) throw std::invalid_argument("frames must be 8- or 16-bit");
+  if (frame.channels() == 3)
+    bgr = frame;
+  else if (frame.channels() == 4)
+    cv::cvtColor(frame, bgr, cv::COLOR_BGRA2BGR);
+  else if (frame.channels() == 1)
+    cv::cvtColor(frame, bgr, cv::COLOR_GRAY2BGR);
+  else
+    throw std::invalid_argument("frames must have 1, 3 or 4 channels");
+  if (bgr.depth() != CV_8U && bgr.depth() != CV_16U)
+    throw std::invalid_argument("frames must be 8- or 16-bit");
   // RGGB: (even row, even col) = R, (odd, odd) = B, else G (sim::bayer_rggb, in one pass with the
   // scaling). 8-bit v -> round(v * top / 255) by a table; 16-bit v -> v >> (16 - bits).
   uint16_t lut[256];
@@ -169,7 +196,8 @@ cv::Mat to_raw_mosaic(const cv::Mat& frame, int bits) {
       for (int c = 0; c < bgr.cols; ++c) d[c] = lut[p[3 * c + ((c & 1) ? second : first)]];
     } else {
       const uint16_t* p = bgr.ptr<uint16_t>(r);
-      for (int c = 0; c < bgr.cols; ++c) d[c] = static_cast<uint16_t>(p[3 * c + ((c & 1) ? second : first)] >> shift);
+      for (int c = 0; c < bgr.cols; ++c)
+        d[c] = static_cast<uint16_t>(p[3 * c + ((c & 1) ? second : first)] >> shift);
     }
   }
   return out;
@@ -193,8 +221,8 @@ struct RecordingWriter::Impl {
 
 namespace {
 
-Hid make_dataset(hid_t file, const char* name, hid_t type, int rank, const hsize_t* dims, const hsize_t* chunk,
-                 const void* fill) {
+Hid make_dataset(hid_t file, const char* name, hid_t type, int rank, const hsize_t* dims,
+                 const hsize_t* chunk, const void* fill) {
   std::vector<hsize_t> zero(dims, dims + rank), maxd(dims, dims + rank);
   zero[0] = 0;
   maxd[0] = H5S_UNLIMITED;
@@ -213,7 +241,8 @@ bool append_row(hid_t ds, hid_t type, int rank, const hsize_t* elem_dims, int64_
   count[0] = 1;
   if (H5Dset_extent(ds, size.data()) < 0) return false;
   Hid fspace(H5Dget_space(ds));
-  if (H5Sselect_hyperslab(fspace, H5S_SELECT_SET, start.data(), nullptr, count.data(), nullptr) < 0) return false;
+  if (H5Sselect_hyperslab(fspace, H5S_SELECT_SET, start.data(), nullptr, count.data(), nullptr) < 0)
+    return false;
   Hid mspace(H5Screate_simple(rank, count.data(), nullptr));
   return H5Dwrite(ds, type, mspace, fspace, H5P_DEFAULT, data) >= 0;
 }
@@ -236,8 +265,9 @@ RecordingWriter::RecordingWriter(const fs::path& dir, RecordingManifest manifest
   manifest.files.clear();
   for (const RigCamera& c : manifest.rig.cameras) manifest.files.push_back(stream_name(c.id));
   if (manifest.start_unix_ns == 0)
-    manifest.start_unix_ns =
-        std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch()).count();
+    manifest.start_unix_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                 std::chrono::system_clock::now().time_since_epoch())
+                                 .count();
   manifest.complete = false;
   impl_->manifest = manifest;
   write_text_atomically(dir / "manifest.json", manifest.to_json().dump(2) + "\n");
@@ -257,12 +287,14 @@ RecordingWriter::RecordingWriter(const fs::path& dir, RecordingManifest manifest
     s.frames = make_dataset(s.file, "frames", H5T_NATIVE_UINT16, 3, fd, fc, nullptr);
     s.seq = make_dataset(s.file, "seq", H5T_NATIVE_UINT64, 1, d1, c1, nullptr);
     s.t = make_dataset(s.file, "t_ns", H5T_NATIVE_INT64, 1, d1, c1, &minus_one);
-    if (!s.frames.ok() || !s.seq.ok() || !s.t.ok()) throw RecordingError("cannot create the datasets of '" + path.string() + "'");
+    if (!s.frames.ok() || !s.seq.ok() || !s.t.ok())
+      throw RecordingError("cannot create the datasets of '" + path.string() + "'");
     write_int_attr(s.file, "width", s.w);
     write_int_attr(s.file, "height", s.h);
     write_int_attr(s.file, "bits", manifest.bits);
     write_int_attr(s.file, "camera", cam.id);
-    if (H5Fstart_swmr_write(s.file) < 0) throw RecordingError("cannot start SWMR writing of '" + path.string() + "'");
+    if (H5Fstart_swmr_write(s.file) < 0)
+      throw RecordingError("cannot start SWMR writing of '" + path.string() + "'");
     impl_->streams.push_back(std::move(s));
   }
 }
@@ -290,13 +322,15 @@ void RecordingWriter::append(int cam, const cv::Mat& raw, uint64_t seq, int64_t 
     hsize_t size = 0;
     H5Fget_filesize(s.file, &size);
     if (const uint64_t left = writable_bytes(impl_->dir, size); left < need)
-      throw RecordingError(fmt::format("disk full: {} bytes left for '{}', a frame needs {} with its margin; stopped "
-                                       "after frame {} of camera {}",
-                                       left, (impl_->dir / impl_->manifest.files[cam]).string(), need, s.n,
-                                       impl_->manifest.rig.cameras[cam].id));
+      throw RecordingError(
+          fmt::format("disk full: {} bytes left for '{}', a frame needs {} with its margin; stopped "
+                      "after frame {} of camera {}",
+                      left, (impl_->dir / impl_->manifest.files[cam]).string(), need, s.n,
+                      impl_->manifest.rig.cameras[cam].id));
     const hsize_t fd[3] = {1, hsize_t(s.h), hsize_t(s.w)}, d1[1] = {1};
     // The frame first, its t_ns last: a frame counts once its t_ns is written (header comment).
-    if (!append_row(s.frames, H5T_NATIVE_UINT16, 3, fd, s.n, m.data) || !append_row(s.seq, H5T_NATIVE_UINT64, 1, d1, s.n, &seq) ||
+    if (!append_row(s.frames, H5T_NATIVE_UINT16, 3, fd, s.n, m.data) ||
+        !append_row(s.seq, H5T_NATIVE_UINT64, 1, d1, s.n, &seq) ||
         !append_row(s.t, H5T_NATIVE_INT64, 1, d1, s.n, &t_ns))
       throw RecordingError(fmt::format("camera {}: cannot write frame {} to '{}' (disk full?)",
                                        impl_->manifest.rig.cameras[cam].id, s.n,
@@ -304,14 +338,16 @@ void RecordingWriter::append(int cam, const cv::Mat& raw, uint64_t seq, int64_t 
     ++s.n;
     bytes_ += m.total() * 2;
   }
-  if (std::chrono::steady_clock::now() - impl_->last_flush > std::chrono::duration<double>(impl_->opt.flush_interval_s))
+  if (std::chrono::steady_clock::now() - impl_->last_flush >
+      std::chrono::duration<double>(impl_->opt.flush_interval_s))
     flush();
 }
 
 void RecordingWriter::flush() {
   std::lock_guard lock(h5_mutex());
   for (auto& s : impl_->streams)
-    if (H5Fflush(s.file, H5F_SCOPE_LOCAL) < 0) throw RecordingError("cannot flush the recording (disk full?)");
+    if (H5Fflush(s.file, H5F_SCOPE_LOCAL) < 0)
+      throw RecordingError("cannot flush the recording (disk full?)");
   impl_->last_flush = std::chrono::steady_clock::now();
 }
 
@@ -347,10 +383,12 @@ MatchResult match_frame_sets(const std::vector<std::vector<FrameMeta>>& metas, i
       if (i > 0) {
         const FrameMeta &a = metas[c][i - 1], &b = metas[c][i];
         if (b.t_ns < a.t_ns)
-          throw RecordingError(fmt::format("stream {}: timestamps go backwards at frame {} ({} ns after {} ns)", c, i,
-                                           b.t_ns, a.t_ns));
-        if (b.seq == a.seq) ++st.duplicates;
-        else if (b.seq > a.seq) st.dropped += int64_t(b.seq - a.seq - 1);
+          throw RecordingError(fmt::format(
+              "stream {}: timestamps go backwards at frame {} ({} ns after {} ns)", c, i, b.t_ns, a.t_ns));
+        if (b.seq == a.seq)
+          ++st.duplicates;
+        else if (b.seq > a.seq)
+          st.dropped += int64_t(b.seq - a.seq - 1);
         else
           throw RecordingError(fmt::format("stream {}: sequence numbers go backwards at frame {}", c, i));
       }
@@ -375,7 +413,8 @@ MatchResult match_frame_sets(const std::vector<std::vector<FrameMeta>>& metas, i
   };
   for (const Item& it : all) {
     if (open && (it.t - cur.t_ns > half || cur.frame[it.cam] >= 0)) {
-      if (it.t - cur.t_ns <= half && cur.frame[it.cam] >= 0 && metas[it.cam][it.index].seq == metas[it.cam][cur.frame[it.cam]].seq) {
+      if (it.t - cur.t_ns <= half && cur.frame[it.cam] >= 0 &&
+          metas[it.cam][it.index].seq == metas[it.cam][cur.frame[it.cam]].seq) {
         ++r.cameras[it.cam].extra;  // the same frame again within the set: left out
         continue;
       }
@@ -419,18 +458,22 @@ RecordingReader::RecordingReader(const fs::path& dir) : impl_(std::make_unique<I
   for (size_t c = 0; c < manifest_.files.size(); ++c) {
     const fs::path path = dir / manifest_.files[c];
     const int id = manifest_.rig.cameras[c].id;
-    if (!fs::exists(path)) throw RecordingError(fmt::format("camera {}: stream '{}' is missing", id, path.string()));
+    if (!fs::exists(path))
+      throw RecordingError(fmt::format("camera {}: stream '{}' is missing", id, path.string()));
     Impl::Stream s;
     s.file = Hid(H5Fopen(path.c_str(), H5F_ACC_RDONLY | H5F_ACC_SWMR_READ, H5P_DEFAULT));
     if (!s.file.ok())
-      throw RecordingError(fmt::format("camera {}: stream '{}' is truncated or not an HDF5 file", id, path.string()));
+      throw RecordingError(
+          fmt::format("camera {}: stream '{}' is truncated or not an HDF5 file", id, path.string()));
     s.frames = Hid(H5Dopen2(s.file, "frames", H5P_DEFAULT));
     Hid seq(H5Dopen2(s.file, "seq", H5P_DEFAULT)), t(H5Dopen2(s.file, "t_ns", H5P_DEFAULT));
     if (!s.frames.ok() || !seq.ok() || !t.ok())
-      throw RecordingError(fmt::format("camera {}: stream '{}' lacks frames, seq or t_ns", id, path.string()));
+      throw RecordingError(
+          fmt::format("camera {}: stream '{}' lacks frames, seq or t_ns", id, path.string()));
     hsize_t fd[3] = {0, 0, 0}, ds[1] = {0}, dt[1] = {0};
     Hid fs_(H5Dget_space(s.frames)), ss(H5Dget_space(seq)), ts(H5Dget_space(t));
-    if (H5Sget_simple_extent_ndims(fs_) != 3) throw RecordingError(fmt::format("camera {}: frames must be 3-D", id));
+    if (H5Sget_simple_extent_ndims(fs_) != 3)
+      throw RecordingError(fmt::format("camera {}: frames must be 3-D", id));
     H5Sget_simple_extent_dims(fs_, fd, nullptr);
     H5Sget_simple_extent_dims(ss, ds, nullptr);
     H5Sget_simple_extent_dims(ts, dt, nullptr);
@@ -438,9 +481,10 @@ RecordingReader::RecordingReader(const fs::path& dir) : impl_(std::make_unique<I
     s.w = int(fd[2]);
     const auto& in = manifest_.rig.cameras[c].in;
     if (s.w != in.width || s.h != in.height)
-      throw RecordingError(fmt::format("camera {}: stream frames are {}x{} but the rig's camera is {}x{} (mismatched "
-                                       "sensor mode)",
-                                       id, s.w, s.h, in.width, in.height));
+      throw RecordingError(
+          fmt::format("camera {}: stream frames are {}x{} but the rig's camera is {}x{} (mismatched "
+                      "sensor mode)",
+                      id, s.w, s.h, in.width, in.height));
     // Complete frames: those whose t_ns was written (>= 0), within every dataset's extent.
     const hsize_t n = std::min({fd[0], ds[0], dt[0]});
     std::vector<int64_t> tv(n);
@@ -483,12 +527,14 @@ cv::Mat RecordingReader::read(int cam, int64_t i) const {
   Hid mspace(H5Screate_simple(3, count, nullptr));
   if (H5Sselect_hyperslab(fspace, H5S_SELECT_SET, start, nullptr, count, nullptr) < 0 ||
       H5Dread(s.frames, H5T_NATIVE_UINT16, mspace, fspace, H5P_DEFAULT, out.data) < 0)
-    throw RecordingError(fmt::format("camera {}: cannot read frame {} (damaged stream)", manifest_.rig.cameras[cam].id, i));
+    throw RecordingError(
+        fmt::format("camera {}: cannot read frame {} (damaged stream)", manifest_.rig.cameras[cam].id, i));
   return out;
 }
 
 std::vector<cv::Mat> RecordingReader::read_frame_set(int64_t i) const {
-  if (i < 0 || i >= frame_sets()) throw RecordingError(fmt::format("frame set {} does not exist ({} sets)", i, frame_sets()));
+  if (i < 0 || i >= frame_sets())
+    throw RecordingError(fmt::format("frame set {} does not exist ({} sets)", i, frame_sets()));
   std::vector<cv::Mat> out(cameras());
   for (int c = 0; c < cameras(); ++c)
     if (match_.sets[i].frame[c] >= 0) out[c] = read(c, match_.sets[i].frame[c]);

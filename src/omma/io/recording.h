@@ -47,8 +47,8 @@ class RecordingError : public std::runtime_error {
 struct RecordingManifest {
   Rig rig;
   std::string sensor_mode = "full";
-  double clock_mhz = 0;   // pixel clock of the sensors (informational)
-  double fps = 30;        // nominal frame rate: the matching period is 1 / fps
+  double clock_mhz = 0;  // pixel clock of the sensors (informational)
+  double fps = 30;       // nominal frame rate: the matching period is 1 / fps
   int bits = 12;
   int64_t start_unix_ns = 0;
   bool complete = false;
@@ -83,7 +83,7 @@ class RecordingWriter {
   void flush();
   // Flushes, closes the streams and marks the manifest complete.
   void close();
-  uint64_t bytes() const { return bytes_; }      // pixel bytes appended
+  uint64_t bytes() const { return bytes_; }  // pixel bytes appended
   int64_t frames(int cam) const;
 
  private:
@@ -94,16 +94,16 @@ class RecordingWriter {
 
 // Frame sets: one frame (index into its stream) per camera, -1 where the camera has none.
 struct FrameSet {
-  int64_t t_ns = 0;              // the set's time (its earliest frame)
+  int64_t t_ns = 0;  // the set's time (its earliest frame)
   std::vector<int64_t> frame;
 };
 
 struct CameraMatchStats {
-  int64_t frames = 0;            // complete frames in the stream
-  int64_t dropped = 0;           // gaps in the sequence numbers
-  int64_t duplicates = 0;        // frames repeating the previous sequence number
-  int64_t missing = 0;           // frame sets without a frame of this camera
-  int64_t extra = 0;             // frames left out of every set (a second frame within one set)
+  int64_t frames = 0;      // complete frames in the stream
+  int64_t dropped = 0;     // gaps in the sequence numbers
+  int64_t duplicates = 0;  // frames repeating the previous sequence number
+  int64_t missing = 0;     // frame sets without a frame of this camera
+  int64_t extra = 0;       // frames left out of every set (a second frame within one set)
 };
 
 struct MatchResult {

@@ -1,12 +1,13 @@
 #include "omma/io/tiff_writer.h"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <string>
 #include <vector>
 
 #include <fmt/format.h>
 #include <tiffio.h>
-#include <unistd.h>
 
 #include "omma/core/io.h"
 
@@ -64,7 +65,8 @@ void BigTiffWriter::write_rows(const cv::Mat& band) {
       d[3 * c + 2] = s[3 * c];
     }
     if (TIFFWriteScanline(impl_->tif, d, uint32_t(next_row_), 0) < 0)
-      throw IoError(fmt::format("cannot write row {} of '{}' (disk full?)", next_row_, impl_->tmp_path.string()));
+      throw IoError(
+          fmt::format("cannot write row {} of '{}' (disk full?)", next_row_, impl_->tmp_path.string()));
   }
 }
 
@@ -118,7 +120,8 @@ cv::Mat read_tiff_rows(const std::filesystem::path& path, int row0, int rows) {
   TIFFGetFieldDefaulted(in.t, TIFFTAG_PLANARCONFIG, &planar);
   if (rows < 0) rows = int(h) - row0;
   if (row0 < 0 || rows < 0 || row0 + rows > int(h))
-    throw IoError(fmt::format("'{}': rows {}..{} outside the image of {} rows", path.string(), row0, row0 + rows, h));
+    throw IoError(
+        fmt::format("'{}': rows {}..{} outside the image of {} rows", path.string(), row0, row0 + rows, h));
   cv::Mat out(rows, int(w), CV_8UC3);
   if (bps == 8 && spp >= 3 && planar == PLANARCONFIG_CONTIG && !TIFFIsTiled(in.t)) {
     std::vector<uint8_t> line(TIFFScanlineSize64(in.t));

@@ -8,8 +8,9 @@
 
 #include <array>
 #include <cstdint>
-#include <opencv2/core.hpp>
 #include <string>
+
+#include <opencv2/core.hpp>
 
 namespace omma::isp {
 

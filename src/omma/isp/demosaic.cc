@@ -1,9 +1,10 @@
 #include "omma/isp/demosaic.h"
 
 #include <cstdlib>
+#include <stdexcept>
+
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
-#include <stdexcept>
 
 namespace omma::isp {
 

@@ -17,8 +17,9 @@
 
 #include <array>
 #include <cstdint>
-#include <opencv2/core.hpp>
 #include <string>
+
+#include <opencv2/core.hpp>
 
 namespace omma::isp {
 

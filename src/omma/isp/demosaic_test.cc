@@ -2,7 +2,6 @@
 #include "omma/isp/demosaic.h"
 
 #include <gtest/gtest.h>
-
 #include <opencv2/imgproc.hpp>
 
 namespace omma::isp {

@@ -1,11 +1,11 @@
 #include "omma/isp/isp.h"
 
-#include <tbb/parallel_for.h>
-
 #include <algorithm>
 #include <cmath>
-#include <opencv2/imgproc.hpp>
 #include <stdexcept>
+
+#include <opencv2/imgproc.hpp>
+#include <tbb/parallel_for.h>
 
 #include "omma/core/io.h"
 #include "omma/core/srgb.h"
@@ -14,7 +14,8 @@ namespace omma::isp {
 
 bool IspOptions::IsValid(std::string* why) const {
   if (bits < 8 || bits > 16) {  // output_table: 2^bits entries, the 8 most significant bits
-    if (why) *why = bits < 8 ? "ISP needs raw values of at least 8 bits" : "ISP needs raw values of at most 16 bits";
+    if (why)
+      *why = bits < 8 ? "ISP needs raw values of at least 8 bits" : "ISP needs raw values of at most 16 bits";
     return false;
   }
   if (!flat_gain.empty() && flat_gain.type() != CV_16UC1) {

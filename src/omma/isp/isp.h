@@ -11,9 +11,10 @@
 #pragma once
 
 #include <map>
-#include <opencv2/core.hpp>
 #include <string>
 #include <vector>
+
+#include <opencv2/core.hpp>
 
 #include "omma/isp/color.h"
 #include "omma/isp/demosaic.h"

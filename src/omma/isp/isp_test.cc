@@ -1,13 +1,13 @@
 // Tests of the ISP pipeline (develop) and the Table A.1 ranking on real photographs.
 #include "omma/isp/isp.h"
 
-#include <gtest/gtest.h>
-
 #include <cstdio>
 #include <filesystem>
+#include <random>
+
+#include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
-#include <random>
 
 namespace omma::isp {
 namespace {

@@ -277,7 +277,7 @@ class Decoder {
 }  // namespace
 
 LinkSummary decode_link(const uint8_t* data, size_t size, const LinkConfig& config,
-                      const std::function<void(const LinkFrame&)>& on_frame) {
+                        const std::function<void(const LinkFrame&)>& on_frame) {
   config.validate();
   if (size == 0 || data == nullptr) return LinkSummary{};
   Decoder dec(data, size, config, on_frame);
@@ -285,7 +285,7 @@ LinkSummary decode_link(const uint8_t* data, size_t size, const LinkConfig& conf
 }
 
 LinkSummary decode_link(const std::vector<uint8_t>& bytes, const LinkConfig& config,
-                      const std::function<void(const LinkFrame&)>& on_frame) {
+                        const std::function<void(const LinkFrame&)>& on_frame) {
   return decode_link(bytes.data(), bytes.size(), config, on_frame);
 }
 

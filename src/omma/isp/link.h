@@ -86,11 +86,12 @@ struct LinkSummary {
 // frame (a constant run of >= half the end-of-frame marker, or the long resynchronisation run).
 // Rows are placed by their timing after the last frame boundary. A stream whose first row start
 // is not within 1 PP of a row slot counted from the stream start (a capture begun mid-row) is
-// synchronised at its first frame boundary; rows before it are skipped and not counted. Runs in time linear in the input; never reads out of bounds, whatever the bytes.
+// synchronised at its first frame boundary; rows before it are skipped and not counted. Runs in time linear
+// in the input; never reads out of bounds, whatever the bytes.
 LinkSummary decode_link(const uint8_t* data, size_t size, const LinkConfig& config,
-                      const std::function<void(const LinkFrame&)>& on_frame);
+                        const std::function<void(const LinkFrame&)>& on_frame);
 LinkSummary decode_link(const std::vector<uint8_t>& bytes, const LinkConfig& config,
-                      const std::function<void(const LinkFrame&)>& on_frame);
+                        const std::function<void(const LinkFrame&)>& on_frame);
 
 // Replaces each damaged row by the nearest intact row of the same Bayer colour (r-2, r+2, r-4,
 // ...); rows with no intact partner stay 0. Returns the number of rows replaced.

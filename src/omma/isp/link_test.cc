@@ -1,9 +1,9 @@
 // Tests of the serial link codec (thesis §5.1.3).
 #include "omma/isp/link.h"
 
-#include <gtest/gtest.h>
-
 #include <random>
+
+#include <gtest/gtest.h>
 
 namespace omma::isp {
 namespace {

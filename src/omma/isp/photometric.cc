@@ -18,8 +18,8 @@ void check_frame(const cv::Mat& f, int width, int height, bool allow16) {
     throw std::invalid_argument(fmt::format("photometric correction needs a {}3-channel sRGB frame",
                                             allow16 ? "8- or 16-bit " : "8-bit "));
   if (f.cols != width || f.rows != height)
-    throw std::invalid_argument(fmt::format("photometric correction: frame is {}x{}, the camera is {}x{}", f.cols,
-                                            f.rows, width, height));
+    throw std::invalid_argument(fmt::format("photometric correction: frame is {}x{}, the camera is {}x{}",
+                                            f.cols, f.rows, width, height));
 }
 
 }  // namespace
@@ -34,17 +34,21 @@ cv::Mat correct_photometric_reference(const cv::Mat& frame, const Photometric& p
     for (int c = 0; c < W; ++c) {
       const double v = vignetting_falloff(p, W, H, c + 0.5, r + 0.5);
       for (int k = 0; k < 3; ++k) {
-        const double in = frame.depth() == CV_8U ? frame.at<cv::Vec3b>(r, c)[k] : frame.at<cv::Vec3w>(r, c)[k];
+        const double in =
+            frame.depth() == CV_8U ? frame.at<cv::Vec3b>(r, c)[k] : frame.at<cv::Vec3w>(r, c)[k];
         const double lin = srgb_to_linear(float(in / full)) / (p.gains[k] * v);
         const double e = std::round(full * linear_to_srgb(float(std::min(lin, 1.0))));
-        if (frame.depth() == CV_8U) out.at<cv::Vec3b>(r, c)[k] = cv::saturate_cast<uint8_t>(e);
-        else out.at<cv::Vec3w>(r, c)[k] = cv::saturate_cast<uint16_t>(e);
+        if (frame.depth() == CV_8U)
+          out.at<cv::Vec3b>(r, c)[k] = cv::saturate_cast<uint8_t>(e);
+        else
+          out.at<cv::Vec3w>(r, c)[k] = cv::saturate_cast<uint16_t>(e);
       }
     }
   return out;
 }
 
-PhotometricTable::PhotometricTable(const Photometric& p, int width, int height) : width_(width), height_(height) {
+PhotometricTable::PhotometricTable(const Photometric& p, int width, int height)
+    : width_(width), height_(height) {
   if (width <= 0 || height <= 0) throw std::invalid_argument("PhotometricTable: image size must be positive");
   validate_photometric(p, width, height, "PhotometricTable");
   gain_q12_.resize(size_t(width) * height);
@@ -56,11 +60,13 @@ PhotometricTable::PhotometricTable(const Photometric& p, int width, int height) 
   for (int k = 0; k < 3; ++k) {
     decode_[k].resize(256);
     for (int i = 0; i < 256; ++i)  // Q16.16
-      decode_[k][i] = uint32_t(std::min(4294967295.0, std::round(65536.0 * srgb_to_linear(i / 255.0f) / p.gains[k])));
+      decode_[k][i] =
+          uint32_t(std::min(4294967295.0, std::round(65536.0 * srgb_to_linear(i / 255.0f) / p.gains[k])));
   }
   const int n = 1 << kEncodeBits;
   encode_.resize(n + 1);
-  for (int i = 0; i <= n; ++i) encode_[i] = uint8_t(std::lround(255.0 * linear_to_srgb(float(double(i) / n))));
+  for (int i = 0; i <= n; ++i)
+    encode_[i] = uint8_t(std::lround(255.0 * linear_to_srgb(float(double(i) / n))));
 }
 
 void PhotometricTable::apply_row(const uint8_t* src, uint8_t* dst, int row) const {
@@ -100,7 +106,8 @@ std::vector<PhotometricTable> photometric_tables(const Rig& rig, bool enabled) {
 
 std::vector<cv::Mat> correct_frames(const Rig& rig, const std::vector<cv::Mat>& frames) {
   if (frames.size() != rig.cameras.size())
-    throw std::invalid_argument(fmt::format("correct_frames: {} frames for {} cameras", frames.size(), rig.cameras.size()));
+    throw std::invalid_argument(
+        fmt::format("correct_frames: {} frames for {} cameras", frames.size(), rig.cameras.size()));
   std::vector<cv::Mat> out(frames);
   tbb::parallel_for(size_t{0}, frames.size(), [&](size_t i) {
     const RigCamera& c = rig.cameras[i];

@@ -14,8 +14,8 @@
 #include <opencv2/core.hpp>
 
 #include "omma/core/photometric.h"
-#include "omma/isp/isp.h"
 #include "omma/core/rig.h"
+#include "omma/isp/isp.h"
 
 namespace omma::isp {
 
@@ -47,9 +47,9 @@ class PhotometricTable {
 
  private:
   int width_ = 0, height_ = 0;
-  std::vector<uint16_t> gain_q12_;                // width * height, 1 / V in Q4.12
-  std::array<std::vector<uint32_t>, 3> decode_;   // per channel (B, G, R): 256 entries, Q0.16 / gain_c
-  std::vector<uint8_t> encode_;                   // 2^kEncodeBits + 1 entries
+  std::vector<uint16_t> gain_q12_;               // width * height, 1 / V in Q4.12
+  std::array<std::vector<uint32_t>, 3> decode_;  // per channel (B, G, R): 256 entries, Q0.16 / gain_c
+  std::vector<uint8_t> encode_;                  // 2^kEncodeBits + 1 entries
 };
 
 // One table per camera of the rig (empty tables for cameras without a photometric model, or for

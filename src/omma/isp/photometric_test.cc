@@ -53,7 +53,8 @@ TEST(PhotometricCorrection, InvertsTheModelInLinearLight) {
       for (int k = 0; k < 3; ++k) {
         const double l = rng.uniform(0.02, 0.8);
         const double v = vignetting_falloff(p, W, H, c + 0.5, r + 0.5);
-        frame16.at<cv::Vec3w>(r, c)[k] = uint16_t(std::lround(65535 * linear_to_srgb(float(l * p.gains[k] * v))));
+        frame16.at<cv::Vec3w>(r, c)[k] =
+            uint16_t(std::lround(65535 * linear_to_srgb(float(l * p.gains[k] * v))));
         truth16.at<cv::Vec3w>(r, c)[k] = uint16_t(std::lround(65535 * linear_to_srgb(float(l))));
       }
   const cv::Mat back = correct_photometric_reference(frame16, p);
@@ -91,7 +92,8 @@ TEST(PhotometricCorrection, ModelAsIspFlatGainUndoesVignettingAndGains) {
   for (int r = 0; r < H; ++r)
     for (int c = 0; c < W; ++c) {
       const int k = (r % 2 == 0) ? (c % 2 == 0 ? 2 : 1) : (c % 2 == 0 ? 1 : 0);
-      raw.at<uint16_t>(r, c) = uint16_t(std::lround(level * p.gains[k] * vignetting_falloff(p, W, H, c + 0.5, r + 0.5)));
+      raw.at<uint16_t>(r, c) =
+          uint16_t(std::lround(level * p.gains[k] * vignetting_falloff(p, W, H, c + 0.5, r + 0.5)));
     }
   IspOptions o;
   o.bits = bits;

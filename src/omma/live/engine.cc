@@ -1,5 +1,8 @@
 #include "omma/live/engine.h"
 
+#include <sys/resource.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -7,9 +10,6 @@
 #include <future>
 #include <mutex>
 #include <thread>
-
-#include <sys/resource.h>
-#include <unistd.h>
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
@@ -84,32 +84,37 @@ bool EngineOptions::IsValid(std::string* why) const {
 nlohmann::json EngineSummary::to_json() const {
   nlohmann::json dropped = nlohmann::json::array();
   for (const auto& d : dropped_cameras)
-    dropped.push_back({{"index", d.index}, {"id", d.id}, {"reason", d.reason}, {"at_frame", d.at_frame},
+    dropped.push_back({{"index", d.index},
+                       {"id", d.id},
+                       {"reason", d.reason},
+                       {"at_frame", d.at_frame},
                        {"remapped", d.remapped}});
-  return {{"frames", frames},
-          {"seconds", seconds},
-          {"fps", fps},
-          {"render_ms_mean", render_ms_mean},
-          {"latency_ms", latency_ms},
-          {"latency_ms_max", latency_ms_max},
-          {"oldest_frame_ms_max", oldest_frame_ms_max},
-          {"camera_frames", camera_frames},
-          {"camera_fps_min", camera_fps_min},
-          {"camera_fps_max", camera_fps_max},
-          {"dropped_frames", dropped_frames},
-          {"camera_threads", camera_threads},
-          {"cameras_live", cameras_live},
-          {"window",
-           {{"seconds", window.seconds},
-            {"fps", window.fps},
-            {"latency_ms", window.latency_ms},
-            {"camera_fps_min", window.camera_fps_min},
-            {"camera_fps_max", window.camera_fps_max}}},
-          {"dropped_cameras", dropped},
-          {"map", {{"bytes_per_pixel", map_bytes_per_pixel}, {"seconds", map_seconds}, {"from_cache", map_from_cache}}},
-          {"depth", depth_compile_s > 0 ? nlohmann::json{{"estimate_ms_mean", depth_ms_mean},
-                                                         {"compile_s", depth_compile_s}}
-                                        : nlohmann::json(nullptr)}};
+  return {
+      {"frames", frames},
+      {"seconds", seconds},
+      {"fps", fps},
+      {"render_ms_mean", render_ms_mean},
+      {"latency_ms", latency_ms},
+      {"latency_ms_max", latency_ms_max},
+      {"oldest_frame_ms_max", oldest_frame_ms_max},
+      {"camera_frames", camera_frames},
+      {"camera_fps_min", camera_fps_min},
+      {"camera_fps_max", camera_fps_max},
+      {"dropped_frames", dropped_frames},
+      {"camera_threads", camera_threads},
+      {"cameras_live", cameras_live},
+      {"window",
+       {{"seconds", window.seconds},
+        {"fps", window.fps},
+        {"latency_ms", window.latency_ms},
+        {"camera_fps_min", window.camera_fps_min},
+        {"camera_fps_max", window.camera_fps_max}}},
+      {"dropped_cameras", dropped},
+      {"map",
+       {{"bytes_per_pixel", map_bytes_per_pixel}, {"seconds", map_seconds}, {"from_cache", map_from_cache}}},
+      {"depth", depth_compile_s > 0
+                    ? nlohmann::json{{"estimate_ms_mean", depth_ms_mean}, {"compile_s", depth_compile_s}}
+                    : nlohmann::json(nullptr)}};
 }
 
 namespace {
@@ -121,9 +126,15 @@ class CameraThreads {
   // `tables`: the photometric tables per camera (empty ones: no correction), applied to each frame
   // in its camera's thread before it is handed over.
   CameraThreads(const Rig& rig, std::vector<std::unique_ptr<CameraSource>>& sources,
-                std::vector<std::unique_ptr<Latest>>& latest, const render::StoreLayout& layout, int max_threads,
-                std::function<void()> notify, const std::vector<isp::PhotometricTable>& tables)
-      : rig_(rig), sources_(sources), latest_(latest), layout_(layout), notify_(std::move(notify)), tables_(tables) {
+                std::vector<std::unique_ptr<Latest>>& latest, const render::StoreLayout& layout,
+                int max_threads, std::function<void()> notify,
+                const std::vector<isp::PhotometricTable>& tables)
+      : rig_(rig),
+        sources_(sources),
+        latest_(latest),
+        layout_(layout),
+        notify_(std::move(notify)),
+        tables_(tables) {
     const int n = int(sources.size());
     const int want = std::min(n, std::max(1, max_threads));
     // Start the threads first, parked until every camera has a thread; if the system refuses a
@@ -196,7 +207,8 @@ class CameraThreads {
       // The camera due first; its own clock if it keeps one.
       for (auto& k : cams)
         if (const auto own = sources_[k.c]->next_capture(); own != Clock::time_point{}) k.due = own;
-      auto it = std::min_element(cams.begin(), cams.end(), [](const Cam& a, const Cam& b) { return a.due < b.due; });
+      auto it = std::min_element(cams.begin(), cams.end(),
+                                 [](const Cam& a, const Cam& b) { return a.due < b.due; });
       const auto wait = it->due - Clock::now();
       if (wait > Clock::duration::zero()) {  // (at most 20 ms: then look at `stop` again)
         std::this_thread::sleep_for(std::min<Clock::duration>(wait, std::chrono::milliseconds(20)));
@@ -278,11 +290,12 @@ class RenderLoop {
     tables_ = isp::photometric_tables(rig, opt.photometric);  // empty where no model or switched off
     for (size_t c = 0; c < n_; ++c) latest_.push_back(std::make_unique<Latest>());
     // The render loop waits for new frames only when it is not paced (fps 0).
-    cameras_ = std::make_unique<CameraThreads>(rig, sources, latest_, map_->layout, opt.max_camera_threads,
-                                               [this, paced = opt.fps > 0] {
-                                                 if (!paced) wake_.notify_one();
-                                               },
-                                               tables_);
+    cameras_ = std::make_unique<CameraThreads>(
+        rig, sources, latest_, map_->layout, opt.max_camera_threads,
+        [this, paced = opt.fps > 0] {
+          if (!paced) wake_.notify_one();
+        },
+        tables_);
     stats_.camera_threads = cameras_->count();
     store_ = std::make_unique<render::FrameStore>(map_->layout);
     current_.resize(n_);
@@ -338,8 +351,8 @@ class RenderLoop {
     stats_.map_seconds = first.seconds;
     stats_.map_from_cache = first.from_cache;
     spdlog::info("map {}x{} {}: {:.2f} bytes/pixel, {} in {:.2f} s", map_->width, map_->height,
-                 pano::to_string(mopt_.method), map_->bytes_per_pixel(), first.from_cache ? "loaded" : "compiled",
-                 first.seconds);
+                 pano::to_string(mopt_.method), map_->bytes_per_pixel(),
+                 first.from_cache ? "loaded" : "compiled", first.seconds);
     // Warm-up render (black frames) from this thread, so that the renderer's worker threads are
     // created here at normal priority (threads inherit the nice value of their creator).
     {
@@ -404,9 +417,9 @@ class RenderLoop {
       } else if (!have_[c] && elapsed > opt_.first_frame_timeout_s) {
         live_[c] = false;
         newly_dead.push_back(int(c));
-        stats_.dropped_cameras.push_back({int(c), rig_.cameras[c].id,
-                                          "no frame within " + std::to_string(opt_.first_frame_timeout_s) + " s",
-                                          stats_.frames, false});
+        stats_.dropped_cameras.push_back(
+            {int(c), rig_.cameras[c].id,
+             "no frame within " + std::to_string(opt_.first_frame_timeout_s) + " s", stats_.frames, false});
         spdlog::warn("camera {} dropped: no first frame", rig_.cameras[c].id);
       }
       any_live = any_live || live_[c];
@@ -417,9 +430,8 @@ class RenderLoop {
       pending_active_ = live_;
       render::MapOptions m2 = mopt_;
       m2.active = live_;
-      pending_ = std::async(std::launch::async, [this, m2] {
-        return render::compile_map_cached(rig_, m2, opt_.cache_dir).map;
-      });
+      pending_ = std::async(std::launch::async,
+                            [this, m2] { return render::compile_map_cached(rig_, m2, opt_.cache_dir).map; });
     }
     return fresh;
   }
@@ -589,7 +601,7 @@ class RenderLoop {
 }  // namespace
 
 EngineSummary run_engine(const Rig& rig, std::vector<std::unique_ptr<CameraSource>> sources,
-                       std::vector<std::unique_ptr<Sink>>& sinks, const EngineOptions& opt) {
+                         std::vector<std::unique_ptr<Sink>>& sinks, const EngineOptions& opt) {
   const size_t n = rig.cameras.size();
   if (sources.size() != n)
     throw std::invalid_argument("run_engine: " + std::to_string(sources.size()) + " sources for " +

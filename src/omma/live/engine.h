@@ -27,41 +27,41 @@
 
 #include <nlohmann/json.hpp>
 
+#include "omma/live/sinks.h"
+#include "omma/live/sources.h"
 #include "omma/render/compiled_map.h"
 #include "omma/render/depth_render.h"
 #include "omma/render/render.h"
-#include "omma/live/sinks.h"
-#include "omma/live/sources.h"
 
 namespace omma::live {
 
 // What one panorama was made of.
 struct PanoramaInfo {
   long index = 0;
-  Clock::time_point rendered;                // when the render finished
-  std::vector<Clock::time_point> captured;   // per rig camera: its frame's capture instant
-                                             // (time_point{} for a camera not used)
-  double latency_ms = 0;                     // mean age of the frames used (see above)
+  Clock::time_point rendered;               // when the render finished
+  std::vector<Clock::time_point> captured;  // per rig camera: its frame's capture instant
+                                            // (time_point{} for a camera not used)
+  double latency_ms = 0;                    // mean age of the frames used (see above)
 };
 
 // Statistics over an interval of the run (the last progress interval, about 0.5 s).
 struct WindowStats {
   double seconds = 0;
-  double fps = 0;              // panoramas/s
-  double latency_ms = 0;       // mean frame age of its panoramas
-  double camera_fps_min = 0;   // frames delivered per second by the slowest live camera
+  double fps = 0;             // panoramas/s
+  double latency_ms = 0;      // mean frame age of its panoramas
+  double camera_fps_min = 0;  // frames delivered per second by the slowest live camera
   double camera_fps_max = 0;
 };
 
 struct EngineOptions {
   render::MapOptions map;
-  std::filesystem::path cache_dir;  // empty: no map cache
-  double duration_s = 0;            // stop after this long (0: when every source has ended)
-  long max_frames = 0;              // stop after this many panoramas (0: no limit)
-  double fps = 30;                  // panorama rate (0: render whenever a camera has a new frame)
-  double first_frame_timeout_s = 5; // a camera without a first frame by then is dropped
-  int threads = 0;                  // renderer threads (0: all)
-  int max_camera_threads = 64;      // camera threads at most; more cameras share them
+  std::filesystem::path cache_dir;   // empty: no map cache
+  double duration_s = 0;             // stop after this long (0: when every source has ended)
+  long max_frames = 0;               // stop after this many panoramas (0: no limit)
+  double fps = 30;                   // panorama rate (0: render whenever a camera has a new frame)
+  double first_frame_timeout_s = 5;  // a camera without a first frame by then is dropped
+  int threads = 0;                   // renderer threads (0: all)
+  int max_camera_threads = 64;       // camera threads at most; more cameras share them
   // Depth-adaptive rendering (render/depth_render.h): the depth estimated every panorama on a
   // coarse grid and the taps moved to it (map.method, not sad). A dropped camera's last frame stays
   // in use (no recompile in this mode).
@@ -79,33 +79,33 @@ struct EngineOptions {
 };
 
 struct DroppedCamera {
-  int index = 0;       // rig camera index
-  int id = 0;          // camera id
-  std::string reason;  // "ended", or the error
-  long at_frame = 0;   // panorama frame count when it was dropped
+  int index = 0;          // rig camera index
+  int id = 0;             // camera id
+  std::string reason;     // "ended", or the error
+  long at_frame = 0;      // panorama frame count when it was dropped
   bool remapped = false;  // a map without it was compiled and in use by the end
 };
 
 struct EngineSummary {
-  long frames = 0;               // panoramas rendered
-  double seconds = 0;            // wall time of the render loop
+  long frames = 0;     // panoramas rendered
+  double seconds = 0;  // wall time of the render loop
   double fps = 0;
-  double render_ms_mean = 0;     // render time per panorama
-  double latency_ms = 0;         // mean frame age (see above), mean over the panoramas
-  double latency_ms_max = 0;     // the largest mean frame age of one panorama
+  double render_ms_mean = 0;       // render time per panorama
+  double latency_ms = 0;           // mean frame age (see above), mean over the panoramas
+  double latency_ms_max = 0;       // the largest mean frame age of one panorama
   double oldest_frame_ms_max = 0;  // the oldest frame used in any panorama
-  long camera_frames = 0;        // frames delivered by the cameras
-  double camera_fps_min = 0;     // frames/s delivered by the slowest / fastest live camera
-  double camera_fps_max = 0;     //   (from its first to its last frame)
-  long dropped_frames = 0;       // camera frames overwritten before any panorama used them
-  int camera_threads = 0;        // threads the cameras ran on
-  int cameras_live = 0;          // cameras not dropped
-  WindowStats window;            // the last interval
+  long camera_frames = 0;          // frames delivered by the cameras
+  double camera_fps_min = 0;       // frames/s delivered by the slowest / fastest live camera
+  double camera_fps_max = 0;       //   (from its first to its last frame)
+  long dropped_frames = 0;         // camera frames overwritten before any panorama used them
+  int camera_threads = 0;          // threads the cameras ran on
+  int cameras_live = 0;            // cameras not dropped
+  WindowStats window;              // the last interval
   std::vector<DroppedCamera> dropped_cameras;
   double map_bytes_per_pixel = 0;
   double map_seconds = 0;
   bool map_from_cache = false;
-  double depth_ms_mean = 0;      // depth mode: estimate per panorama (included in render_ms_mean)
+  double depth_ms_mean = 0;  // depth mode: estimate per panorama (included in render_ms_mean)
   double depth_compile_s = 0;
   nlohmann::json to_json() const;
 };
@@ -114,7 +114,7 @@ struct EngineSummary {
 // be one per rig camera (rig order). Throws (after stopping every thread and aborting the sinks)
 // if a frame has the wrong size, a sink fails, or no camera delivers a frame at all.
 EngineSummary run_engine(const Rig& rig, std::vector<std::unique_ptr<CameraSource>> sources,
-                       std::vector<std::unique_ptr<Sink>>& sinks, const EngineOptions& opt);
+                         std::vector<std::unique_ptr<Sink>>& sinks, const EngineOptions& opt);
 
 // Stops a running run_engine from another thread (e.g. a signal handler's watcher).
 void request_stop();

@@ -8,8 +8,8 @@
 
 #include <cmath>
 #include <filesystem>
-#include <set>
 #include <fstream>
+#include <set>
 #include <thread>
 
 #include <gtest/gtest.h>
@@ -17,14 +17,14 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "omma/live/sim_loop.h"
-#include "omma/sim/panorama_views.h"
-#include "omma/testing/synthetic.h"
-#include "omma/live/web_assets.h"
 #include "omma/isp/isp.h"
-#include "omma/isp/photometric.h"
 #include "omma/isp/link.h"
+#include "omma/isp/photometric.h"
+#include "omma/live/sim_loop.h"
+#include "omma/live/web_assets.h"
+#include "omma/sim/panorama_views.h"
 #include "omma/sim/render.h"
+#include "omma/testing/synthetic.h"
 
 namespace omma::live {
 namespace {
@@ -127,9 +127,10 @@ TEST(EngineRun, PhotometricModelIsAppliedAsFramesArrive) {
     run_engine(rig, std::move(sources), sinks, opt);
     const cv::Mat corrected = render::reference_render(rig, opt.map, isp::correct_frames(rig, frames));
     const cv::Mat plain = render::reference_render(rig, opt.map, frames);
-    const double db_corrected = render::psnr_u8(cap->last, corrected), db_plain = render::psnr_u8(cap->last, plain);
-    std::printf("  photometric %d: PSNR vs corrected reference %.2f dB, vs uncorrected %.2f dB\n", int(photometric),
-                db_corrected, db_plain);
+    const double db_corrected = render::psnr_u8(cap->last, corrected),
+                 db_plain = render::psnr_u8(cap->last, plain);
+    std::printf("  photometric %d: PSNR vs corrected reference %.2f dB, vs uncorrected %.2f dB\n",
+                int(photometric), db_corrected, db_plain);
     EXPECT_GE(photometric ? db_corrected : db_plain, 55.0);
     EXPECT_LT(photometric ? db_plain : db_corrected, 40.0);  // the correction is visible
   }
@@ -238,7 +239,8 @@ TEST(EngineRun, RawSensorLinkFilesGoThroughTheIspIntoThePanorama) {
     const isp::ChipStream cs = isp::encode_link({lf, lf, lf}, cfg);
     char name[32];
     std::snprintf(name, sizeof name, "cam_%02d.bin", rig.cameras[c].id);
-    std::ofstream(dir / name, std::ios::binary).write(reinterpret_cast<const char*>(cs.bytes.data()), cs.bytes.size());
+    std::ofstream(dir / name, std::ios::binary)
+        .write(reinterpret_cast<const char*>(cs.bytes.data()), cs.bytes.size());
   }
   // The source delivers exactly what the ISP develops from the raw frame.
   {
@@ -258,9 +260,11 @@ TEST(EngineRun, RawSensorLinkFilesGoThroughTheIspIntoThePanorama) {
   opt.map.grid = PanoGrid{Projection::kVr180, 96, 96};
   opt.fps = 0;
   opt.duration_s = 1.5;
-  const EngineSummary st = run_engine(rig, open_sources(rig, {(dir / "cam_{id}.bin").string()}, so), sinks, opt);
-  std::printf("  link -> ISP -> panorama: %ld panoramas, %.1f fps, %ld camera frames (%.1f per camera per s)\n",
-              st.frames, st.fps, st.camera_frames, st.camera_frames / 24.0 / st.seconds);
+  const EngineSummary st =
+      run_engine(rig, open_sources(rig, {(dir / "cam_{id}.bin").string()}, so), sinks, opt);
+  std::printf(
+      "  link -> ISP -> panorama: %ld panoramas, %.1f fps, %ld camera frames (%.1f per camera per s)\n",
+      st.frames, st.fps, st.camera_frames, st.camera_frames / 24.0 / st.seconds);
   EXPECT_GT(st.frames, 5);
   EXPECT_TRUE(st.dropped_cameras.empty());
   EXPECT_GT(st.camera_frames, 24 * 3);
@@ -343,7 +347,11 @@ TEST(EngineSinks, StreamViewersNeverStarveThePageAndTheStats) {
     cli.set_read_timeout(2, 0);
     int status = 0;
     cli.Get(
-        "/stream.mjpg", [&](const httplib::Response& r) { status = r.status; return true; },
+        "/stream.mjpg",
+        [&](const httplib::Response& r) {
+          status = r.status;
+          return true;
+        },
         [](const char*, size_t) { return false; });
     admitted = status == 200;
     if (!admitted) std::this_thread::sleep_for(std::chrono::milliseconds(100));
@@ -491,18 +499,22 @@ TEST(EngineSim, MovingSceneMatchesTheSimulatorsTruthAtTheSameInstant) {
       return sim::render_truth(loop->scene(), opt.map.grid, pose, 2);
     };
     const double same = render::psnr_u8(s.pano, truth_at(angle));
-    const double off = std::max(render::psnr_u8(s.pano, truth_at(angle - 2)), render::psnr_u8(s.pano, truth_at(angle + 2)));
+    const double off =
+        std::max(render::psnr_u8(s.pano, truth_at(angle - 2)), render::psnr_u8(s.pano, truth_at(angle + 2)));
     // The same stitch of frames all captured at that instant: what the truth comparison costs
     // without any motion.
     std::vector<cv::Mat> sync;
     for (const auto& cam : rig.cameras)
-      sync.push_back(sim::render_camera(loop->scene(), cam, m.pose(t_scene), sim::CameraEffects::ideal(1), false).image);
+      sync.push_back(
+          sim::render_camera(loop->scene(), cam, m.pose(t_scene), sim::CameraEffects::ideal(1), false).image);
     const cv::Mat still = render::reference_render(rig, opt.map, sync);
     const double vs_sync = render::psnr_u8(still, s.pano);
-    std::printf("  panorama %ld: frames captured within %.1f ms, scene at %.2f deg (%.1f deg/s); PSNR vs truth at "
-                "the same instant %.2f dB, at +-2 deg %.2f dB; synchronous frames vs truth %.2f dB, vs live %.2f dB\n",
-                s.info.index, spread, angle, (m.offset(t_scene + 1e-4) - angle) / 1e-4, same, off,
-                render::psnr_u8(still, truth_at(angle)), vs_sync);
+    std::printf(
+        "  panorama %ld: frames captured within %.1f ms, scene at %.2f deg (%.1f deg/s); PSNR vs truth at "
+        "the same instant %.2f dB, at +-2 deg %.2f dB; synchronous frames vs truth %.2f dB, vs live %.2f "
+        "dB\n",
+        s.info.index, spread, angle, (m.offset(t_scene + 1e-4) - angle) / 1e-4, same, off,
+        render::psnr_u8(still, truth_at(angle)), vs_sync);
     EXPECT_GE(same, 32.0);
     EXPECT_GE(same - off, 10.0);
     EXPECT_GE(vs_sync, 34.0);

@@ -58,8 +58,8 @@ namespace {
 // Camera c's thread: reads its source (free-running at the source's own rate), converts each frame
 // to the raw mosaic and queues it for the writer; a full queue drops the frame (the sequence numbers
 // show the gap). The first error of any camera is kept in sh.error.
-void capture(int c, CameraSource& src, const io::RecordingManifest& manifest, const RecordOptions& opt, Shared& sh,
-             std::chrono::steady_clock::time_point t0) {
+void capture(int c, CameraSource& src, const io::RecordingManifest& manifest, const RecordOptions& opt,
+             Shared& sh, std::chrono::steady_clock::time_point t0) {
   uint64_t seq = 0;
   const double fps = src.fps();
   auto next_due = std::chrono::steady_clock::now();
@@ -67,11 +67,13 @@ void capture(int c, CameraSource& src, const io::RecordingManifest& manifest, co
     cv::Mat frame;
     while (!sh.stop && (opt.frames == 0 || int64_t(seq) < opt.frames) && src.read(frame)) {
       // Capture time: when the source delivered the frame.
-      const int64_t t = std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count();
+      const int64_t t =
+          std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count();
       cv::Mat raw = io::to_raw_mosaic(frame, manifest.bits);
       if (raw.cols != manifest.rig.cameras[c].in.width || raw.rows != manifest.rig.cameras[c].in.height)
         throw std::runtime_error(fmt::format("frames are {}x{}, the rig says {}x{}", raw.cols, raw.rows,
-                                             manifest.rig.cameras[c].in.width, manifest.rig.cameras[c].in.height));
+                                             manifest.rig.cameras[c].in.width,
+                                             manifest.rig.cameras[c].in.height));
       {
         CameraQueue& cq = sh.queues[c];
         std::lock_guard lock(cq.m);
@@ -125,7 +127,8 @@ RecordSummary record(std::vector<std::unique_ptr<CameraSource>> sources, const s
   Progress progress("recording", opt.frames > 0 ? size_t(opt.frames) * n : 0, opt.progress && opt.frames > 0);
   auto should_stop = [&] {
     return (opt.stop && *opt.stop) ||
-           (opt.duration_s > 0 && std::chrono::steady_clock::now() - t0 > std::chrono::duration<double>(opt.duration_s));
+           (opt.duration_s > 0 &&
+            std::chrono::steady_clock::now() - t0 > std::chrono::duration<double>(opt.duration_s));
   };
   auto has_error = [&] {
     std::lock_guard lock(sh.m);

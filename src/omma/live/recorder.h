@@ -19,13 +19,13 @@
 namespace omma::live {
 
 struct RecordOptions {
-  double duration_s = 0;     // 0 = no limit
-  int64_t frames = 0;        // frames per camera; 0 = no limit
-  int queue_frames = 4;      // per camera
+  double duration_s = 0;  // 0 = no limit
+  int64_t frames = 0;     // frames per camera; 0 = no limit
+  int queue_frames = 4;   // per camera
   double flush_interval_s = 0.5;
   std::string sensor_mode = "full";
   double clock_mhz = 0;
-  double fps = 30;           // nominal rate (matching period) written to the manifest
+  double fps = 30;  // nominal rate (matching period) written to the manifest
   bool progress = true;
   const std::atomic<bool>* stop = nullptr;
   bool IsValid(std::string* why = nullptr) const;
@@ -36,7 +36,7 @@ struct RecordSummary {
   std::vector<int64_t> dropped;  // dropped for a full queue per camera
   uint64_t bytes = 0;            // pixel bytes written
   double seconds = 0;
-  std::string error;             // empty, or why the recording stopped early (disk full, a source)
+  std::string error;  // empty, or why the recording stopped early (disk full, a source)
   double mb_per_s() const { return seconds > 0 ? bytes / 1e6 / seconds : 0; }
 };
 

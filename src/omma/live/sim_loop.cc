@@ -21,9 +21,12 @@ bool SimCameraOptions::IsValid(std::string* why) const {
     return false;
   };
   if (!(fps_min > 0 && fps_max >= fps_min && fps_max <= 1000))
-    return fail(fmt::format("simulated camera rates {}-{} fps: need 0 < min <= max <= 1000", fps_min, fps_max));
-  if (!(jitter_ms >= 0 && jitter_ms <= 1000)) return fail(fmt::format("jitter {} ms: need 0-1000 ms", jitter_ms));
-  if (!(loop_s > 0 && loop_s <= 3600)) return fail(fmt::format("loop length {} s: need 0 < loop <= 3600 s", loop_s));
+    return fail(
+        fmt::format("simulated camera rates {}-{} fps: need 0 < min <= max <= 1000", fps_min, fps_max));
+  if (!(jitter_ms >= 0 && jitter_ms <= 1000))
+    return fail(fmt::format("jitter {} ms: need 0-1000 ms", jitter_ms));
+  if (!(loop_s > 0 && loop_s <= 3600))
+    return fail(fmt::format("loop length {} s: need 0 < loop <= 3600 s", loop_s));
   if (!(max_memory_mb > 0)) return fail(fmt::format("loop memory bound {} MB: need > 0", max_memory_mb));
   return true;
 }
@@ -88,7 +91,8 @@ std::shared_ptr<const sim::Scene> make_named_scene(const std::string& scene) {
 }
 }  // namespace
 
-SimLoop::SimLoop(const Rig& rig, const std::string& scene, std::optional<double> speed, const SimCameraOptions& opt)
+SimLoop::SimLoop(const Rig& rig, const std::string& scene, std::optional<double> speed,
+                 const SimCameraOptions& opt)
     : SimLoop(rig, make_named_scene(scene), scene.rfind("colon", 0) == 0, speed, opt) {}
 
 SimLoop::SimLoop(const Rig& rig, std::shared_ptr<const sim::Scene> scene, bool translate,
@@ -109,9 +113,10 @@ SimLoop::SimLoop(const Rig& rig, std::shared_ptr<const sim::Scene> scene, bool t
   if (bytes_per_s * opt.loop_s > max_bytes) {
     const double fit = max_bytes / bytes_per_s;
     if (fit < 2.0 / opt.fps_min)
-      throw SourceError(fmt::format("source 'sim:{}': {} cameras need {:.0f} MB per second of loop; the bound "
-                                    "of {:.0f} MB holds less than two frames",
-                                    spec_, rig.cameras.size(), bytes_per_s / 1e6, opt.max_memory_mb));
+      throw SourceError(
+          fmt::format("source 'sim:{}': {} cameras need {:.0f} MB per second of loop; the bound "
+                      "of {:.0f} MB holds less than two frames",
+                      spec_, rig.cameras.size(), bytes_per_s / 1e6, opt.max_memory_mb));
     spdlog::warn("sim: a {:.2f} s loop of {} cameras needs {:.0f} MB; shortened to {:.2f} s to fit {:.0f} MB",
                  opt.loop_s, rig.cameras.size(), bytes_per_s * opt.loop_s / 1e6, fit, opt.max_memory_mb);
     opt.loop_s = fit;
@@ -156,13 +161,14 @@ SimLoop::SimLoop(const Rig& rig, std::shared_ptr<const sim::Scene> scene, bool t
   tbb::parallel_for(size_t{0}, jobs.size(), [&](size_t i) {
     const Job& j = jobs[i];
     frames_[j.cam][j.k] =
-        sim::render_camera(*scene_, rig.cameras[j.cam], motion_.pose(capture_s_[j.cam][j.k]), fx, false).image;
+        sim::render_camera(*scene_, rig.cameras[j.cam], motion_.pose(capture_s_[j.cam][j.k]), fx, false)
+            .image;
     progress.step();
   });
   progress.finish();
   render_s_ = std::chrono::duration<double>(Clock::now() - t0).count();
-  spdlog::info("sim: {} frames ({:.0f} MB) of {} cameras at {:.1f}-{:.1f} fps rendered in {:.1f} s", jobs.size(),
-               bytes() / 1e6, n, opt.fps_min, opt.fps_max, render_s_);
+  spdlog::info("sim: {} frames ({:.0f} MB) of {} cameras at {:.1f}-{:.1f} fps rendered in {:.1f} s",
+               jobs.size(), bytes() / 1e6, n, opt.fps_min, opt.fps_max, render_s_);
 }
 
 std::vector<std::unique_ptr<CameraSource>> SimLoop::sources() {

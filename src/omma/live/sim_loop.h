@@ -40,11 +40,11 @@ namespace omma::live {
 
 // The dome's periodic motion (see the file comment).
 struct SimMotion {
-  bool translate = false;  // along the scene z axis (colon) or turning about the dome axis
-  double speed = 10;       // peak speed, mm/s (translate) or deg/s
-  double period_s = 2;     // T
-  double amplitude() const;               // A: mm or deg
-  double offset(double t_s) const;        // z (mm) or angle (deg) at scene time t (any t: periodic)
+  bool translate = false;           // along the scene z axis (colon) or turning about the dome axis
+  double speed = 10;                // peak speed, mm/s (translate) or deg/s
+  double period_s = 2;              // T
+  double amplitude() const;         // A: mm or deg
+  double offset(double t_s) const;  // z (mm) or angle (deg) at scene time t (any t: periodic)
   sim::DomePose pose(double t_s) const;
 };
 
@@ -57,8 +57,8 @@ class SimLoop : public std::enable_shared_from_this<SimLoop> {
   // options.
   SimLoop(const Rig& rig, const std::string& scene, std::optional<double> speed, const SimCameraOptions& opt);
   // Any scene; `translate`: the dome moves along the scene's z axis (mm/s) instead of turning (deg/s).
-  SimLoop(const Rig& rig, std::shared_ptr<const sim::Scene> scene, bool translate, std::optional<double> speed,
-          const SimCameraOptions& opt);
+  SimLoop(const Rig& rig, std::shared_ptr<const sim::Scene> scene, bool translate,
+          std::optional<double> speed, const SimCameraOptions& opt);
 
   // One source per rig camera, in rig order, playing the loop back on its own clock. The clocks
   // start (S) when the first of them is asked for its first capture instant.
@@ -74,9 +74,9 @@ class SimLoop : public std::enable_shared_from_this<SimLoop> {
   // Camera c's capture instants tau_ck in the loop (s) and its frames (rig order).
   const std::vector<double>& capture_times(int c) const { return capture_s_[c]; }
   const std::vector<cv::Mat>& loop_frames(int c) const { return frames_[c]; }
-  size_t frames() const;             // pre-rendered frames in all
+  size_t frames() const;  // pre-rendered frames in all
   double render_seconds() const { return render_s_; }
-  size_t bytes() const;              // memory of the pre-rendered frames
+  size_t bytes() const;  // memory of the pre-rendered frames
 
  private:
   friend class SimLoopCamera;
@@ -84,8 +84,8 @@ class SimLoop : public std::enable_shared_from_this<SimLoop> {
   std::shared_ptr<const sim::Scene> scene_;
   SimMotion motion_;
   std::string spec_;
-  std::vector<std::vector<cv::Mat>> frames_;   // [camera][k]
-  std::vector<std::vector<double>> capture_s_; // [camera][k]: tau_ck, s from the loop start
+  std::vector<std::vector<cv::Mat>> frames_;    // [camera][k]
+  std::vector<std::vector<double>> capture_s_;  // [camera][k]: tau_ck, s from the loop start
   mutable std::mutex mutex_;
   Clock::time_point start_{};
   double render_s_ = 0;

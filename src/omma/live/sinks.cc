@@ -1,7 +1,7 @@
 #include "omma/live/sinks.h"
 
-#include <cmath>
 #include <atomic>
+#include <cmath>
 #include <condition_variable>
 #include <cstdio>
 #include <filesystem>
@@ -34,8 +34,8 @@ void remove_leftover(const fs::path& tmp, const fs::path& target) {
   std::error_code ec;
   if (!fs::exists(tmp, ec)) return;
   fs::remove(tmp, ec);
-  spdlog::warn("{} the temporary file {} of an interrupted earlier run writing {}", ec ? "could not remove" : "removed",
-               tmp.string(), target.string());
+  spdlog::warn("{} the temporary file {} of an interrupted earlier run writing {}",
+               ec ? "could not remove" : "removed", tmp.string(), target.string());
 }
 
 class VideoSink : public Sink {
@@ -47,16 +47,22 @@ class VideoSink : public Sink {
                                      : cv::VideoWriter::fourcc('M', 'J', 'P', 'G');
     const fs::path dir = path.has_parent_path() ? path.parent_path() : fs::path(".");
     std::error_code ec;
-    if (!fs::is_directory(dir, ec)) throw SinkError("cannot write video " + path.string() + ": folder " + dir.string() + " does not exist");
-    tmp_ = dir / fmt::format(".{}.partial{}", path.stem().string(), ext);  // (fmt: GCC 12 -Wrestrict false positive on "." + string)
+    if (!fs::is_directory(dir, ec))
+      throw SinkError("cannot write video " + path.string() + ": folder " + dir.string() + " does not exist");
+    tmp_ = dir / fmt::format(".{}.partial{}", path.stem().string(),
+                             ext);  // (fmt: GCC 12 -Wrestrict false positive on "." + string)
     remove_leftover(tmp_, path_);
     if (!writer_.open(tmp_.string(), cv::CAP_FFMPEG, fourcc, fps, size, true) || !writer_.isOpened()) {
       fs::remove(tmp_, ec);
-      throw SinkError("cannot write video " + path.string() + " (VideoWriter did not open; folder writable?)");
+      throw SinkError("cannot write video " + path.string() +
+                      " (VideoWriter did not open; folder writable?)");
     }
   }
   ~VideoSink() override { abort(); }
-  void write(const cv::Mat& pano, const render::FrameStore&) override { writer_.write(pano); ++frames_; }
+  void write(const cv::Mat& pano, const render::FrameStore&) override {
+    writer_.write(pano);
+    ++frames_;
+  }
   void finish() override {
     if (done_) return;
     done_ = true;
@@ -124,11 +130,13 @@ class PngSink : public Sink {
     if (projection) grid_ = PanoGrid{*projection, size.width, size.height};
     std::error_code ec;
     fs::create_directories(dir, ec);
-    if (ec || !fs::is_directory(dir)) throw SinkError("cannot create PNG folder " + dir.string() + ": " + ec.message());
+    if (ec || !fs::is_directory(dir))
+      throw SinkError("cannot create PNG folder " + dir.string() + ": " + ec.message());
     // Temporary files of frames (core/io.h: .frame_NNNNNN.tmpRANDOM.png) left by a killed run.
     for (const auto& e : fs::directory_iterator(dir, ec)) {
       const std::string name = e.path().filename().string();
-      if (name.rfind(".frame_", 0) == 0 && name.find(".tmp") != std::string::npos && e.path().extension() == ".png")
+      if (name.rfind(".frame_", 0) == 0 && name.find(".tmp") != std::string::npos &&
+          e.path().extension() == ".png")
         remove_leftover(e.path(), dir / name.substr(1, name.find(".tmp") - 1).append(".png"));
     }
     // Probe that the folder is writable.
@@ -141,8 +149,10 @@ class PngSink : public Sink {
   void write(const cv::Mat& pano, const render::FrameStore&) override {
     char name[32];
     std::snprintf(name, sizeof name, "frame_%06ld.png", n_++);
-    if (grid_) io::write_panorama(dir_ / name, pano, *grid_);  // with the 360-degree XMP
-    else write_image(dir_ / name, pano);
+    if (grid_)
+      io::write_panorama(dir_ / name, pano, *grid_);  // with the 360-degree XMP
+    else
+      write_image(dir_ / name, pano);
   }
   std::string describe() const override { return "png:" + dir_.string(); }
 
@@ -161,7 +171,9 @@ class PassthroughSink : public Sink {
   }
   void finish() override { inner_->finish(); }
   void abort() override { inner_->abort(); }
-  std::string describe() const override { return "camera " + std::to_string(cam_) + " -> " + inner_->describe(); }
+  std::string describe() const override {
+    return "camera " + std::to_string(cam_) + " -> " + inner_->describe();
+  }
 
  private:
   int cam_;
@@ -175,7 +187,8 @@ class HttpSink : public Sink {
   HttpSink(int port, cv::Size size, const SinkOptions& opt)
       : port_(port), quality_(opt.jpeg_quality), max_streams_(opt.max_streams) {
     if (max_streams_ < 1 || max_streams_ > kMaxStreams)
-      throw SinkError(fmt::format("live view: the stream limit must be 1-{}, got {}", kMaxStreams, max_streams_));
+      throw SinkError(
+          fmt::format("live view: the stream limit must be 1-{}, got {}", kMaxStreams, max_streams_));
     config_ = nlohmann::json{{"projection", to_string(opt.projection)},
                              {"width", size.width},
                              {"height", size.height},
@@ -215,8 +228,9 @@ class HttpSink : public Sink {
         streams_.fetch_sub(1);
         res.status = 503;
         res.set_header("Retry-After", "5");
-        res.set_content(fmt::format("omma live view: {} viewers are streaming already (the limit)", max_streams_),
-                        "text/plain");
+        res.set_content(
+            fmt::format("omma live view: {} viewers are streaming already (the limit)", max_streams_),
+            "text/plain");
         return;
       }
       auto last = std::make_shared<long>(0);
@@ -236,8 +250,9 @@ class HttpSink : public Sink {
               *last = seq_;
               jpeg = jpeg_;
             }
-            const std::string head = "--ommaframe\r\nContent-Type: image/jpeg\r\nContent-Length: " +
-                                     std::to_string(jpeg.size()) + "\r\n\r\n";
+            const std::string head =
+                "--ommaframe\r\nContent-Type: image/jpeg\r\nContent-Length: " + std::to_string(jpeg.size()) +
+                "\r\n\r\n";
             if (!sink.write(head.data(), head.size())) return false;
             if (!sink.write(reinterpret_cast<const char*>(jpeg.data()), jpeg.size())) return false;
             return sink.write("\r\n", 2);
@@ -337,7 +352,7 @@ class HttpSink : public Sink {
   std::thread thread_, encoder_;
   std::mutex mutex_;
   std::condition_variable cv_;
-  cv::Mat pending_;          // the newest panorama, not encoded yet
+  cv::Mat pending_;  // the newest panorama, not encoded yet
   bool has_pending_ = false;
   std::vector<uchar> jpeg_;  // the newest encoded one, number seq_
   long seq_ = 0;
@@ -369,7 +384,8 @@ bool SinkOptions::IsValid(std::string* why) const {
   return true;
 }
 
-std::unique_ptr<Sink> open_sink(const std::string& spec, const Rig& rig, cv::Size pano_size, const SinkOptions& opt) {
+std::unique_ptr<Sink> open_sink(const std::string& spec, const Rig& rig, cv::Size pano_size,
+                                const SinkOptions& opt) {
   if (std::string why; !opt.IsValid(&why)) throw SinkError("sink '" + spec + "': " + why);
   if (spec.rfind("http://", 0) == 0) {
     const std::string rest = spec.substr(7);
@@ -382,7 +398,8 @@ std::unique_ptr<Sink> open_sink(const std::string& spec, const Rig& rig, cv::Siz
     if (!port.empty() && port.back() == '/') port.pop_back();
     return std::make_unique<HttpSink>(parse_port(spec, port), pano_size, opt);
   }
-  if (spec.rfind("http:", 0) == 0) return std::make_unique<HttpSink>(parse_port(spec, spec.substr(5)), pano_size, opt);
+  if (spec.rfind("http:", 0) == 0)
+    return std::make_unique<HttpSink>(parse_port(spec, spec.substr(5)), pano_size, opt);
   if (spec.rfind("cam:", 0) == 0) {
     const std::string rest = spec.substr(4);
     const size_t colon = rest.find(':');
@@ -409,7 +426,8 @@ std::unique_ptr<Sink> open_sink(const std::string& spec, const Rig& rig, cv::Siz
   if (spec.rfind("png:", 0) == 0) return std::make_unique<PngSink>(spec.substr(4), pano_size, metadata);
   if (!spec.empty() && spec.back() == '/') return std::make_unique<PngSink>(spec, pano_size, metadata);
   const std::string ext = lower(fs::path(spec).extension().string());
-  if (ext == ".mp4" || ext == ".mkv" || ext == ".avi") return std::make_unique<VideoSink>(spec, pano_size, opt.fps, metadata);
+  if (ext == ".mp4" || ext == ".mkv" || ext == ".avi")
+    return std::make_unique<VideoSink>(spec, pano_size, opt.fps, metadata);
   throw SinkError("sink '" + spec + "': use FILE.mp4|.mkv|.avi, png:DIR, DIR/, cam:ID:SINK or http:PORT");
 }
 

@@ -58,7 +58,8 @@ struct SinkOptions {
   double fps = 30;        // frame rate written into video files
   int jpeg_quality = 80;  // live view
   int max_streams = 8;    // live view: concurrent /stream.mjpg viewers (the page is one)
-  Projection projection = Projection::kVr180;  // the panoramas' projection (live view: how the viewer shows them)
+  Projection projection =
+      Projection::kVr180;  // the panoramas' projection (live view: how the viewer shows them)
   // MP4 files and PNG frames carry the 360-degree metadata of `projection` (omma/io/metadata.h:
   // Spherical Video V2, GPano XMP); off: plain files (and always for cam:ID pass-through sinks).
   bool spherical_metadata = false;

@@ -15,11 +15,11 @@
 
 #include "omma/core/frames.h"
 #include "omma/core/io.h"
-#include "omma/live/sim_loop.h"
-#include "omma/sim/panorama_views.h"
 #include "omma/isp/isp.h"
 #include "omma/isp/link.h"
 #include "omma/isp/photometric.h"
+#include "omma/live/sim_loop.h"
+#include "omma/sim/panorama_views.h"
 
 namespace omma::live {
 namespace fs = std::filesystem;
@@ -78,7 +78,8 @@ class Video : public CameraSource {
   }
   bool read(cv::Mat& frame) override {
     if (cap_.read(frame) && !frame.empty()) return true;
-    if (loop_ && !device_ && cap_.set(cv::CAP_PROP_POS_FRAMES, 0) && cap_.read(frame) && !frame.empty()) return true;
+    if (loop_ && !device_ && cap_.set(cv::CAP_PROP_POS_FRAMES, 0) && cap_.read(frame) && !frame.empty())
+      return true;
     if (device_) throw SourceError("V4L2 device " + spec_ + " stopped delivering frames");
     return false;
   }
@@ -99,7 +100,8 @@ class Still : public CameraSource {
       : frame_(std::move(f)), fps_(fps), limit_(limit), fail_(fail), what_(std::move(what)) {}
   bool read(cv::Mat& frame) override {
     if (limit_ > 0 && n_ >= limit_) {
-      if (fail_) throw SourceError(what_ + ": simulated camera failure after " + std::to_string(n_) + " frames");
+      if (fail_)
+        throw SourceError(what_ + ": simulated camera failure after " + std::to_string(n_) + " frames");
       return false;
     }
     ++n_;
@@ -157,7 +159,8 @@ class PanoView : public CameraSource {
 // model as the ISP's flat gain and no automatic white balance (isp/photometric.h).
 class LinkFile : public CameraSource {
  public:
-  LinkFile(const fs::path& path, const RigCamera& cam, double fps, bool loop) : path_(path), fps_(fps), loop_(loop) {
+  LinkFile(const fs::path& path, const RigCamera& cam, double fps, bool loop)
+      : path_(path), fps_(fps), loop_(loop) {
     if (cam.photometric) {
       isp_.flat_gain = isp::flat_gain_from_model(*cam.photometric, cam.in.width, cam.in.height);
       isp_.awb = isp::Awb::kNone;
@@ -173,7 +176,8 @@ class LinkFile : public CameraSource {
     try {
       thread_ = std::thread([this] { decode(); });
     } catch (const std::system_error& e) {
-      throw SourceError("cannot start the decoder thread of sensor-link file " + path.string() + ": " + e.what());
+      throw SourceError("cannot start the decoder thread of sensor-link file " + path.string() + ": " +
+                        e.what());
     }
   }
   ~LinkFile() override {
@@ -191,7 +195,8 @@ class LinkFile : public CameraSource {
       cv_.wait(lock, [&] { return !queue_.empty() || done_; });
       if (queue_.empty()) {
         if (!error_.empty()) throw SourceError(error_);
-        if (decoded_ == 0) throw SourceError("sensor-link file " + path_.string() + " holds no decodable frame");
+        if (decoded_ == 0)
+          throw SourceError("sensor-link file " + path_.string() + " holds no decodable frame");
         return false;
       }
       lf = std::move(queue_.front());
@@ -244,7 +249,8 @@ class LinkFile : public CameraSource {
   std::string error_;
 };
 
-std::unique_ptr<CameraSource> open_one(const std::string& spec, const RigCamera& cam, const SourceOptions& opt) {
+std::unique_ptr<CameraSource> open_one(const std::string& spec, const RigCamera& cam,
+                                       const SourceOptions& opt) {
   if (spec.rfind("link:", 0) == 0 || has_ext(fs::path(spec), {".bin"})) {
     const fs::path p = spec.rfind("link:", 0) == 0 ? spec.substr(5) : spec;
     return std::make_unique<LinkFile>(p, cam, opt.fps, opt.loop);
@@ -259,7 +265,8 @@ std::unique_ptr<CameraSource> open_one(const std::string& spec, const RigCamera&
     } catch (const std::exception&) {
       throw SourceError("source '" + spec + "': expected v4l2:N or /dev/videoN");
     }
-    if (spec[0] == '/' && !fs::exists(spec)) throw SourceError("cannot open V4L2 device " + spec + ": no such device");
+    if (spec[0] == '/' && !fs::exists(spec))
+      throw SourceError("cannot open V4L2 device " + spec + ": no such device");
     return std::make_unique<Video>(spec, dev, opt);
   }
   const fs::path p(spec);
@@ -268,7 +275,8 @@ std::unique_ptr<CameraSource> open_one(const std::string& spec, const RigCamera&
   if (!fs::exists(p, ec)) throw SourceError("source '" + spec + "': no such file or folder");
   if (has_ext(p, {".mp4", ".mkv", ".avi", ".mov", ".webm", ".m4v", ".mjpeg", ".mjpg"}))
     return std::make_unique<Video>(spec, -1, opt);
-  throw SourceError("source '" + spec + "': not a folder, a video file (.mp4 .mkv .avi .mov .webm) or a device");
+  throw SourceError("source '" + spec +
+                    "': not a folder, a video file (.mp4 .mkv .avi .mov .webm) or a device");
 }
 
 // "NAME@RATE" (sim:colon@2.5, pano:x.jpg@30): strips "@RATE" from `spec` and returns the rate,
@@ -301,7 +309,8 @@ bool SourceOptions::IsValid(std::string* why) const {
   return sim.IsValid(why);
 }
 
-std::vector<std::unique_ptr<CameraSource>> open_sources(const Rig& rig, const std::vector<std::string>& specs_in,
+std::vector<std::unique_ptr<CameraSource>> open_sources(const Rig& rig,
+                                                        const std::vector<std::string>& specs_in,
                                                         const SourceOptions& opt) {
   const size_t n = rig.cameras.size();
   std::vector<std::unique_ptr<CameraSource>> out;
@@ -328,7 +337,8 @@ std::vector<std::unique_ptr<CameraSource>> open_sources(const Rig& rig, const st
       throw SourceError("source '" + specs[0] + "': " + e.what());
     }
     for (size_t c = 0; c < n; ++c)
-      out.push_back(std::make_unique<Still>(frames[c], opt.fps, 0, false, specs[0] + " " + frame_filename(rig.cameras[c].id)));
+      out.push_back(std::make_unique<Still>(frames[c], opt.fps, 0, false,
+                                            specs[0] + " " + frame_filename(rig.cameras[c].id)));
     return out;
   }
   if (specs.size() == 1 && specs[0].rfind("sim:", 0) == 0) {
@@ -357,7 +367,8 @@ std::vector<std::unique_ptr<CameraSource>> open_sources(const Rig& rig, const st
       scene->map_x.push_back(xy[0]);
       scene->map_y.push_back(xy[1]);
     }
-    for (size_t c = 0; c < n; ++c) out.push_back(std::make_unique<PanoView>(scene, int(c), opt.fps, specs[0]));
+    for (size_t c = 0; c < n; ++c)
+      out.push_back(std::make_unique<PanoView>(scene, int(c), opt.fps, specs[0]));
     return out;
   }
   if (specs.size() != n)

@@ -78,10 +78,10 @@ struct SimCameraOptions {
 };
 
 struct SourceOptions {
-  double fps = 30;    // rate of image sequences, stills and pano: sources (0 = as fast as possible);
-                      // video files and devices use their own rate unless `force_fps`
+  double fps = 30;  // rate of image sequences, stills and pano: sources (0 = as fast as possible);
+                    // video files and devices use their own rate unless `force_fps`
   bool force_fps = false;
-  bool loop = false;  // image sequences and video files start again at their end
+  bool loop = false;     // image sequences and video files start again at their end
   SimCameraOptions sim;  // sim: sources (their rates are the sensors' own, not `fps`)
   bool IsValid(std::string* why = nullptr) const;  // fps >= 0, sim valid
 };

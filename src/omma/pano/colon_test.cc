@@ -1,10 +1,10 @@
 // The six methods on the simulated colon (near field, parallax) seen by the 24-camera prototype,
 // with the simulator's default sensor effects (vignetting, +-10 % colour gains, shot and read noise,
 // 10-bit quantisation) at one ray per pixel to keep the test short.
-#include <gtest/gtest.h>
-
 #include <cstdio>
 #include <map>
+
+#include <gtest/gtest.h>
 
 #include "omma/design/prototype.h"
 #include "omma/pano/maps.h"

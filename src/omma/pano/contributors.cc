@@ -37,7 +37,8 @@ std::vector<Contributor> find_contributors(const Rig& rig, const Vec3& w_in, dou
   for (size_t i = 0; i < rig.cameras.size(); ++i) {
     const CameraModel cam = rig.cameras[i].model();
     // The camera's own ray towards X = q + D w (w itself at infinity, the thesis's model).
-    const Vec3 ray = at_infinity ? w : surface_ray(opt.q, rig.cameras[i].position_mm, w, depth_mm).normalized();
+    const Vec3 ray =
+        at_infinity ? w : surface_ray(opt.q, rig.cameras[i].position_mm, w, depth_mm).normalized();
     if (!cam.sees(ray)) continue;  // eq. 2.3
     const auto px = cam.project(ray);
     if (!px || !cam.inside(*px)) continue;

@@ -34,8 +34,8 @@ struct Contributor {
 };
 
 struct SearchOptions {
-  Vec3 q = Vec3::Zero();  // observer point (virtual viewpoint), mm; the dome centre by default
-  double min_r_mm = 1e-6; // |r| is clamped below by this (cameras at the observer point)
+  Vec3 q = Vec3::Zero();   // observer point (virtual viewpoint), mm; the dome centre by default
+  double min_r_mm = 1e-6;  // |r| is clamped below by this (cameras at the observer point)
 
   // False (with the reason in *why) when a value lies outside the range the code relies on.
   bool IsValid(std::string* why = nullptr) const;

@@ -49,7 +49,8 @@ cv::Mat depth_jump_map(const cv::Mat& depth) {
     const float a = depth.at<float>(r, c), b = depth.at<float>(r2, c2);
     if (std::isinf(a) && std::isinf(b)) return;
     float& near = a <= b ? out.at<float>(r, c) : out.at<float>(r2, c2);
-    const float jump = std::isinf(std::max(a, b)) ? 10.f : std::min(10.f, std::max(a, b) / std::min(a, b) - 1);
+    const float jump =
+        std::isinf(std::max(a, b)) ? 10.f : std::min(10.f, std::max(a, b) / std::min(a, b) - 1);
     near = std::max(near, jump);
   };
   for (int r = 0; r < depth.rows; ++r)
@@ -85,7 +86,8 @@ BoundaryScore boundary_score(const cv::Mat& pred, const cv::Mat& truth, int tol,
 
 BoundaryScore best_boundary_score(const cv::Mat& boundary, const cv::Mat& truth, int tol, double* threshold,
                                   const cv::Mat& mask) {
-  if (boundary.type() != CV_32FC1) throw std::invalid_argument("best_boundary_score: CV_32FC1 boundary map needed");
+  if (boundary.type() != CV_32FC1)
+    throw std::invalid_argument("best_boundary_score: CV_32FC1 boundary map needed");
   BoundaryScore best;
   double best_th = 0;
   for (int i = 1; i <= 100; ++i) {

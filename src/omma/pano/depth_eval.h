@@ -12,13 +12,14 @@ namespace omma::pano {
 cv::Mat clamp_depth(const cv::Mat& depth, double max_mm);
 
 struct DepthError {
-  double median_rel = 0;   // median of |D_est - D_true| / D_true
+  double median_rel = 0;  // median of |D_est - D_true| / D_true
   double mean_rel = 0;
-  double within_10 = 0;    // fraction with relative error < 10 %
-  long pixels = 0;         // pixels compared: D_true finite and <= max_mm (and mask, if given)
+  double within_10 = 0;  // fraction with relative error < 10 %
+  long pixels = 0;       // pixels compared: D_true finite and <= max_mm (and mask, if given)
 };
 // Compares where the true depth is finite and at most max_mm (and mask != 0 if a mask is given).
-DepthError depth_error(const cv::Mat& estimate, const cv::Mat& truth, double max_mm, const cv::Mat& mask = {});
+DepthError depth_error(const cv::Mat& estimate, const cv::Mat& truth, double max_mm,
+                       const cv::Mat& mask = {});
 
 // Relative depth jump at every pixel: max over its 4-neighbours farther than itself of
 // (D_neighbour / D - 1) (the jump is marked on the nearer, occluding side), CV_32FC1, capped at 10;

@@ -1,8 +1,6 @@
 // The projection surface and depth from the overlaps (surface.h, plane_sweep.h): D = infinity reproduces the
 // thesis's stitcher exactly; on the simulated colon the true depth removes most of the parallax
 // error and the estimated depth closes most of the gap to it.
-#include <gtest/gtest.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -10,18 +8,18 @@
 #include <limits>
 
 #include <fmt/format.h>
-
+#include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
 
 #include "omma/design/prototype.h"
 #include "omma/pano/depth_eval.h"
 #include "omma/pano/maps.h"
+#include "omma/pano/plane_sweep.h"
 #include "omma/pano/quality.h"
 #include "omma/pano/stitch.h"
 #include "omma/pano/surface.h"
-#include "omma/pano/plane_sweep.h"
-#include "omma/testing/test_scenes.h"
 #include "omma/sim/simulate.h"
+#include "omma/testing/test_scenes.h"
 
 namespace omma::pano {
 namespace {
@@ -31,8 +29,10 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 TEST(PanoSurface, InfinityIsTheThesisModelExactly) {
   const Rig rig = testing::small_rig(64);
   const PanoGrid grid{Projection::kVr180, 96, 96};
-  const auto frames = testing::render_frames(rig, testing::smooth_texture(), testing::NearSphere{
-      15.0 * direction_from_spherical(deg2rad(45), deg2rad(30)), 3.0, cv::Vec3f(1, 1, 1)});
+  const auto frames =
+      testing::render_frames(rig, testing::smooth_texture(),
+                             testing::NearSphere{15.0 * direction_from_spherical(deg2rad(45), deg2rad(30)),
+                                                 3.0, cv::Vec3f(1, 1, 1)});
   const cv::Mat inf_depth(grid.height, grid.width, CV_32FC1, cv::Scalar(kInf));
   for (Method m : all_methods()) {
     StitchOptions a;
@@ -44,9 +44,9 @@ TEST(PanoSurface, InfinityIsTheThesisModelExactly) {
     const cv::Mat pa = stitch(rig, frames, a), pb = stitch(rig, frames, b);
     EXPECT_EQ(cv::norm(pa, pb, cv::NORM_INF), 0.0) << to_string(m);
   }
-  EXPECT_EQ(cv::norm(boundary_map(rig, frames, grid), boundary_map(rig, frames, grid, {}, inf_depth),
-                     cv::NORM_INF),
-            0.0);
+  EXPECT_EQ(
+      cv::norm(boundary_map(rig, frames, grid), boundary_map(rig, frames, grid, {}, inf_depth), cv::NORM_INF),
+      0.0);
   EXPECT_EQ(inter_camera_psnr(rig, frames, grid), inter_camera_psnr(rig, frames, grid, {}, inf_depth));
   // A very distant sphere is infinity to within float rounding of the rays.
   StitchOptions far;
@@ -156,13 +156,15 @@ ColonFigures colon_figures(const PanoGrid& grid, uint64_t seed) {
       "colon seed %d %s %dx%d, mrf PSNR (seam): inf %.2f (%.2f), sphere:22 %.2f (%.2f), truth %.2f (%.2f), "
       "estimate %.2f (%.2f); gap closed %.0f %% (seam %.0f %%); depth median rel %.3f, within 10 %% %.2f; "
       "boundary P/R/F1 thesis %.2f/%.2f/%.2f, L_ob with depth %.2f/%.2f/%.2f, from depth %.2f/%.2f/%.2f\n",
-      int(seed), to_string(grid.projection).c_str(), grid.width, grid.height, f.inf.psnr_db, f.inf.seam_psnr_db,
-      f.sphere.psnr_db, f.sphere.seam_psnr_db, f.truth.psnr_db, f.truth.seam_psnr_db, f.estimate.psnr_db,
-      f.estimate.seam_psnr_db, 100 * (f.estimate.psnr_db - f.sphere.psnr_db) / (f.truth.psnr_db - f.sphere.psnr_db),
-      100 * (f.estimate.seam_psnr_db - f.sphere.seam_psnr_db) / (f.truth.seam_psnr_db - f.sphere.seam_psnr_db),
+      int(seed), to_string(grid.projection).c_str(), grid.width, grid.height, f.inf.psnr_db,
+      f.inf.seam_psnr_db, f.sphere.psnr_db, f.sphere.seam_psnr_db, f.truth.psnr_db, f.truth.seam_psnr_db,
+      f.estimate.psnr_db, f.estimate.seam_psnr_db,
+      100 * (f.estimate.psnr_db - f.sphere.psnr_db) / (f.truth.psnr_db - f.sphere.psnr_db),
+      100 * (f.estimate.seam_psnr_db - f.sphere.seam_psnr_db) /
+          (f.truth.seam_psnr_db - f.sphere.seam_psnr_db),
       f.depth.median_rel, f.depth.within_10, f.thesis.precision, f.thesis.recall, f.thesis.f1,
-      f.with_depth.precision, f.with_depth.recall, f.with_depth.f1, f.from_depth.precision, f.from_depth.recall,
-      f.from_depth.f1);
+      f.with_depth.precision, f.with_depth.recall, f.with_depth.f1, f.from_depth.precision,
+      f.from_depth.recall, f.from_depth.f1);
   return f;
 }
 
@@ -184,9 +186,9 @@ TEST(PanoDepth, ColonTruthAndEstimate) {
       // Measured on seeds 1, 2, 3 (vr180 270x270): truth - inf = 6.3 / 6.7 / 5.8 dB, truth - sphere:22 =
       // 2.0 / 2.5 / 1.7 dB; the estimate closes 88 / 77 / 82 % of the gap between the best sphere and the
       // truth (seam band the same; equirect 480x128: 93 / 83 / 88 %). Before the band-pass of the matched
-      // gray levels (plane_sweep.h "Cost") seed 2 closed 28 %: the vignetting ramp at the image edges matched.
-      // Median relative depth error 2.1 / 1.8 / 1.7 %. Boundaries (best F1 over th_ob): the depth's own
-      // jumps F1 0.16 / 0.29 / 0.25 against 0.13 / 0.21 / 0.11 for the thesis's L_ob at infinity
+      // gray levels (plane_sweep.h "Cost") seed 2 closed 28 %: the vignetting ramp at the image edges
+      // matched. Median relative depth error 2.1 / 1.8 / 1.7 %. Boundaries (best F1 over th_ob): the depth's
+      // own jumps F1 0.16 / 0.29 / 0.25 against 0.13 / 0.21 / 0.11 for the thesis's L_ob at infinity
       // (equirect 0.30 / 0.44 / 0.52 against 0.21 / 0.22 / 0.23, where L_ob is best marking everything:
       // recall 1.0, so recall alone would not compare them).
       EXPECT_GT(f.truth.psnr_db, f.inf.psnr_db + 4.0);
@@ -226,7 +228,8 @@ TEST(PanoDepth, FarFieldNotWorseThanInfinity) {
   cv::divide(1.0, est.depth, inv);
   std::printf("louvre vr180 270x270 mrf: inf %.2f dB, estimate %.2f dB (median depth %.0f mm)\n", inf, with,
               1 / cv::mean(inv)[0]);
-  EXPECT_GT(with, inf - 0.2);  // measured 25.93 and 25.93 dB (540x540 louvre and lake: docs/results/depth_table.md)
+  EXPECT_GT(with,
+            inf - 0.2);  // measured 25.93 and 25.93 dB (540x540 louvre and lake: docs/results/depth_table.md)
 }
 
 // The aggregation alone (plane_sweep.h "Aggregation"), on hand-made cost volumes.

@@ -6,7 +6,6 @@
 //     in every panorama, and does not read in their mirror images.
 // The frames come from the simulator (sim/scene.h's photo scene: an equirect-full photo wrapped as a
 // 360-degree viewer shows it) and the panoramas from the reference stitcher (stitch.h).
-#include <gtest/gtest.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -20,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include <gtest/gtest.h>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -42,10 +42,14 @@ const Projection kAllProjections[] = {Projection::kVr180, Projection::kEquirect,
 
 PanoGrid grid_for(Projection p) {
   switch (p) {
-    case Projection::kVr180: return {p, 1080, 1080};
-    case Projection::kEquirect: return {p, 1440, 360};
-    case Projection::kEquirectFull: return {p, 1440, 720};
-    case Projection::kEquirect100: return {p, 1440, 400};
+    case Projection::kVr180:
+      return {p, 1080, 1080};
+    case Projection::kEquirect:
+      return {p, 1440, 360};
+    case Projection::kEquirectFull:
+      return {p, 1440, 720};
+    case Projection::kEquirect100:
+      return {p, 1440, 400};
   }
   return {};
 }
@@ -79,7 +83,8 @@ struct SiftMatch {
   double det = 0;  // Jacobian determinant of the frame -> panorama homography at the frame centre
 };
 
-SiftMatch match_frame(const cv::Mat& frame, const std::vector<cv::KeyPoint>& pano_kp, const cv::Mat& pano_desc) {
+SiftMatch match_frame(const cv::Mat& frame, const std::vector<cv::KeyPoint>& pano_kp,
+                      const cv::Mat& pano_desc) {
   cv::Ptr<cv::SIFT> sift = cv::SIFT::create();
   cv::Mat gray, desc;
   cv::cvtColor(frame, gray, cv::COLOR_BGR2GRAY);
@@ -106,8 +111,10 @@ SiftMatch match_frame(const cv::Mat& frame, const std::vector<cv::KeyPoint>& pan
   const double w = H.at<double>(2, 0) * px + H.at<double>(2, 1) * py + H.at<double>(2, 2);
   const double qx = (H.at<double>(0, 0) * px + H.at<double>(0, 1) * py + H.at<double>(0, 2)) / w;
   const double qy = (H.at<double>(1, 0) * px + H.at<double>(1, 1) * py + H.at<double>(1, 2)) / w;
-  const double j00 = (H.at<double>(0, 0) - qx * H.at<double>(2, 0)) / w, j01 = (H.at<double>(0, 1) - qx * H.at<double>(2, 1)) / w;
-  const double j10 = (H.at<double>(1, 0) - qy * H.at<double>(2, 0)) / w, j11 = (H.at<double>(1, 1) - qy * H.at<double>(2, 1)) / w;
+  const double j00 = (H.at<double>(0, 0) - qx * H.at<double>(2, 0)) / w,
+               j01 = (H.at<double>(0, 1) - qx * H.at<double>(2, 1)) / w;
+  const double j10 = (H.at<double>(1, 0) - qy * H.at<double>(2, 0)) / w,
+               j11 = (H.at<double>(1, 1) - qy * H.at<double>(2, 1)) / w;
   m.det = j00 * j11 - j01 * j10;
   return m;
 }
@@ -150,10 +157,11 @@ void check_sift_handedness(const std::string& photo) {
       if (std::getenv("OMMA_HANDEDNESS_VERBOSE"))
         std::printf("  cam %zu: %d inliers (det %.3f), mirrored %d\n", i, m.inliers, m.det, mf.inliers);
     }
-    std::printf("%s %s: %d of %zu frames match, %d as they are with a positive determinant, %d better "
-                "mirrored; inliers %d as they are, %d mirrored\n",
-                photo.c_str(), to_string(p).c_str(), matched, frames.size(), positive, mirrored_better, inliers,
-                inliers_flipped);
+    std::printf(
+        "%s %s: %d of %zu frames match, %d as they are with a positive determinant, %d better "
+        "mirrored; inliers %d as they are, %d mirrored\n",
+        photo.c_str(), to_string(p).c_str(), matched, frames.size(), positive, mirrored_better, inliers,
+        inliers_flipped);
     EXPECT_GE(matched, 12) << to_string(p);
     EXPECT_EQ(positive, matched) << to_string(p) << ": a frame matched the panorama only mirrored";
     EXPECT_EQ(mirrored_better, 0) << to_string(p);
@@ -176,14 +184,16 @@ std::string ocr_line(const cv::Mat& img, const fs::path& dir, const std::string&
   cv::copyMakeBorder(big, big, 20, 20, 20, 20, cv::BORDER_REPLICATE);
   const fs::path png = dir / (name + ".png"), out = dir / name;
   cv::imwrite(png.string(), big);
-  const std::string cmd = "tesseract '" + png.string() + "' '" + out.string() + "' --psm 7 -l eng >/dev/null 2>&1";
+  const std::string cmd =
+      "tesseract '" + png.string() + "' '" + out.string() + "' --psm 7 -l eng >/dev/null 2>&1";
   if (std::system(cmd.c_str()) != 0) return "<tesseract failed>";
   std::ifstream in(out.string() + ".txt");
   std::stringstream ss;
   ss << in.rdbuf();
   std::string text;
   for (char c : ss.str())
-    if (std::isalpha(static_cast<unsigned char>(c))) text += static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+    if (std::isalpha(static_cast<unsigned char>(c)))
+      text += static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
   return text;
 }
 
@@ -235,7 +245,8 @@ cv::Mat text_world(const std::string& word, const Vec3& at, double height_deg) {
   cv::putText(label, word, cv::Point(baseline, ts.height + baseline / 2), cv::FONT_HERSHEY_DUPLEX, font,
               cv::Scalar(20, 20, 20), 12, cv::LINE_AA);
   const double s = height_deg * px_per_deg / ts.height;
-  cv::resize(label, label, cv::Size(int(label.cols * s / std::sin(theta)), int(label.rows * s)), 0, 0, cv::INTER_AREA);
+  cv::resize(label, label, cv::Size(int(label.cols * s / std::sin(theta)), int(label.rows * s)), 0, 0,
+             cv::INTER_AREA);
   const int x0 = int(c.x() - label.cols / 2.0), y0 = int(c.y() - label.rows / 2.0);
   label.copyTo(world(cv::Rect(x0, y0, label.cols, label.rows)));
   return world;
@@ -267,8 +278,8 @@ TEST(Handedness, TesseractReadsAWordInTheFramesAndEveryPanorama) {
   // another's; each read in its nearest camera's frame and in every panorama.
   const struct {
     std::string word;
-    int camera;         // the word is centred on this camera's optical axis ...
-    double dphi_deg;    // ... turned by this much about +z
+    int camera;       // the word is centred on this camera's optical axis ...
+    double dphi_deg;  // ... turned by this much about +z
   } cases[] = {{"CORNER", 4, 0.0}, {"GARDEN", 8, 6.0}};
   for (const auto& c : cases) {
     const Vec3 t = rig.cameras[size_t(c.camera)].frame.t;
@@ -284,24 +295,26 @@ TEST(Handedness, TesseractReadsAWordInTheFramesAndEveryPanorama) {
     const auto in_frame = spot([&](const Vec3& w) { return m.project(w); }, at, above);
     ASSERT_TRUE(in_frame);
     std::vector<std::pair<std::string, cv::Mat>> views;
-    views.emplace_back("frame cam " + std::to_string(rig.cameras[best].id),
-                       upright_patch(frames[best], in_frame->px, in_frame->step.normalized(), cv::Size(240, 80), 1.0));
+    views.emplace_back(
+        "frame cam " + std::to_string(rig.cameras[best].id),
+        upright_patch(frames[best], in_frame->px, in_frame->step.normalized(), cv::Size(240, 80), 1.0));
     for (Projection p : kAllProjections) {
       const PanoGrid g = grid_for(p);
       const auto in_pano = spot([&](const Vec3& w) { return g.pixel(w); }, at, above);
       ASSERT_TRUE(in_pano) << to_string(p);
       const cv::Mat pano = stitch_u8(rig, frames, g);
       // Scaled to the frame's pixels per degree there, so that every patch holds the same view.
-      views.emplace_back(to_string(p), upright_patch(pano, in_pano->px, in_pano->step.normalized(), cv::Size(240, 80),
-                                                     in_frame->step.norm() / in_pano->step.norm()));
+      views.emplace_back(to_string(p),
+                         upright_patch(pano, in_pano->px, in_pano->step.normalized(), cv::Size(240, 80),
+                                       in_frame->step.norm() / in_pano->step.norm()));
     }
     for (const auto& [name, patch] : views) {
       cv::Mat mirror;
       cv::flip(patch, mirror, 1);
       const std::string as_is = ocr_line(patch, dir, c.word + "_" + std::to_string(checks));
       const std::string mirrored = ocr_line(mirror, dir, c.word + "_m" + std::to_string(checks));
-      std::printf("%-18s '%s': reads '%s', its mirror image '%s'\n", name.c_str(), c.word.c_str(), as_is.c_str(),
-                  mirrored.c_str());
+      std::printf("%-18s '%s': reads '%s', its mirror image '%s'\n", name.c_str(), c.word.c_str(),
+                  as_is.c_str(), mirrored.c_str());
       ++checks;
       read += edit_distance(as_is, c.word) <= 1;
       mirrored_read += edit_distance(mirrored, c.word) < 3;

@@ -1,18 +1,19 @@
 #include "omma/pano/maps.h"
 
-#include <tbb/parallel_for.h>
-
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+
+#include <tbb/parallel_for.h>
 
 #include "omma/pano/stitch.h"
 #include "omma/pano/surface.h"
 
 namespace omma::pano {
 
-cv::Mat coverage_map(const Rig& rig, const PanoGrid& grid, const SearchOptions& search, const cv::Mat& depth) {
+cv::Mat coverage_map(const Rig& rig, const PanoGrid& grid, const SearchOptions& search,
+                     const cv::Mat& depth) {
   check_depth(depth, grid);
   cv::Mat out(grid.height, grid.width, CV_8UC1);
   tbb::parallel_for(0, grid.height, [&](int row) {
@@ -56,8 +57,8 @@ cv::Mat boundary_map(const Rig& rig, const std::vector<cv::Mat>& frames_in, cons
   cv::Mat out(grid.height, grid.width, CV_32FC1, cv::Scalar(0));
   tbb::parallel_for(0, grid.height, [&](int row) {
     for (int col = 0; col < grid.width; ++col) {
-      const auto cs =
-          find_contributors(rig, grid.pixel_direction(col, row), depth_at(depth, col, row), search);  // eq. 4.12
+      const auto cs = find_contributors(rig, grid.pixel_direction(col, row), depth_at(depth, col, row),
+                                        search);  // eq. 4.12
       if (cs.size() < 2) continue;
       auto by_r = [](const Contributor& a, const Contributor& b) { return a.r < b.r; };
       const Contributor& j = *std::min_element(cs.begin(), cs.end(), by_r);  // eq. 4.13
@@ -95,7 +96,8 @@ double inter_camera_psnr(const Rig& rig, const std::vector<cv::Mat>& frames_in, 
     double sum = 0;
     std::vector<double> y;
     for (int col = 0; col < grid.width; ++col) {
-      const auto cs = find_contributors(rig, grid.pixel_direction(col, row), depth_at(depth, col, row), search);
+      const auto cs =
+          find_contributors(rig, grid.pixel_direction(col, row), depth_at(depth, col, row), search);
       if (cs.size() < 2) continue;  // MSE_w = 0 for a single contributor
       y.clear();
       for (const auto& c : cs) y.push_back(luma(sample_bilinear(frames[c.camera], c.px)));

@@ -6,8 +6,9 @@
 // the gray level Y (BT.601 luma) in [0,1], as in §4.3.
 #pragma once
 
-#include <opencv2/core.hpp>
 #include <vector>
+
+#include <opencv2/core.hpp>
 
 #include "omma/core/grid.h"
 #include "omma/core/rig.h"

@@ -13,12 +13,18 @@ Method parse_method(const std::string& name) {
 
 std::string to_string(Method m) {
   switch (m) {
-    case Method::kNearest: return "nn";
-    case Method::kLinear: return "linear";
-    case Method::kGaussian: return "gaussian";
-    case Method::kMrf: return "mrf";
-    case Method::kMrfSpherical: return "mrf-spherical";
-    case Method::kSad: return "sad";
+    case Method::kNearest:
+      return "nn";
+    case Method::kLinear:
+      return "linear";
+    case Method::kGaussian:
+      return "gaussian";
+    case Method::kMrf:
+      return "mrf";
+    case Method::kMrfSpherical:
+      return "mrf-spherical";
+    case Method::kSad:
+      return "sad";
   }
   return "?";
 }

@@ -1,8 +1,5 @@
 #include "omma/pano/plane_sweep.h"
 
-#include <fmt/format.h>
-#include <tbb/parallel_for.h>
-
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -11,7 +8,9 @@
 #include <limits>
 #include <stdexcept>
 
+#include <fmt/format.h>
 #include <opencv2/imgproc.hpp>
+#include <tbb/parallel_for.h>
 
 #include "omma/pano/stitch.h"
 
@@ -23,7 +22,8 @@ bool PlaneSweepOptions::IsValid(std::string* why) const {
     return false;
   };
   if (!(near_mm > 0) || !std::isfinite(near_mm)) return fail("near distance must be a positive number of mm");
-  if (!(far_mm > near_mm)) return fail(fmt::format("far distance {} mm must exceed near {} mm", far_mm, near_mm));
+  if (!(far_mm > near_mm))
+    return fail(fmt::format("far distance {} mm must exceed near {} mm", far_mm, near_mm));
   // far_mm may be +infinity (the last candidate is then the scene at infinity, s = 0)
   if (steps < 2 || steps > kMaxSteps)
     return fail(fmt::format("steps must be 2..{}, got {}", kMaxSteps, steps));
@@ -32,8 +32,9 @@ bool PlaneSweepOptions::IsValid(std::string* why) const {
   if (window < 1 || window > 8) return fail(fmt::format("patch radius must be 1..8, got {}", window));
   if (band_ratio != 0 && !(band_ratio > 1)) return fail("band-pass ratio must be 0 (none) or > 1");
   if (paths != 4 && paths != 8) return fail("paths must be 4 or 8");
-  if (!(noise_sigma > 0) || !(w0 > 0) || !(p1 >= 0) || !(p2 >= p1) || !(edge_gray > 0) || !(margin_scale > 0) ||
-      !(fill_sigma > 0) || !(fill_lambda > 0) || !(prior_mm >= 0) || !(temporal_weight >= 0))
+  if (!(noise_sigma > 0) || !(w0 > 0) || !(p1 >= 0) || !(p2 >= p1) || !(edge_gray > 0) ||
+      !(margin_scale > 0) || !(fill_sigma > 0) || !(fill_lambda > 0) || !(prior_mm >= 0) ||
+      !(temporal_weight >= 0))
     return fail("sweep weights must be positive (p2 >= p1)");
   return true;
 }
@@ -81,18 +82,19 @@ struct DepthSweep::Impl {
   Rig rig;
   PanoGrid grid, coarse;
   PlaneSweepOptions opt;
-  std::vector<Vec3> dirs;       // per coarse pixel
-  std::vector<double> inv;      // per candidate, 1/mm
-  std::vector<double> sigma;    // per camera: blur to the coarse pitch, camera pixels
-  std::vector<int> level;       // per camera: pyramid level the gray levels are computed at (see estimate)
+  std::vector<Vec3> dirs;     // per coarse pixel
+  std::vector<double> inv;    // per candidate, 1/mm
+  std::vector<double> sigma;  // per camera: blur to the coarse pitch, camera pixels
+  std::vector<int> level;     // per camera: pyramid level the gray levels are computed at (see estimate)
   bool cached = false;
-  std::vector<Layer> layers;    // [k * cameras + i] when cached
+  std::vector<Layer> layers;  // [k * cameras + i] when cached
   int cams() const { return static_cast<int>(rig.cameras.size()); }
 
   Layer make_layer(int k, int i) const;
   // The phases of estimate(), in order (see plane_sweep.h).
   // Per camera: the gray levels blurred to the coarse pitch, and their band-pass.
-  void gray_levels(const std::vector<cv::Mat>& frames, std::vector<cv::Mat>& gray, std::vector<cv::Mat>& band) const;
+  void gray_levels(const std::vector<cv::Mat>& frames, std::vector<cv::Mat>& gray,
+                   std::vector<cv::Mat>& band) const;
   // The pair sums num = sum w (1 - ZNCC), den = sum w, candidate-major (K x N); guide = G, the mean
   // gray level of the cameras at the middle candidate.
   void pair_costs(const std::vector<cv::Mat>& gray, const std::vector<cv::Mat>& band, std::vector<float>& num,
@@ -102,10 +104,11 @@ struct DepthSweep::Impl {
   std::vector<float> final_costs(const std::vector<float>& num, const std::vector<float>& den,
                                  const cv::Mat& previous, std::vector<float>& evidence) const;
   // k* refined by the parabola (s_best, 1/mm), the confidence, the median filter.
-  void winners(const std::vector<float>& S, const std::vector<float>& evidence, cv::Mat& s_best, cv::Mat& conf,
-               std::vector<int>& kbest) const;
+  void winners(const std::vector<float>& S, const std::vector<float>& evidence, cv::Mat& s_best,
+               cv::Mat& conf, std::vector<int>& kbest) const;
   // The prior, the counts at the range's ends, and the fallback: out's coarse fields.
-  void fallback(const cv::Mat& s_best, const cv::Mat& conf, const std::vector<int>& kbest, DepthEstimate& out) const;
+  void fallback(const cv::Mat& s_best, const cv::Mat& conf, const std::vector<int>& kbest,
+                DepthEstimate& out) const;
   // depth and confidence on the output grid (bilinear in inverse depth).
   void upsample_to_output(DepthEstimate& out) const;
 };
@@ -156,7 +159,8 @@ Layer DepthSweep::Impl::make_layer(int k, int i) const {
     wraps = true;
     r0 = 0;
   }
-  if (coarse.projection != Projection::kEquirect && sees_point(coarse.direction(0.5 * coarse.width, coarse.height))) {
+  if (coarse.projection != Projection::kEquirect &&
+      sees_point(coarse.direction(0.5 * coarse.width, coarse.height))) {
     wraps = true;
     r1 = coarse.height - 1;
   }
@@ -212,14 +216,16 @@ DepthSweep::DepthSweep(const Rig& rig, const PanoGrid& grid, const PlaneSweepOpt
   int factor = opt.factor;
   if (factor == 0) {
     const AngularSpan span = angular_span(grid.projection);
-    const double out_pitch = rad2deg(std::max(span.width / grid.width, span.height / grid.height));  // degrees
+    const double out_pitch =
+        rad2deg(std::max(span.width / grid.width, span.height / grid.height));  // degrees
     factor = std::clamp(static_cast<int>(std::lround(opt.pitch_deg / out_pitch)), 1, 64);
   }
   m.coarse = PanoGrid{grid.projection, std::max(1, (grid.width + factor / 2) / factor),
                       std::max(1, (grid.height + factor / 2) / factor)};
   m.dirs.resize(size_t(m.coarse.width) * m.coarse.height);
   for (int r = 0; r < m.coarse.height; ++r)
-    for (int c = 0; c < m.coarse.width; ++c) m.dirs[size_t(r) * m.coarse.width + c] = m.coarse.pixel_direction(c, r);
+    for (int c = 0; c < m.coarse.width; ++c)
+      m.dirs[size_t(r) * m.coarse.width + c] = m.coarse.pixel_direction(c, r);
   for (int k = 0; k < opt.steps; ++k) {
     const double t = double(k) / (opt.steps - 1);
     m.inv.push_back((1 - t) / opt.near_mm + t / opt.far_mm);
@@ -242,7 +248,8 @@ DepthSweep::DepthSweep(const Rig& rig, const PanoGrid& grid, const PlaneSweepOpt
   m.cached = bytes < 96e6;
   if (m.cached) {
     m.layers.resize(size_t(opt.steps) * m.cams());
-    tbb::parallel_for(0, opt.steps * m.cams(), [&](int ki) { m.layers[ki] = m.make_layer(ki / m.cams(), ki % m.cams()); });
+    tbb::parallel_for(0, opt.steps * m.cams(),
+                      [&](int ki) { m.layers[ki] = m.make_layer(ki / m.cams(), ki % m.cams()); });
   }
 }
 
@@ -256,8 +263,8 @@ double DepthSweep::inverse_depth(int k) const { return impl_->inv.at(k); }
 
 namespace detail {
 
-std::vector<float> aggregate_sgm(const std::vector<float>& C, int W, int H, int K, const cv::Mat& guide, double p1,
-                                 double p2, double edge_gray, int paths) {
+std::vector<float> aggregate_sgm(const std::vector<float>& C, int W, int H, int K, const cv::Mat& guide,
+                                 double p1, double p2, double edge_gray, int paths) {
   const int N = W * H;
   if (W < 1 || H < 1 || K < 1 || C.size() != size_t(N) * K)
     throw std::invalid_argument("aggregate_sgm: the cost volume is not W x H x K");
@@ -376,7 +383,8 @@ void add_pair_cost(const Layer& li, const Layer& lj, const cv::Mat& vi_val, cons
       const float cnt = sum[0][p];
       if (cnt < 0.5f * win_area) continue;
       const float ma = sum[1][p] / cnt, mb = sum[2][p] / cnt;
-      const float va = std::max(0.f, sum[3][p] / cnt - ma * ma), vb = std::max(0.f, sum[4][p] / cnt - mb * mb);
+      const float va = std::max(0.f, sum[3][p] / cnt - ma * ma),
+                  vb = std::max(0.f, sum[4][p] / cnt - mb * mb);
       const float cov = sum[5][p] / cnt - ma * mb;
       const float zncc = std::clamp(cov / std::sqrt(va * vb + 1e-12f), -1.f, 1.f);
       const float v = std::min(va, vb);
@@ -462,7 +470,8 @@ void DepthSweep::Impl::pair_costs(const std::vector<cv::Mat>& gray, const std::v
 }
 
 std::vector<float> DepthSweep::Impl::final_costs(const std::vector<float>& num, const std::vector<float>& den,
-                                                 const cv::Mat& previous, std::vector<float>& evidence) const {
+                                                 const cv::Mat& previous,
+                                                 std::vector<float>& evidence) const {
   const int K = opt.steps, N = coarse.width * coarse.height;
   std::vector<float> C(size_t(N) * K);
   evidence.assign(N, 0.f);
@@ -481,7 +490,8 @@ std::vector<float> DepthSweep::Impl::final_costs(const std::vector<float>& num, 
       const float d = den[size_t(k) * N + u];
       if (d >= kEvidence) best = std::min(best, num[size_t(k) * N + u] / d);
     }
-    const float fill = best == std::numeric_limits<float>::max() ? neutral : std::min(neutral, best + unknown);
+    const float fill =
+        best == std::numeric_limits<float>::max() ? neutral : std::min(neutral, best + unknown);
     // An unknown candidate next to candidates with evidence takes the cost of the nearest of them (in
     // candidate index), at most `fill`: the cost curve is continued flat, so that neither end of the
     // overlap (nearer: overlaps shrink; farther: at infinity the footprints of a far-field scene's
@@ -519,8 +529,8 @@ std::vector<float> DepthSweep::Impl::final_costs(const std::vector<float>& num, 
   return C;
 }
 
-void DepthSweep::Impl::winners(const std::vector<float>& S, const std::vector<float>& evidence, cv::Mat& s_best,
-                               cv::Mat& conf, std::vector<int>& kbest) const {
+void DepthSweep::Impl::winners(const std::vector<float>& S, const std::vector<float>& evidence,
+                               cv::Mat& s_best, cv::Mat& conf, std::vector<int>& kbest) const {
   const int W = coarse.width, H = coarse.height, K = opt.steps, N = W * H;
   s_best.create(H, W, CV_32FC1);
   conf.create(H, W, CV_32FC1);
@@ -621,7 +631,8 @@ DepthEstimate DepthSweep::estimate(const std::vector<cv::Mat>& frames_in, const 
   num = {};
   den = {};
   // Semi-global aggregation.
-  const std::vector<float> S = detail::aggregate_sgm(C, W, H, o.steps, guide, o.p1, o.p2, o.edge_gray, o.paths);
+  const std::vector<float> S =
+      detail::aggregate_sgm(C, W, H, o.steps, guide, o.p1, o.p2, o.edge_gray, o.paths);
   C = {};
   // Winner, sub-candidate refinement, confidence; the fallback towards the prior.
   cv::Mat s_best, conf;

@@ -78,16 +78,16 @@ namespace omma::pano {
 inline constexpr int kMaxSteps = 256;  // candidates per sweep at most (PlaneSweepOptions::steps)
 
 struct PlaneSweepOptions {
-  double near_mm = 8;      // nearest candidate distance from q, mm (must lie outside the dome)
+  double near_mm = 8;  // nearest candidate distance from q, mm (must lie outside the dome)
   // Farthest candidate, mm; +infinity (the default) makes the last candidate the scene at infinity.
   // A 5 mm dome still sees 2 pixels of parallax at 300 mm: far-field scenes need infinity.
   double far_mm = std::numeric_limits<double>::infinity();
-  int steps = 96;          // number of candidates (uniform in 1/D), 2 .. kMaxSteps
+  int steps = 96;  // number of candidates (uniform in 1/D), 2 .. kMaxSteps
   // Coarse grid = output / factor; 0: the factor that makes its pitch closest to pitch_deg.
   int factor = 0;
-  double pitch_deg = 1.33;  // about 5 pixels of the prototype's cameras (0.26 deg/pixel)
-  int window = 2;          // patch radius, coarse pixels (patch 5x5)
-  double band_ratio = 2;   // band-pass of the matched gray levels (see "Cost"); 0 = none
+  double pitch_deg = 1.33;     // about 5 pixels of the prototype's cameras (0.26 deg/pixel)
+  int window = 2;              // patch radius, coarse pixels (patch 5x5)
+  double band_ratio = 2;       // band-pass of the matched gray levels (see "Cost"); 0 = none
   double noise_sigma = 0.005;  // sigma_n: gray-level noise of the band-pass for the texture weight
   double w0 = 0.2;             // evidence of the neutral cost
   double unknown_cost = 0.25;  // cap of an unknown candidate's cost above the pixel's best (see above)
@@ -114,7 +114,7 @@ struct DepthEstimate {
   // Of the directions with confidence > 0.3: the fraction whose best candidate is the nearest /
   // the farthest (a sweep range that excludes the scene piles the estimate up at its ends).
   double at_near = 0, at_far = 0;
-  long confident = 0;         // number of those directions
+  long confident = 0;  // number of those directions
 };
 
 // The sweep's geometry for one rig, output grid and options, computed once (per camera and
@@ -151,8 +151,8 @@ namespace detail {
 // pixel-major (C[(y W + x) K + k], W x H coarse pixels, K candidates), guide the CV_32FC1 W x H gray
 // levels G of the edge-aware P2; returns S(u, k) = sum over `paths` (4 or 8) directions of L_r(u, k),
 // in the same layout. Throws std::invalid_argument on mismatched sizes.
-std::vector<float> aggregate_sgm(const std::vector<float>& C, int W, int H, int K, const cv::Mat& guide, double p1,
-                                 double p2, double edge_gray, int paths);
+std::vector<float> aggregate_sgm(const std::vector<float>& C, int W, int H, int K, const cv::Mat& guide,
+                                 double p1, double p2, double edge_gray, int paths);
 }  // namespace detail
 
 // One-shot: DepthSweep(rig, grid, opt).estimate(frames).

@@ -3,10 +3,10 @@
 // ideal panorama. The test prints the table (colon_test.cc adds the simulated colon).
 #include "omma/design/prototype.h"
 
-#include <gtest/gtest.h>
-
 #include <cstdio>
 #include <map>
+
+#include <gtest/gtest.h>
 
 #include "omma/pano/maps.h"
 #include "omma/pano/quality.h"
@@ -17,7 +17,7 @@ namespace omma::pano {
 namespace {
 
 std::map<Method, EvalSummary> table(const Rig& rig, const cv::Mat& tex, const PanoGrid& grid,
-                                   const char* label) {
+                                    const char* label) {
   const auto frames = testing::render_frames(rig, tex);
   const cv::Mat truth = testing::render_truth(grid, tex);
   const cv::Mat seam = seam_mask(coverage_map(rig, grid), false);

@@ -2,9 +2,10 @@
 
 #include <cmath>
 #include <limits>
-#include <opencv2/imgproc.hpp>
 #include <stdexcept>
 #include <vector>
+
+#include <opencv2/imgproc.hpp>
 
 #include "omma/core/frames.h"
 

@@ -1,15 +1,15 @@
 #include "omma/pano/stitch.h"
 
-#include <fmt/format.h>
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <opencv2/imgproc.hpp>
 #include <stdexcept>
 #include <string>
+
+#include <fmt/format.h>
+#include <opencv2/imgproc.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 #include "omma/core/frames.h"
 #include "omma/core/progress.h"
@@ -71,7 +71,8 @@ cv::Vec3f sample_bilinear(const cv::Mat& img, const Vec2& px) {
          fy * ((1 - fx) * at(x0, y0 + 1) + fx * at(x0 + 1, y0 + 1));
 }
 
-void for_each_pixel_weights(const Rig& rig, const StitchOptions& opt, const PixelWeightsFn& f, Progress* progress) {
+void for_each_pixel_weights(const Rig& rig, const StitchOptions& opt, const PixelWeightsFn& f,
+                            Progress* progress) {
   const PanoGrid& grid = opt.grid;
   std::string why;
   if (!opt.IsValid(&why)) throw std::invalid_argument(why);
@@ -87,7 +88,8 @@ void for_each_pixel_weights(const Rig& rig, const StitchOptions& opt, const Pixe
       auto& cs = rows[r - first];
       cs.resize(grid.width);
       for (int c = 0; c < grid.width; ++c)
-        cs[c] = find_contributors(rig, grid.pixel_direction(c, r), depth_at(opt.depth, c, r), opt.blend.search);
+        cs[c] =
+            find_contributors(rig, grid.pixel_direction(c, r), depth_at(opt.depth, c, r), opt.blend.search);
     }
     auto at = [&](int c, int r) -> const std::vector<Contributor>* { return &rows[r - first][c]; };
     for (int row = block.begin(); row < block.end(); ++row) {

@@ -8,10 +8,11 @@
 // results are CV_32FC3 BGR in [0,1] (use omma::to_u8 to write 8-bit files).
 #pragma once
 
-#include <opencv2/core.hpp>
 #include <functional>
 #include <string>
 #include <vector>
+
+#include <opencv2/core.hpp>
 
 #include "omma/core/grid.h"
 #include "omma/core/progress.h"
@@ -24,8 +25,8 @@ namespace omma::pano {
 
 struct StitchOptions {
   Method method = Method::kMrf;
-  PanoGrid grid;         // output projection and size (default vr180 1080x1080)
-  BlendParams blend;     // observer point q, Gaussian sigma, SAD epsilon
+  PanoGrid grid;      // output projection and size (default vr180 1080x1080)
+  BlendParams blend;  // observer point q, Gaussian sigma, SAD epsilon
   // The projection surface D(w) (surface.h, contributors.h): CV_32FC1 of the grid's size, mm from
   // q; empty = +infinity everywhere (the thesis's model, eq. 2.3-2.5). Every method works on any D.
   cv::Mat depth;
@@ -53,8 +54,8 @@ inline double luma(const cv::Vec3f& bgr) { return 0.114 * bgr[0] + 0.587 * bgr[1
 // 4.18), summing to 1: what stitch() blends, and what the engine's depth-adaptive map compiles.
 // f(col, row, contributors, weights) is called once per pixel seen by a camera, from oneTBB
 // threads (rows in blocks). `progress` (optional) is stepped once per finished row.
-using PixelWeightsFn =
-    std::function<void(int col, int row, const std::vector<Contributor>& cs, const std::vector<double>& weights)>;
+using PixelWeightsFn = std::function<void(int col, int row, const std::vector<Contributor>& cs,
+                                          const std::vector<double>& weights)>;
 void for_each_pixel_weights(const Rig& rig, const StitchOptions& options, const PixelWeightsFn& f,
                             Progress* progress = nullptr);
 

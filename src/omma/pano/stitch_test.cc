@@ -1,11 +1,11 @@
 // Reference stitcher, maps and quality figures on rendered scenes with a known ideal panorama.
 #include "omma/pano/stitch.h"
 
-#include <gtest/gtest.h>
-
 #include <cmath>
 #include <cstdio>
 #include <map>
+
+#include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
 
 #include "omma/pano/maps.h"
@@ -234,7 +234,8 @@ TEST(Options, StitchOptionsRefuseBadValues) {
   EXPECT_NE(why.find("gaussian_sigma_rel"), std::string::npos);
   const Rig rig = testing::small_rig();
   std::vector<cv::Mat> frames;
-  for (const auto& c : rig.cameras) frames.emplace_back(c.in.height, c.in.width, CV_8UC3, cv::Scalar::all(100));
+  for (const auto& c : rig.cameras)
+    frames.emplace_back(c.in.height, c.in.width, CV_8UC3, cv::Scalar::all(100));
   EXPECT_NE(refusal([&] { stitch(rig, frames, o); }).find("gaussian_sigma_rel"), std::string::npos);
   o = {};
   o.grid.width = 0;

@@ -1,12 +1,11 @@
 #include "omma/pano/surface.h"
 
-#include <fmt/format.h>
-
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <vector>
 
+#include <fmt/format.h>
 #include <opencv2/imgproc.hpp>
 
 #include "omma/core/io.h"
@@ -17,31 +16,33 @@ void check_depth(const cv::Mat& depth, const PanoGrid& grid, const std::string& 
   if (depth.empty()) return;
   if (depth.type() != CV_32FC1) throw std::invalid_argument(what + ": must be one-channel 32-bit float (mm)");
   if (depth.cols != grid.width || depth.rows != grid.height)
-    throw std::invalid_argument(fmt::format("{} is {}x{}, the panorama is {}x{}", what, depth.cols, depth.rows,
-                                            grid.width, grid.height));
+    throw std::invalid_argument(fmt::format("{} is {}x{}, the panorama is {}x{}", what, depth.cols,
+                                            depth.rows, grid.width, grid.height));
   for (int r = 0; r < depth.rows; ++r) {
     const float* p = depth.ptr<float>(r);
     for (int c = 0; c < depth.cols; ++c)
       if (!(p[c] > 0))
-        throw std::invalid_argument(
-            fmt::format("{}: value {} at pixel ({}, {}); depths must be > 0 mm (+inf = infinity)", what, p[c], c, r));
+        throw std::invalid_argument(fmt::format(
+            "{}: value {} at pixel ({}, {}); depths must be > 0 mm (+inf = infinity)", what, p[c], c, r));
   }
 }
 
 cv::Mat sphere_depth(const Rig& rig, const PanoGrid& grid, double radius_mm, const Vec3& q) {
   if (!(radius_mm > 0) || !std::isfinite(radius_mm))
-    throw std::invalid_argument(fmt::format("sphere radius must be a positive number of mm, got {}", radius_mm));
+    throw std::invalid_argument(
+        fmt::format("sphere radius must be a positive number of mm, got {}", radius_mm));
   double inner = q.norm();
   for (const auto& cam : rig.cameras) inner = std::max(inner, cam.position_mm.norm());
   if (radius_mm <= inner)
     throw std::invalid_argument(fmt::format(
-        "sphere radius {} mm is inside the dome: it must exceed {:.2f} mm (the farthest camera centre)", radius_mm,
-        inner));
+        "sphere radius {} mm is inside the dome: it must exceed {:.2f} mm (the farthest camera centre)",
+        radius_mm, inner));
   cv::Mat out(grid.height, grid.width, CV_32FC1);
   for (int r = 0; r < grid.height; ++r)
     for (int c = 0; c < grid.width; ++c) {
       const double qw = q.dot(grid.pixel_direction(c, r));
-      out.at<float>(r, c) = static_cast<float>(-qw + std::sqrt(qw * qw - q.squaredNorm() + radius_mm * radius_mm));
+      out.at<float>(r, c) =
+          static_cast<float>(-qw + std::sqrt(qw * qw - q.squaredNorm() + radius_mm * radius_mm));
     }
   return out;
 }
@@ -49,7 +50,8 @@ cv::Mat sphere_depth(const Rig& rig, const PanoGrid& grid, double radius_mm, con
 cv::Mat read_depth(const std::filesystem::path& path, const PanoGrid& grid) {
   cv::Mat raw = read_image(path);
   if (raw.channels() != 1)
-    throw std::invalid_argument(fmt::format("depth file {} has {} channels (need 1)", path.string(), raw.channels()));
+    throw std::invalid_argument(
+        fmt::format("depth file {} has {} channels (need 1)", path.string(), raw.channels()));
   cv::Mat depth;
   if (raw.depth() == CV_32F) {
     depth = raw;
@@ -92,7 +94,8 @@ std::pair<double, double> percentile_range(const cv::Mat& depth) {
 }  // namespace
 
 cv::Mat depth_colormap(const cv::Mat& depth, double near_mm, double far_mm, const std::string& title) {
-  if (depth.empty() || depth.type() != CV_32FC1) throw std::invalid_argument("depth_colormap: CV_32FC1 needed");
+  if (depth.empty() || depth.type() != CV_32FC1)
+    throw std::invalid_argument("depth_colormap: CV_32FC1 needed");
   if (near_mm <= 0 || far_mm <= near_mm) std::tie(near_mm, far_mm) = percentile_range(depth);
   // Inverse depth in [1/far, 1/near] -> 0..255 (255 = near), turbo colours.
   const double s0 = 1 / far_mm, s1 = 1 / near_mm;
@@ -100,7 +103,8 @@ cv::Mat depth_colormap(const cv::Mat& depth, double near_mm, double far_mm, cons
   for (int r = 0; r < depth.rows; ++r)
     for (int c = 0; c < depth.cols; ++c) {
       const double s = 1 / static_cast<double>(depth.at<float>(r, c));
-      index.at<uint8_t>(r, c) = static_cast<uint8_t>(std::lround(255 * std::clamp((s - s0) / (s1 - s0), 0.0, 1.0)));
+      index.at<uint8_t>(r, c) =
+          static_cast<uint8_t>(std::lround(255 * std::clamp((s - s0) / (s1 - s0), 0.0, 1.0)));
     }
   cv::Mat colour;
   cv::applyColorMap(index, colour, cv::COLORMAP_TURBO);
@@ -112,8 +116,9 @@ cv::Mat depth_colormap(const cv::Mat& depth, double near_mm, double far_mm, cons
   cv::Mat out(depth.rows + 3 * line, W, CV_8UC3, cv::Scalar(40, 40, 40));
   colour.copyTo(out(cv::Rect(0, 0, depth.cols, depth.rows)));
   const int y0 = depth.rows;
-  cv::putText(out, fmt::format("{} (mm, colour = 1/depth; black = infinity)", title), {line / 2, y0 + line - 6},
-              cv::FONT_HERSHEY_SIMPLEX, font, cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
+  cv::putText(out, fmt::format("{} (mm, colour = 1/depth; black = infinity)", title),
+              {line / 2, y0 + line - 6}, cv::FONT_HERSHEY_SIMPLEX, font, cv::Scalar(255, 255, 255), 1,
+              cv::LINE_AA);
   const int bx0 = line / 2, bx1 = W - line / 2, by = y0 + line + 2, bh = line / 2;
   for (int x = bx0; x < bx1; ++x) {
     // left = far, right = near (inverse depth grows to the right)

@@ -78,7 +78,8 @@ struct MrfNode {
 // see v), normalised; the prior phi(u) alone if no camera sees the whole neighbourhood. This is
 // what method_weights computes for mrf, mrf-spherical and sad; callers that visit every node
 // (the engine's map compiler) compute each node's potentials once and call this directly.
-std::vector<double> mrf_posterior(const std::vector<Contributor>& centre, const std::vector<double>& phi_centre,
+std::vector<double> mrf_posterior(const std::vector<Contributor>& centre,
+                                  const std::vector<double>& phi_centre,
                                   const std::array<MrfNode, 4>& neighbours);
 
 // The 4-connected neighbours (left, right, up, down) of (col, row) on `grid`, as (col, row) pairs;

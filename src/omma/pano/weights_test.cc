@@ -1,9 +1,9 @@
 // Blending weights (thesis eq. 2.6-2.9, 4.8-4.11, 4.17-4.18).
 #include "omma/pano/weights.h"
 
-#include <gtest/gtest.h>
-
 #include <cmath>
+
+#include <gtest/gtest.h>
 
 #include "omma/testing/test_scenes.h"
 

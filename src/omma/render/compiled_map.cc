@@ -1,7 +1,6 @@
 #include "omma/render/compiled_map.h"
 
 #include <algorithm>
-#include <fmt/format.h>
 #include <array>
 #include <chrono>
 #include <cmath>
@@ -9,6 +8,7 @@
 #include <cstring>
 #include <stdexcept>
 
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgproc.hpp>
 #include <tbb/parallel_for.h>
@@ -19,7 +19,6 @@
 
 namespace omma::render {
 namespace {
-
 
 uint64_t fnv1a(const std::string& s) {
   uint64_t h = 1469598103934665603ull;
@@ -153,12 +152,18 @@ cv::Mat FrameStore::camera(int c) const {
 
 cv::Mat to_bgr8(const cv::Mat& frame) {
   cv::Mat src = frame;
-  if (src.depth() == CV_16U) src.convertTo(src, CV_8U, 1.0 / 257.0);
-  else if (src.depth() == CV_32F) src.convertTo(src, CV_8U, 255.0);
-  else if (src.depth() != CV_8U) throw std::invalid_argument("unsupported frame depth");
-  if (src.channels() == 1) cv::cvtColor(src, src, cv::COLOR_GRAY2BGR);
-  else if (src.channels() == 4) cv::cvtColor(src, src, cv::COLOR_BGRA2BGR);
-  else if (src.channels() != 3) throw std::invalid_argument("unsupported channel count");
+  if (src.depth() == CV_16U)
+    src.convertTo(src, CV_8U, 1.0 / 257.0);
+  else if (src.depth() == CV_32F)
+    src.convertTo(src, CV_8U, 255.0);
+  else if (src.depth() != CV_8U)
+    throw std::invalid_argument("unsupported frame depth");
+  if (src.channels() == 1)
+    cv::cvtColor(src, src, cv::COLOR_GRAY2BGR);
+  else if (src.channels() == 4)
+    cv::cvtColor(src, src, cv::COLOR_BGRA2BGR);
+  else if (src.channels() != 3)
+    throw std::invalid_argument("unsupported channel count");
   return src;
 }
 
@@ -263,8 +268,14 @@ namespace {
 class TapCompiler {
  public:
   TapCompiler(const Rig& rig, const MapOptions& opt, const cv::Rect& win, const StoreLayout& layout)
-      : opt_(opt), wx_(win.x), wy_(win.y), W_(win.width), H_(win.height), layout_(layout),
-        sad_(opt.method == pano::Method::kSad), needs_nb_(pano::uses_neighbours(opt.method)),
+      : opt_(opt),
+        wx_(win.x),
+        wy_(win.y),
+        W_(win.width),
+        H_(win.height),
+        layout_(layout),
+        sad_(opt.method == pano::Method::kSad),
+        needs_nb_(pano::uses_neighbours(opt.method)),
         spherical_(opt.method == pano::Method::kMrfSpherical) {
     ActiveRig active = active_cameras(rig, opt.active);
     sub_ = std::move(active.rig);
@@ -317,8 +328,10 @@ class TapCompiler {
       double radius = 0;
       for (double fy : {0.0, 0.5, 1.0})
         for (double fx : {0.0, 0.5, 1.0}) {
-          const double x = std::clamp(c0 - 2 + fx * (c1 - c0 + 4), -double(wx_), double(opt_.grid.width - wx_));
-          const double y = std::clamp(r0 - 2 + fy * (r1 - r0 + 4), -double(wy_), double(opt_.grid.height - wy_));
+          const double x =
+              std::clamp(c0 - 2 + fx * (c1 - c0 + 4), -double(wx_), double(opt_.grid.width - wx_));
+          const double y =
+              std::clamp(r0 - 2 + fy * (r1 - r0 + 4), -double(wy_), double(opt_.grid.height - wy_));
           radius = std::max(radius, angle_between(wc, grid_dir(x, y)));
         }
       radius += deg2rad(2.0);
@@ -343,7 +356,8 @@ class TapCompiler {
   }
 
   void fill(const Block& b, Node& n, int col, int row) const {
-    n.cs = pano::find_contributors(b.rig, opt_.grid.pixel_direction(col + wx_, row + wy_), opt_.params.search);
+    n.cs =
+        pano::find_contributors(b.rig, opt_.grid.pixel_direction(col + wx_, row + wy_), opt_.params.search);
     if (needs_nb_) n.phi = pano::node_potentials(n.cs, spherical_);
   }
   const Node& node(const Block& b, int col, int row, int slot) const {
@@ -391,9 +405,12 @@ class TapCompiler {
     double total = 0;
     for (const auto& t : taps) total += t.weight;
     if (opt_.min_weight > 0 && !sad_ && total > 0) {  // drop the faint taps, never the strongest
-      const double strongest =
-          std::max_element(taps.begin(), taps.end(), [](auto& a, auto& b) { return a.weight < b.weight; })->weight;
-      std::erase_if(taps, [&](const pano::Tap& t) { return t.weight < opt_.min_weight * total && t.weight < strongest; });
+      const double strongest = std::max_element(taps.begin(), taps.end(), [](auto& a, auto& b) {
+                                 return a.weight < b.weight;
+                               })->weight;
+      std::erase_if(taps, [&](const pano::Tap& t) {
+        return t.weight < opt_.min_weight * total && t.weight < strongest;
+      });
     }
     std::sort(taps.begin(), taps.end(), [&](auto& a, auto& b) { return a.camera < b.camera; });
     return taps;
@@ -432,7 +449,8 @@ class TapCompiler {
       const int* qk = qe + 4 * k;
       if (q[k] == 0) continue;
       out.off2[out.n] = off2[k];
-      out.weight[out.n] = uint32_t(qk[0]) | uint32_t(qk[1]) << 8 | uint32_t(qk[2]) << 16 | uint32_t(qk[3]) << 24;
+      out.weight[out.n] =
+          uint32_t(qk[0]) | uint32_t(qk[1]) << 8 | uint32_t(qk[2]) << 16 | uint32_t(qk[3]) << 24;
       out.prior[out.n] = sad_ ? static_cast<uint8_t>(q[k] - 1) : 0;
       ++out.n;
     }
@@ -464,7 +482,8 @@ TileData compile_tile(const CompiledMap& map, const TapCompiler& taps, int t) {
     for (int col = c0; col < c1; ++col) {
       const PixelTaps& p = px[size_t(row - r0) * kTileW + (col - c0)];
       for (int k = 0; k < p.n; ++k)
-        for (size_t b : {size_t(p.off2[k]) * 2, size_t(p.off2[k]) * 2 + 15}) d.lines.push_back(uint32_t(b / 64 * 64));
+        for (size_t b : {size_t(p.off2[k]) * 2, size_t(p.off2[k]) * 2 + 15})
+          d.lines.push_back(uint32_t(b / 64 * 64));
     }
   std::sort(d.lines.begin(), d.lines.end());
   d.lines.erase(std::unique(d.lines.begin(), d.lines.end()), d.lines.end());

@@ -58,10 +58,10 @@ inline constexpr size_t kMaxStoreBytes = size_t(8) << 30;
 
 // Geometry of the shared frame store of a rig (see the file comment).
 struct StoreLayout {
-  int stride_px = 0;             // pixels per store row (widest camera)
-  int rows = 0;                  // total rows (sum of the camera heights)
-  std::vector<int> row0;         // first store row of each camera
-  std::vector<cv::Size> size;    // each camera's frame size
+  int stride_px = 0;           // pixels per store row (widest camera)
+  int rows = 0;                // total rows (sum of the camera heights)
+  std::vector<int> row0;       // first store row of each camera
+  std::vector<cv::Size> size;  // each camera's frame size
   static StoreLayout for_rig(const Rig& rig);
   size_t stride_bytes() const { return size_t(stride_px) * 6; }
   size_t bytes() const { return stride_bytes() * rows + kStorePadding; }
@@ -137,9 +137,9 @@ ActiveRig active_cameras(const Rig& rig, const std::vector<bool>& active);
 
 // One tap of an output pixel, decoded (CompiledMap::visit).
 struct MapTap {
-  size_t offset;      // store byte offset of the 2x2 neighbourhood
-  uint8_t w[4];       // weights of (x,y), (x,y+1), (x+1,y), (x+1,y+1), 1/128
-  int prior;          // sad: the prior weight in 1/256 (1..256); other methods: 0
+  size_t offset;  // store byte offset of the 2x2 neighbourhood
+  uint8_t w[4];   // weights of (x,y), (x,y+1), (x+1,y), (x+1,y+1), 1/128
+  int prior;      // sad: the prior weight in 1/256 (1..256); other methods: 0
   int weight() const { return w[0] + w[1] + w[2] + w[3]; }
 };
 
@@ -155,7 +155,7 @@ struct CompiledMap {
   std::vector<uint32_t> base;
   std::vector<int16_t> delta;
   std::vector<uint32_t> weight;
-  std::vector<uint8_t> prior;   // sad only
+  std::vector<uint8_t> prior;  // sad only
   std::vector<uint32_t> lines;
 
   int tiles_x() const { return (width + kTileW - 1) / kTileW; }
@@ -229,8 +229,7 @@ struct MapLoad {
 // A cached file that fails load_map (damaged, truncated, written for other options) is never used:
 // a warning names the reason, and the map is compiled and the file replaced.
 // An empty cache_dir disables the cache. A cache write failure is logged, not fatal.
-MapLoad compile_map_cached(const Rig& rig, const MapOptions& opt,
-                           const std::filesystem::path& cache_dir);
+MapLoad compile_map_cached(const Rig& rig, const MapOptions& opt, const std::filesystem::path& cache_dir);
 
 // ---------------------------------------------------------------------------------------------
 template <class F>

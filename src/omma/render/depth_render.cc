@@ -1,17 +1,16 @@
 #include "omma/render/depth_render.h"
 
-#include <fmt/format.h>
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
 
-#include <opencv2/imgproc.hpp>
+#include <fmt/format.h>
 #include <immintrin.h>
+#include <opencv2/imgproc.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include "omma/pano/stitch.h"
 #include "omma/pano/surface.h"
@@ -33,7 +32,8 @@ bool DepthRenderOptions::IsValid(std::string* why) const {
     return false;
   };
   if (!map.IsValid(why)) return false;
-  if (map.method == pano::Method::kSad) return fail("the depth-adaptive renderer does not run sad (per-frame weights)");
+  if (map.method == pano::Method::kSad)
+    return fail("the depth-adaptive renderer does not run sad (per-frame weights)");
   if (!sweep.IsValid(why)) return false;
   if (!(reference_mm > 0) || !std::isfinite(reference_mm)) return fail("reference distance must be positive");
   if (threads < 0) return fail("threads must be >= 0");
@@ -56,9 +56,9 @@ struct DTap {
 struct DCam {
   float bt, bb, cos2;
   float fu, fv, cu, cv;
-  float pu, pv;        // cu b.t + fu b.u, cv b.t + fv b.v (DTap::pu, pv for b)
-  float xmax, ymax;    // width - 1, height - 1
-  size_t base;         // the camera's first byte in the frame store
+  float pu, pv;      // cu b.t + fu b.u, cv b.t + fv b.v (DTap::pu, pv for b)
+  float xmax, ymax;  // width - 1, height - 1
+  size_t base;       // the camera's first byte in the frame store
   int width, height;
   bool distort;
   std::array<double, 5> k;
@@ -133,7 +133,8 @@ inline void render_depth_tile(const TileArgs& a, int tile, size_t p) {
           }
           if (!(px >= 0 && py >= 0 && px < c.width && py < c.height)) continue;
           // Bilinear, centres at +0.5, edges replicated: the row pair at (x0, y0) holds the 2x2.
-          const float xx = std::clamp(px - 0.5f, 0.f, c.xmax), yy = std::min(std::max(py - 0.5f, 0.f), c.ymax);
+          const float xx = std::clamp(px - 0.5f, 0.f, c.xmax),
+                      yy = std::min(std::max(py - 0.5f, 0.f), c.ymax);
           const int x0 = std::min(int(xx), c.width - 2), y0 = int(yy);
           // Fixed point: the fractions in 1/128 (rounded), the four weights sum to 2^14; a
           // channel's sum of weight x 8-bit value stays under 2^22 (int32).
@@ -169,15 +170,18 @@ struct SseAcc {
   __m128 a = _mm_setzero_ps();
   void add(const uint8_t* n, int w00, int w01, int w10, int w11, float tw) {
     const __m128i v = _mm_loadu_si128(reinterpret_cast<const __m128i*>(n));  // inside: kStorePadding
-    const __m128i left = _mm_shuffle_epi8(v, _mm_setr_epi8(0, -1, 3, -1, 1, -1, 4, -1, 2, -1, 5, -1, -1, -1, -1, -1));
-    const __m128i right = _mm_shuffle_epi8(v, _mm_setr_epi8(6, -1, 9, -1, 7, -1, 10, -1, 8, -1, 11, -1, -1, -1, -1, -1));
+    const __m128i left =
+        _mm_shuffle_epi8(v, _mm_setr_epi8(0, -1, 3, -1, 1, -1, 4, -1, 2, -1, 5, -1, -1, -1, -1, -1));
+    const __m128i right =
+        _mm_shuffle_epi8(v, _mm_setr_epi8(6, -1, 9, -1, 7, -1, 10, -1, 8, -1, 11, -1, -1, -1, -1, -1));
     const __m128i sum = _mm_add_epi32(_mm_madd_epi16(left, _mm_set1_epi32(w00 | (w01 << 16))),
                                       _mm_madd_epi16(right, _mm_set1_epi32(w10 | (w11 << 16))));
     a = _mm_add_ps(a, _mm_mul_ps(_mm_set1_ps(tw), _mm_cvtepi32_ps(sum)));
   }
   void store(uint8_t* o, float inv) const {
     alignas(16) float f[4];
-    _mm_store_ps(f, _mm_min_ps(_mm_set1_ps(255.f), _mm_add_ps(_mm_mul_ps(a, _mm_set1_ps(inv)), _mm_set1_ps(0.5f))));
+    _mm_store_ps(
+        f, _mm_min_ps(_mm_set1_ps(255.f), _mm_add_ps(_mm_mul_ps(a, _mm_set1_ps(inv)), _mm_set1_ps(0.5f))));
     o[0] = uint8_t(f[0]);
     o[1] = uint8_t(f[1]);
     o[2] = uint8_t(f[2]);
@@ -191,8 +195,9 @@ __attribute__((flatten)) void depth_tile_ssse3(const TileArgs& a, int tile, size
 // The tile renderer for this CPU (both give the same pixels: the integer sums are exact).
 using TileFn = void (*)(const TileArgs&, int, size_t);
 TileFn depth_tile_kernel() {
-  static const TileFn fn = __builtin_cpu_supports("ssse3") && __builtin_cpu_supports("sse4.1") ? depth_tile_ssse3
-                                                                                                 : depth_tile_scalar;
+  static const TileFn fn = __builtin_cpu_supports("ssse3") && __builtin_cpu_supports("sse4.1")
+                               ? depth_tile_ssse3
+                               : depth_tile_scalar;
   return fn;
 }
 
@@ -254,8 +259,13 @@ PixelTapLists pixel_taps(const Rig& rig, const DepthRenderOptions& opt, const Ve
     const RigCamera& c = rig.cameras[cam];
     const Vec3 b = q - c.position_mm;
     const double wt = w.dot(c.frame.t), wu = w.dot(c.frame.u), wv = w.dot(c.frame.v);
-    return DTap{float(c.in.cu * wt + c.in.fu * wu), float(c.in.cv * wt + c.in.fv * wv), float(wt), float(w.dot(b)),
-                float(weight), uint16_t(cam), 0};
+    return DTap{float(c.in.cu * wt + c.in.fu * wu),
+                float(c.in.cv * wt + c.in.fv * wv),
+                float(wt),
+                float(w.dot(b)),
+                float(weight),
+                uint16_t(cam),
+                0};
   };
   PixelTapLists p;
   p.cams.resize(g.height);
@@ -268,35 +278,35 @@ PixelTapLists pixel_taps(const Rig& rig, const DepthRenderOptions& opt, const Ve
   so.blend = opt.map.params;
   so.progress = false;
   so.depth = pano::sphere_depth(rig, g, opt.reference_mm, q);
-  pano::for_each_pixel_weights(rig, so, [&](int col, int row, const std::vector<pano::Contributor>& cs,
-                                            const std::vector<double>& w) {
-    size_t best = 0;
-    for (size_t i = 1; i < cs.size(); ++i)
-      if (w[i] > w[best]) best = i;
-    double sum = 0;
-    std::vector<size_t> keep;
-    for (size_t i = 0; i < cs.size(); ++i)
-      if (w[i] > 0 && (i == best || w[i] >= opt.map.min_weight)) {
-        keep.push_back(i);
-        sum += w[i];
-      }
-    const Vec3 dir = g.pixel_direction(col, row);
-    auto& out = p.taps[row][col];
-    for (size_t i : keep) {
-      out.push_back(make_tap(cs[i].camera, dir, w[i] / sum));
-      p.cams[row][col].push_back(cs[i].camera);
-    }
-  });
+  pano::for_each_pixel_weights(
+      rig, so, [&](int col, int row, const std::vector<pano::Contributor>& cs, const std::vector<double>& w) {
+        size_t best = 0;
+        for (size_t i = 1; i < cs.size(); ++i)
+          if (w[i] > w[best]) best = i;
+        double sum = 0;
+        std::vector<size_t> keep;
+        for (size_t i = 0; i < cs.size(); ++i)
+          if (w[i] > 0 && (i == best || w[i] >= opt.map.min_weight)) {
+            keep.push_back(i);
+            sum += w[i];
+          }
+        const Vec3 dir = g.pixel_direction(col, row);
+        auto& out = p.taps[row][col];
+        for (size_t i : keep) {
+          out.push_back(make_tap(cs[i].camera, dir, w[i] / sum));
+          p.cams[row][col].push_back(cs[i].camera);
+        }
+      });
   so.depth = cv::Mat();  // the cameras that see the direction at infinity only
-  pano::for_each_pixel_weights(rig, so, [&](int col, int row, const std::vector<pano::Contributor>& cs,
-                                            const std::vector<double>& w) {
-    const Vec3 dir = g.pixel_direction(col, row);
-    auto& out = p.taps[row][col];
-    const auto& have = p.cams[row][col];
-    for (size_t i = 0; i < cs.size(); ++i)
-      if (w[i] > 0 && std::find(have.begin(), have.end(), cs[i].camera) == have.end() && out.size() < 255)
-        out.push_back(make_tap(cs[i].camera, dir, 1e-3 * std::max(w[i], 1e-3)));
-  });
+  pano::for_each_pixel_weights(
+      rig, so, [&](int col, int row, const std::vector<pano::Contributor>& cs, const std::vector<double>& w) {
+        const Vec3 dir = g.pixel_direction(col, row);
+        auto& out = p.taps[row][col];
+        const auto& have = p.cams[row][col];
+        for (size_t i = 0; i < cs.size(); ++i)
+          if (w[i] > 0 && std::find(have.begin(), have.end(), cs[i].camera) == have.end() && out.size() < 255)
+            out.push_back(make_tap(cs[i].camera, dir, 1e-3 * std::max(w[i], 1e-3)));
+      });
   return p;
 }
 
@@ -310,7 +320,8 @@ PackedTaps pack_taps(const PanoGrid& g, const PixelTapLists& p);
 
 }  // namespace
 
-DepthRenderer::DepthRenderer(const Rig& rig, const DepthRenderOptions& opt) : impl_(std::make_unique<Impl>()) {
+DepthRenderer::DepthRenderer(const Rig& rig, const DepthRenderOptions& opt)
+    : impl_(std::make_unique<Impl>()) {
   std::string why;
   if (!opt.IsValid(&why)) throw std::invalid_argument("depth renderer: " + why);
   const auto t0 = std::chrono::steady_clock::now();
@@ -318,9 +329,11 @@ DepthRenderer::DepthRenderer(const Rig& rig, const DepthRenderOptions& opt) : im
   m.rig = rig;
   m.opt = opt;
   m.layout = StoreLayout::for_rig(rig);
-  m.arena = opt.threads > 0 ? std::make_unique<tbb::task_arena>(opt.threads) : std::make_unique<tbb::task_arena>();
+  m.arena =
+      opt.threads > 0 ? std::make_unique<tbb::task_arena>(opt.threads) : std::make_unique<tbb::task_arena>();
   const Vec3 q = opt.map.params.search.q;
-  for (const auto& c : rig.cameras) m.cams.push_back(depth_camera(c, q, m.layout.offset(int(m.cams.size()), 0, 0)));
+  for (const auto& c : rig.cameras)
+    m.cams.push_back(depth_camera(c, q, m.layout.offset(int(m.cams.size()), 0, 0)));
   PackedTaps packed = pack_taps(opt.map.grid, pixel_taps(rig, opt, q));
   m.first = std::move(packed.first);
   m.ffirst = std::move(packed.ffirst);
@@ -376,8 +389,8 @@ PackedTaps pack_taps(const PanoGrid& g, const PixelTapLists& p) {
 
 DepthRenderer::~DepthRenderer() = default;
 
-DepthFrameStats DepthRenderer::render(const FrameStore& store, const std::vector<cv::Mat>& frames, cv::Mat& out,
-                                      const cv::Mat& fixed_inverse) {
+DepthFrameStats DepthRenderer::render(const FrameStore& store, const std::vector<cv::Mat>& frames,
+                                      cv::Mat& out, const cv::Mat& fixed_inverse) {
   Impl& m = *impl_;
   if (store.layout().row0 != m.layout.row0 || store.layout().stride_px != m.layout.stride_px)
     throw std::invalid_argument("depth renderer: the frame store's layout is not this rig's");
@@ -387,7 +400,8 @@ DepthFrameStats DepthRenderer::render(const FrameStore& store, const std::vector
     const auto t0 = std::chrono::steady_clock::now();
     if (!fixed_inverse.empty()) {
       const PanoGrid& cg = m.sweep->coarse_grid();
-      if (fixed_inverse.type() != CV_32FC1 || fixed_inverse.cols != cg.width || fixed_inverse.rows != cg.height)
+      if (fixed_inverse.type() != CV_32FC1 || fixed_inverse.cols != cg.width ||
+          fixed_inverse.rows != cg.height)
         throw std::invalid_argument("depth renderer: the fixed inverse depth is not on the coarse grid");
       m.inverse = fixed_inverse.clone();
       m.confidence = cv::Mat(fixed_inverse.size(), CV_32FC1, cv::Scalar(1));
@@ -415,7 +429,8 @@ DepthFrameStats DepthRenderer::render(const FrameStore& store, const std::vector
     // Tile by tile (compiled_map.h's kTileW x kTileH): the camera pixels a tile gathers stay in the
     // cache (row by row was 1.6x slower, bound by the gathers).
     const int tiles_x = (g.width + kTileW - 1) / kTileW, tiles_y = (g.height + kTileH - 1) / kTileH;
-    const TileArgs args{data, stride, tap, fb, first, ffirst, cams, &m.inverse_full, &out, tiles_x, g.width, g.height};
+    const TileArgs args{data, stride,          tap,  fb,      first,   ffirst,
+                        cams, &m.inverse_full, &out, tiles_x, g.width, g.height};
     const auto tile_fn = depth_tile_kernel();
     tbb::parallel_for(0, tiles_x * tiles_y, [&](int tile) { tile_fn(args, tile, m.tile_first[tile]); });
     st.render_ms = ms_since(t1);

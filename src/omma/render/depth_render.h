@@ -28,8 +28,8 @@
 
 #include <opencv2/core.hpp>
 
-#include "omma/render/compiled_map.h"
 #include "omma/pano/plane_sweep.h"
+#include "omma/render/compiled_map.h"
 
 namespace omma::render {
 
@@ -39,19 +39,20 @@ namespace omma::render {
 pano::PlaneSweepOptions engine_sweep_options();
 
 struct DepthRenderOptions {
-  MapOptions map;             // grid, method (not sad), params (observer q), min_weight
-  pano::PlaneSweepOptions sweep = engine_sweep_options();  // the per-frame estimate (its temporal_weight is used between frames)
-  double reference_mm = 22;   // the surface the static weights are computed on (the colon wall)
+  MapOptions map;  // grid, method (not sad), params (observer q), min_weight
+  pano::PlaneSweepOptions sweep =
+      engine_sweep_options();  // the per-frame estimate (its temporal_weight is used between frames)
+  double reference_mm = 22;    // the surface the static weights are computed on (the colon wall)
   // Temporal filter of the inverse depth between panoramas: s = s_prev + alpha (s_new - s_prev)
   // (1 = none). With sweep.temporal_weight it keeps the wall's depth from flickering with the noise.
   double temporal_alpha = 0.35;
-  int threads = 0;            // 0 = all
+  int threads = 0;  // 0 = all
   bool IsValid(std::string* why = nullptr) const;
 };
 
 struct DepthFrameStats {
   double estimate_ms = 0, render_ms = 0;
-  double mean_depth_mm = 0;     // harmonic mean over the coarse grid
+  double mean_depth_mm = 0;  // harmonic mean over the coarse grid
   double mean_confidence = 0;
 };
 

@@ -2,19 +2,18 @@
 // and the temporal stability of its per-frame depth on the colon.
 #include "omma/render/depth_render.h"
 
-#include <gtest/gtest.h>
-
 #include <cmath>
 #include <cstdio>
 
+#include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
 
 #include "omma/core/frames.h"
 #include "omma/design/prototype.h"
-#include "omma/render/render.h"
 #include "omma/pano/quality.h"
 #include "omma/pano/stitch.h"
 #include "omma/pano/surface.h"
+#include "omma/render/render.h"
 #include "omma/sim/simulate.h"
 
 namespace omma::render {
@@ -69,9 +68,10 @@ TEST(EngineDepth, MatchesTheReferenceStitchOnItsDepth) {
   const double p_same = psnr_u8(out, ref_same), p_ref = psnr_u8(out, ref);
   const double t_out = pano::psnr_db(out, c.truth), t_ref = pano::psnr_db(ref, c.truth),
                t_inf = pano::psnr_db(at_inf, c.truth);
-  std::printf("depth renderer vs stitch on its depth %.2f dB, vs stitch --depth estimate %.2f dB; against the "
-              "truth: renderer %.2f, reference %.2f, inf %.2f dB (estimate %.1f ms, render %.1f ms, %.1f bytes/px)\n",
-              p_same, p_ref, t_out, t_ref, t_inf, st.estimate_ms, st.render_ms, dr.bytes_per_pixel());
+  std::printf(
+      "depth renderer vs stitch on its depth %.2f dB, vs stitch --depth estimate %.2f dB; against the "
+      "truth: renderer %.2f, reference %.2f, inf %.2f dB (estimate %.1f ms, render %.1f ms, %.1f bytes/px)\n",
+      p_same, p_ref, t_out, t_ref, t_inf, st.estimate_ms, st.render_ms, dr.bytes_per_pixel());
   // Measured: 59.7 dB from the stitch on the same depth (float arithmetic, the static weights at
   // 22 mm), 43.5 dB from `omma stitch --depth estimate` (the engine's coarser, faster sweep), truth
   // PSNR 33.49 vs 33.65 dB (inf: 27.76 dB).
@@ -81,8 +81,9 @@ TEST(EngineDepth, MatchesTheReferenceStitchOnItsDepth) {
 
   // A fixed depth at infinity reproduces the thesis's model (the static mrf stitch) closely.
   cv::Mat out_inf;
-  dr.render(store, c.frames, out_inf, cv::Mat(dr.sweep().coarse_grid().height, dr.sweep().coarse_grid().width,
-                                               CV_32FC1, cv::Scalar(0)));
+  dr.render(
+      store, c.frames, out_inf,
+      cv::Mat(dr.sweep().coarse_grid().height, dr.sweep().coarse_grid().width, CV_32FC1, cv::Scalar(0)));
   const double p_inf = psnr_u8(out_inf, at_inf);
   std::printf("depth renderer at infinity vs the static stitch: %.2f dB\n", p_inf);
   EXPECT_GT(p_inf, 35.0);
@@ -118,11 +119,12 @@ TEST(EngineDepth, DepthOfWallIsStableOnAMovingSequence) {
     dr.render(store, frames, out);
     const cv::Mat truth = sim::render_truth_depth(*scene, cg, so.pose);
     cv::Mat err = dr.coarse_inverse().mul(truth) - 1;  // D_true / D_est - 1
-    if (!prev_err.empty() && f >= 2) {  // after one frame of warm-up of the temporal term
+    if (!prev_err.empty() && f >= 2) {                 // after one frame of warm-up of the temporal term
       std::vector<float> v;
       for (int y = 0; y < err.rows; ++y)
         for (int x = 0; x < err.cols; ++x)
-          if (truth.at<float>(y, x) < 40) v.push_back(std::abs(err.at<float>(y, x) - prev_err.at<float>(y, x)));
+          if (truth.at<float>(y, x) < 40)
+            v.push_back(std::abs(err.at<float>(y, x) - prev_err.at<float>(y, x)));
       std::sort(v.begin(), v.end());
       const double median = v[v.size() / 2], p95 = v[v.size() * 95 / 100];
       std::printf("frame %d: flicker of the wall's depth median %.2f %%, 95th percentile %.2f %%\n", f,

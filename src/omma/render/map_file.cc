@@ -62,12 +62,15 @@ bool StoreLayout::IsValid(std::string* why) const {
     return false;
   };
   const size_t n = row0.size();
-  if (n == 0 || n > size_t(kMaxCameras) || size.size() != n) return fail("bad camera count in the store layout");
+  if (n == 0 || n > size_t(kMaxCameras) || size.size() != n)
+    return fail("bad camera count in the store layout");
   int64_t next = 0, widest = 0;
   for (size_t c = 0; c < n; ++c) {
-    if (size[c].width < 1 || size[c].height < 1 || size[c].width > kMaxImageSide || size[c].height > kMaxImageSide)
+    if (size[c].width < 1 || size[c].height < 1 || size[c].width > kMaxImageSide ||
+        size[c].height > kMaxImageSide)
       return fail("camera " + std::to_string(c) + ": frame size out of range");
-    if (row0[c] != next) return fail("camera " + std::to_string(c) + ": first store row does not follow the previous camera");
+    if (row0[c] != next)
+      return fail("camera " + std::to_string(c) + ": first store row does not follow the previous camera");
     next += size[c].height;
     widest = std::max<int64_t>(widest, size[c].width);
   }
@@ -85,14 +88,16 @@ bool CompiledMap::IsValid(std::string* why) const {
   if (width <= 0 || height <= 0 || int64_t(width) * height > kMaxImagePixels || width > kMaxBandedSide ||
       height > kMaxImageSide)
     return fail("map size out of range");
-  if (method != pano::Method::kNearest && method != pano::Method::kLinear && method != pano::Method::kGaussian &&
-      method != pano::Method::kMrf && method != pano::Method::kMrfSpherical && method != pano::Method::kSad)
+  if (method != pano::Method::kNearest && method != pano::Method::kLinear &&
+      method != pano::Method::kGaussian && method != pano::Method::kMrf &&
+      method != pano::Method::kMrfSpherical && method != pano::Method::kSad)
     return fail("unknown method");
   if (!(std::isfinite(sad_epsilon) && sad_epsilon > 0)) return fail("sad epsilon out of range");
   if (!layout.IsValid(why)) return false;
   const size_t nt = size_t(tiles());
   for (const auto* v : {&tile_run, &tile_tap, &tile_base, &tile_line})
-    if (v->size() != nt + 1 || v->front() != 0 || !std::is_sorted(v->begin(), v->end())) return fail("bad tile index");
+    if (v->size() != nt + 1 || v->front() != 0 || !std::is_sorted(v->begin(), v->end()))
+      return fail("bad tile index");
   if (tile_run.back() != runs.size() || tile_tap.back() != weight.size() || tile_base.back() != base.size() ||
       tile_line.back() != lines.size() || delta.size() != weight.size())
     return fail("tile index does not match the arrays");
@@ -112,7 +117,8 @@ bool CompiledMap::IsValid(std::string* why) const {
         if (r + 1 >= tile_run[t + 1]) return fail("runs overflow their tile");
         const int n = runs[r], len = runs[r + 1];
         if (len == 0) break;
-        if (n > kMaxTaps || b + n > tile_base[t + 1] || k + size_t(n) * len > tile_tap[t + 1] || cols + len > w)
+        if (n > kMaxTaps || b + n > tile_base[t + 1] || k + size_t(n) * len > tile_tap[t + 1] ||
+            cols + len > w)
           return fail("run overflows its tile");
         for (int p = 0; p < len; ++p) {
           int sum = 0, prior_sum = 0;
@@ -142,7 +148,8 @@ bool CompiledMap::IsValid(std::string* why) const {
       r += 2;
       if (cols != w) return fail("tile row of the wrong width");
     }
-    if (r != tile_run[t + 1] || k != tile_tap[t + 1] || b != tile_base[t + 1]) return fail("tile of the wrong size");
+    if (r != tile_run[t + 1] || k != tile_tap[t + 1] || b != tile_base[t + 1])
+      return fail("tile of the wrong size");
   }
   return true;
 }
@@ -201,7 +208,8 @@ std::optional<CompiledMap> parse_map(const uint8_t* data, size_t n, std::string*
   Reader all{data, data + n};
   if (!all.get(magic) || magic != kMagic) return fail("not an omma map file");
   if (!all.get(version) || version != kMapFormatVersion)
-    return fail("map format version " + std::to_string(version) + ", not " + std::to_string(kMapFormatVersion));
+    return fail("map format version " + std::to_string(version) + ", not " +
+                std::to_string(kMapFormatVersion));
   // The checksum covers everything before it: header, arrays and the closing magic.
   std::memcpy(&crc, data + n - 4, 4);  // n >= 8 here
   if (crc32(data, n - 4) != crc) return fail("checksum mismatch (damaged file)");
@@ -222,9 +230,9 @@ std::optional<CompiledMap> parse_map(const uint8_t* data, size_t n, std::string*
     m.layout.row0.push_back(r0);
     m.layout.size.emplace_back(w, h);
   }
-  if (!i.get_vec(m.tile_run) || !i.get_vec(m.tile_tap) || !i.get_vec(m.tile_base) || !i.get_vec(m.tile_line) ||
-      !i.get_vec(m.runs) || !i.get_vec(m.base) || !i.get_vec(m.delta) || !i.get_vec(m.weight) ||
-      !i.get_vec(m.prior) || !i.get_vec(m.lines))
+  if (!i.get_vec(m.tile_run) || !i.get_vec(m.tile_tap) || !i.get_vec(m.tile_base) ||
+      !i.get_vec(m.tile_line) || !i.get_vec(m.runs) || !i.get_vec(m.base) || !i.get_vec(m.delta) ||
+      !i.get_vec(m.weight) || !i.get_vec(m.prior) || !i.get_vec(m.lines))
     return fail("truncated arrays");
   if (!i.get(magic) || magic != kMagic || i.p != i.end) return fail("bad end of file");
   if (std::string w; !m.IsValid(&w)) return fail(w);

@@ -45,7 +45,9 @@ struct Fixture {
   size_t header_bytes() const { return 8 + kMapKeyBytes + 7 * 4 + 12 * rig.cameras.size(); }
 };
 
-bool same(const cv::Mat& a, const cv::Mat& b) { return a.size() == b.size() && cv::norm(a, b, cv::NORM_INF) == 0; }
+bool same(const cv::Mat& a, const cv::Mat& b) {
+  return a.size() == b.size() && cv::norm(a, b, cv::NORM_INF) == 0;
+}
 
 TEST(MapFile, RoundTripIsExact) {
   const Fixture f;
@@ -134,7 +136,8 @@ TEST(MapFile, StructuralChecksKeepDamagedMapsSafeToRender) {
       EXPECT_EQ(out.size(), f.want.size());
     }
   }
-  std::printf("  %d of %d body bit flips pass the structural checks alone (the CRC refuses them)\n", accepted, tries);
+  std::printf("  %d of %d body bit flips pass the structural checks alone (the CRC refuses them)\n", accepted,
+              tries);
 }
 
 // Through the cache, as `omma run` uses it: a damaged file is reported, recompiled and replaced.
@@ -149,10 +152,14 @@ TEST(MapFile, DamagedCacheFileIsRecompiledAndReplaced) {
     std::vector<uint8_t> b = good;
     b.resize(std::max(b.size(), at + n));
     std::memset(b.data() + at, v, n);
-    std::ofstream(first.file, std::ios::binary).write(reinterpret_cast<const char*>(b.data()), std::streamsize(b.size()));
+    std::ofstream(first.file, std::ios::binary)
+        .write(reinterpret_cast<const char*>(b.data()), std::streamsize(b.size()));
   };
-  for (auto [at, n, v] : {std::tuple<size_t, size_t, uint8_t>{36, 4, 0xff}, {48, 4, 0xff}, {1000, 4096, 0x5a},
-                          {good.size() - 3, 1, 0}, {good.size(), 100, 0}}) {
+  for (auto [at, n, v] : {std::tuple<size_t, size_t, uint8_t>{36, 4, 0xff},
+                          {48, 4, 0xff},
+                          {1000, 4096, 0x5a},
+                          {good.size() - 3, 1, 0},
+                          {good.size(), 100, 0}}) {
     damage(at, n, v);
     const MapLoad again = compile_map_cached(f.rig, f.opt, dir);
     EXPECT_FALSE(again.from_cache) << at;

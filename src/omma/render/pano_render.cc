@@ -82,7 +82,9 @@ const CompiledMap& PanoRenderer::band_map(int i, std::unique_ptr<CompiledMap>& s
   if (maps_[i]) return *maps_[i];
   std::string why;
   auto m = load_map(map_files_[i], rig_, band_options(i), &why);
-  if (!m) throw std::runtime_error("render: the cached map '" + map_files_[i].string() + "' cannot be used: " + why);
+  if (!m)
+    throw std::runtime_error("render: the cached map '" + map_files_[i].string() +
+                             "' cannot be used: " + why);
   scratch = std::make_unique<CompiledMap>(std::move(*m));
   return *scratch;
 }
@@ -134,7 +136,8 @@ std::vector<cv::Mat> develop_frame_set(const FrameSetReader& recording, int64_t 
   std::vector<cv::Mat> frames = isp::develop_with_model(raws, iso, gains);
   const Rig& rig = recording.rig();
   for (size_t c = 0; c < raws.size(); ++c)
-    if (frames[c].empty()) frames[c] = cv::Mat::zeros(rig.cameras[c].in.height, rig.cameras[c].in.width, CV_8UC3);
+    if (frames[c].empty())
+      frames[c] = cv::Mat::zeros(rig.cameras[c].in.height, rig.cameras[c].in.width, CV_8UC3);
   if (times) {
     times->read = std::chrono::duration<double>(t1 - t0).count();
     times->develop = std::chrono::duration<double>(clock::now() - t1).count();

@@ -23,24 +23,24 @@
 
 #include <opencv2/core.hpp>
 
+#include "omma/isp/isp.h"
 #include "omma/render/compiled_map.h"
 #include "omma/render/frame_reader.h"
 #include "omma/render/render.h"
-#include "omma/isp/isp.h"
 
 namespace omma::render {
 
 struct PanoRenderOptions {
   PanoGrid grid{Projection::kEquirect100, 9000, 2400};
   pano::Method method = pano::Method::kMrf;
-  bool offline = false;          // the high-quality offline blend (see the file comment)
+  bool offline = false;  // the high-quality offline blend (see the file comment)
   pano::BlendParams params;
   double min_weight = 1.0 / 20;  // MapOptions::min_weight (engine methods)
   int band_rows = 256;           // rows per band map (a multiple of kTileH is best)
   bool resident_maps = true;     // keep every band map in memory (else load each from the cache)
   std::filesystem::path cache_dir = default_cache_dir();  // empty: no cache (resident only)
   RenderOptions render;
-  bool progress = true;          // progress bar on stderr while compiling maps
+  bool progress = true;  // progress bar on stderr while compiling maps
   bool IsValid(std::string* why = nullptr) const;
 };
 
@@ -48,9 +48,9 @@ struct PanoRenderOptions {
 using BandSink = std::function<void(int row0, const cv::Mat& band)>;
 
 struct PanoRenderMemory {
-  size_t store_bytes = 0;      // the frame store
-  size_t maps_bytes = 0;       // all band maps (resident) or the largest one
-  size_t band_bytes = 0;       // one output band
+  size_t store_bytes = 0;  // the frame store
+  size_t maps_bytes = 0;   // all band maps (resident) or the largest one
+  size_t band_bytes = 0;   // one output band
   size_t total() const { return store_bytes + maps_bytes + band_bytes; }
 };
 
@@ -73,7 +73,7 @@ class PanoRenderer {
   // The whole panorama in memory (small grids, tests).
   cv::Mat render_image();
   PanoRenderMemory memory() const;
-  double maps_seconds() const { return maps_seconds_; }   // compile or load time of the maps
+  double maps_seconds() const { return maps_seconds_; }  // compile or load time of the maps
   int maps_from_cache() const { return maps_from_cache_; }
 
  private:
@@ -81,7 +81,7 @@ class PanoRenderer {
   Rig rig_;
   PanoRenderOptions opt_;
   FrameStore store_;
-  std::vector<cv::Mat> frames_;  // offline: the developed frames
+  std::vector<cv::Mat> frames_;          // offline: the developed frames
   MapOptions band_options(int i) const;  // the map of band i: the panorama's grid, band(i) as window
   std::vector<std::unique_ptr<CompiledMap>> maps_;
   std::vector<std::filesystem::path> map_files_;
@@ -101,6 +101,7 @@ struct FrameSetTimes {
 // rig's photometric model as flat-gain maps (isp::flat_gains_from_rig, computed once per rig):
 // cameras with a model are developed with it instead of the white balance; empty: none.
 std::vector<cv::Mat> develop_frame_set(const FrameSetReader& reader, int64_t set, isp::IspOptions iso,
-                                       FrameSetTimes* times = nullptr, const std::vector<cv::Mat>& gains = {});
+                                       FrameSetTimes* times = nullptr,
+                                       const std::vector<cv::Mat>& gains = {});
 
 }  // namespace omma::render

@@ -36,8 +36,8 @@ struct Cursor {
 // Channel ch of the neighbourhood at s (B G R of (x,y), (x,y+1), (x+1,y), (x+1,y+1)) weighted by
 // the four weight bytes of w.
 inline int32_t weighted_sum(const uint8_t* s, uint32_t w, int ch) {
-  return int32_t(w & 255) * s[ch] + int32_t((w >> 8) & 255) * s[3 + ch] + int32_t((w >> 16) & 255) * s[6 + ch] +
-         int32_t(w >> 24) * s[9 + ch];
+  return int32_t(w & 255) * s[ch] + int32_t((w >> 8) & 255) * s[3 + ch] +
+         int32_t((w >> 16) & 255) * s[6 + ch] + int32_t(w >> 24) * s[9 + ch];
 }
 
 // Portable kernel: the definition the SIMD kernels reproduce bit for bit: with weights summing to
@@ -80,7 +80,8 @@ struct SadKernel {
         sum += wi;
         for (int ch = 0; ch < 3; ++ch) acc[ch] += wi * s[i][ch];
       }
-      for (int ch = 0; ch < 3; ++ch) o[ch] = static_cast<uint8_t>(std::min(255.0f, acc[ch] / (sum * 128.0f) + 0.5f));
+      for (int ch = 0; ch < 3; ++ch)
+        o[ch] = static_cast<uint8_t>(std::min(255.0f, acc[ch] / (sum * 128.0f) + 0.5f));
     }
   }
 };
@@ -92,14 +93,16 @@ struct SadKernel {
 // prefetch, 3.0 ms by tiles prefetching each tile's lines at its start, 2.0 ms with the prefetch
 // spread over the tile before, 1.7 ms with every camera pixel in the L1 cache.
 template <class K>
-inline void render_tiles(const K& kernel, const CompiledMap& map, const uint8_t* store, int t0, int t1, uint8_t* out,
-                         size_t step, bool pf) {
+inline void render_tiles(const K& kernel, const CompiledMap& map, const uint8_t* store, int t0, int t1,
+                         uint8_t* out, size_t step, bool pf) {
   const uint32_t* lines = map.lines.data();
   if (pf)
-    for (uint32_t a = map.tile_line[t0]; a < map.tile_line[t0 + 1]; ++a) __builtin_prefetch(store + lines[a], 0, 3);
+    for (uint32_t a = map.tile_line[t0]; a < map.tile_line[t0 + 1]; ++a)
+      __builtin_prefetch(store + lines[a], 0, 3);
   const int tiles_x = map.tiles_x();
   for (int t = t0; t < t1; ++t) {
-    const uint32_t pa = pf && t + 1 < t1 ? map.tile_line[t + 1] : 0, pb = pf && t + 1 < t1 ? map.tile_line[t + 2] : 0;
+    const uint32_t pa = pf && t + 1 < t1 ? map.tile_line[t + 1] : 0,
+                   pb = pf && t + 1 < t1 ? map.tile_line[t + 2] : 0;
     const int c0 = (t % tiles_x) * kTileW, r0 = (t / tiles_x) * kTileH;
     const int w = std::min(map.width, c0 + kTileW) - c0, h = std::min(map.height, r0 + kTileH) - r0;
     const uint8_t* run = map.runs.data() + map.tile_run[t];
@@ -114,15 +117,33 @@ inline void render_tiles(const K& kernel, const CompiledMap& map, const uint8_t*
       for (; run[1] != 0; run += 2) {
         const int n = run[1], c = run[0];
         switch (c) {
-          case 0: std::memset(o, 0, 3 * size_t(n)); break;
-          case 1: kernel.template run<1>(store, base, cu, n, o, room); break;
-          case 2: kernel.template run<2>(store, base, cu, n, o, room); break;
-          case 3: kernel.template run<3>(store, base, cu, n, o, room); break;
-          case 4: kernel.template run<4>(store, base, cu, n, o, room); break;
-          case 5: kernel.template run<5>(store, base, cu, n, o, room); break;
-          case 6: kernel.template run<6>(store, base, cu, n, o, room); break;
-          case 7: kernel.template run<7>(store, base, cu, n, o, room); break;
-          default: kernel.template run<8>(store, base, cu, n, o, room); break;
+          case 0:
+            std::memset(o, 0, 3 * size_t(n));
+            break;
+          case 1:
+            kernel.template run<1>(store, base, cu, n, o, room);
+            break;
+          case 2:
+            kernel.template run<2>(store, base, cu, n, o, room);
+            break;
+          case 3:
+            kernel.template run<3>(store, base, cu, n, o, room);
+            break;
+          case 4:
+            kernel.template run<4>(store, base, cu, n, o, room);
+            break;
+          case 5:
+            kernel.template run<5>(store, base, cu, n, o, room);
+            break;
+          case 6:
+            kernel.template run<6>(store, base, cu, n, o, room);
+            break;
+          case 7:
+            kernel.template run<7>(store, base, cu, n, o, room);
+            break;
+          default:
+            kernel.template run<8>(store, base, cu, n, o, room);
+            break;
         }
         base += c;
         o += 3 * n;
@@ -132,10 +153,12 @@ inline void render_tiles(const K& kernel, const CompiledMap& map, const uint8_t*
   }
 }
 
-void render_tiles_scalar(const CompiledMap& map, const uint8_t* store, int t0, int t1, uint8_t* out, size_t step, bool pf) {
+void render_tiles_scalar(const CompiledMap& map, const uint8_t* store, int t0, int t1, uint8_t* out,
+                         size_t step, bool pf) {
   render_tiles(ScalarKernel{}, map, store, t0, t1, out, step, pf);
 }
-void render_tiles_sad(const CompiledMap& map, const uint8_t* store, int t0, int t1, uint8_t* out, size_t step, bool pf) {
+void render_tiles_sad(const CompiledMap& map, const uint8_t* store, int t0, int t1, uint8_t* out, size_t step,
+                      bool pf) {
   render_tiles(SadKernel{map.sad_epsilon}, map, store, t0, t1, out, step, pf);
 }
 
@@ -148,7 +171,8 @@ void render_tiles_sad(const CompiledMap& map, const uint8_t* store, int t0, int 
 // w(x+1,y), w(x+1,y+1)).
 inline __m128i neighbours(const uint8_t* p, const int16_t*& d) {
   const __m128i regroup = _mm_setr_epi8(0, 3, 6, 9, 1, 4, 7, 10, 2, 5, 8, 11, -1, -1, -1, -1);
-  return _mm_shuffle_epi8(_mm_loadu_si128(reinterpret_cast<const __m128i*>(p + 2 * ptrdiff_t(*d++))), regroup);
+  return _mm_shuffle_epi8(_mm_loadu_si128(reinterpret_cast<const __m128i*>(p + 2 * ptrdiff_t(*d++))),
+                          regroup);
 }
 
 // The SIMD kernels' run loop, around K::pixel<C>(start pointers, deltas, weights): one output
@@ -163,13 +187,17 @@ struct SimdRun {
     for (int t = 0; t < C; ++t) p[t] = store + 2 * size_t(base[t]);
     int i = 0;
     for (; i + 4 <= n && room >= 16; i += 4, o += 12, room -= 12) {
-      const __m128i a0 = K::template pixel<C>(p, cu.delta, cu.weight), a1 = K::template pixel<C>(p, cu.delta, cu.weight);
-      const __m128i a2 = K::template pixel<C>(p, cu.delta, cu.weight), a3 = K::template pixel<C>(p, cu.delta, cu.weight);
-      const __m128i bytes = _mm_packus_epi16(_mm_packus_epi32(a0, a1), _mm_packus_epi32(a2, a3));  // B G R 0 x 4
+      const __m128i a0 = K::template pixel<C>(p, cu.delta, cu.weight),
+                    a1 = K::template pixel<C>(p, cu.delta, cu.weight);
+      const __m128i a2 = K::template pixel<C>(p, cu.delta, cu.weight),
+                    a3 = K::template pixel<C>(p, cu.delta, cu.weight);
+      const __m128i bytes =
+          _mm_packus_epi16(_mm_packus_epi32(a0, a1), _mm_packus_epi32(a2, a3));  // B G R 0 x 4
       _mm_storeu_si128(reinterpret_cast<__m128i*>(o), _mm_shuffle_epi8(bytes, squeeze));
     }
     for (; i < n; ++i, o += 3, room -= 3) {
-      const uint32_t v = uint32_t(_mm_cvtsi128_si32(_mm_shuffle_epi8(K::template pixel<C>(p, cu.delta, cu.weight), pick)));
+      const uint32_t v =
+          uint32_t(_mm_cvtsi128_si32(_mm_shuffle_epi8(K::template pixel<C>(p, cu.delta, cu.weight), pick)));
       std::memcpy(o, &v, room >= 4 ? 4 : 3);
     }
   }
@@ -187,7 +215,8 @@ struct Avx2Kernel {
   static __m128i pixel(const uint8_t* const* p, const int16_t*& d, const uint32_t*& w) {
     __m128i acc = _mm_setzero_si128();
 #pragma GCC unroll 8
-    for (int t = 0; t < C; ++t) acc = _mm_add_epi16(acc, _mm_maddubs_epi16(neighbours(p[t], d), _mm_set1_epi32(int(*w++))));
+    for (int t = 0; t < C; ++t)
+      acc = _mm_add_epi16(acc, _mm_maddubs_epi16(neighbours(p[t], d), _mm_set1_epi32(int(*w++))));
     return _mm_srli_epi32(_mm_add_epi32(_mm_madd_epi16(acc, _mm_set1_epi16(1)), _mm_set1_epi32(64)), 7);
   }
 };
@@ -230,10 +259,13 @@ using TileRenderer = void (*)(const CompiledMap&, const uint8_t*, int, int, uint
 TileRenderer tile_renderer(Kernel k) {
   switch (k) {
 #ifdef OMMA_X86
-    case Kernel::kAvx512Vnni: return render_tiles_vnni;
-    case Kernel::kAvx2: return render_tiles_avx2;
+    case Kernel::kAvx512Vnni:
+      return render_tiles_vnni;
+    case Kernel::kAvx2:
+      return render_tiles_avx2;
 #endif
-    default: return render_tiles_scalar;
+    default:
+      return render_tiles_scalar;
   }
 }
 
@@ -241,10 +273,14 @@ TileRenderer tile_renderer(Kernel k) {
 
 std::string to_string(Kernel k) {
   switch (k) {
-    case Kernel::kAuto: return "auto";
-    case Kernel::kScalar: return "scalar";
-    case Kernel::kAvx2: return "avx2";
-    case Kernel::kAvx512Vnni: return "avx512-vnni";
+    case Kernel::kAuto:
+      return "auto";
+    case Kernel::kScalar:
+      return "scalar";
+    case Kernel::kAvx2:
+      return "avx2";
+    case Kernel::kAvx512Vnni:
+      return "avx512-vnni";
   }
   return "?";
 }
@@ -259,9 +295,12 @@ bool kernel_available(Kernel k) {
 #endif
   switch (k) {
     case Kernel::kAuto:
-    case Kernel::kScalar: return true;
-    case Kernel::kAvx2: return avx2;
-    case Kernel::kAvx512Vnni: return vnni;
+    case Kernel::kScalar:
+      return true;
+    case Kernel::kAvx2:
+      return avx2;
+    case Kernel::kAvx512Vnni:
+      return vnni;
   }
   return false;
 }
@@ -278,7 +317,8 @@ bool RenderOptions::IsValid(std::string* why) const {
     return false;
   };
   if (threads < 0) return fail("threads must be >= 0 (0 = all)");
-  if (kernel != Kernel::kAuto && kernel != Kernel::kScalar && kernel != Kernel::kAvx2 && kernel != Kernel::kAvx512Vnni)
+  if (kernel != Kernel::kAuto && kernel != Kernel::kScalar && kernel != Kernel::kAvx2 &&
+      kernel != Kernel::kAvx512Vnni)
     return fail("unknown render kernel");
   return true;
 }
@@ -304,15 +344,17 @@ void render(const CompiledMap& map, const FrameStore& store, cv::Mat& out, const
   // sharing the oneTBB workers, e.g. OpenCV in source threads), so a render never waits behind them.
   auto body = [&] {
     tbb::this_task_arena::isolate([&] {
-      tbb::parallel_for(tbb::blocked_range<int>(0, n, 8),
-                        [&](const tbb::blocked_range<int>& r) { tiles(map, data, r.begin(), r.end(), o, step, opt.prefetch); });
+      tbb::parallel_for(tbb::blocked_range<int>(0, n, 8), [&](const tbb::blocked_range<int>& r) {
+        tiles(map, data, r.begin(), r.end(), o, step, opt.prefetch);
+      });
     });
   };
   if (opt.threads <= 0) {
     body();
   } else {
     static thread_local std::unique_ptr<tbb::task_arena> arena;
-    if (!arena || arena->max_concurrency() != opt.threads) arena = std::make_unique<tbb::task_arena>(opt.threads);
+    if (!arena || arena->max_concurrency() != opt.threads)
+      arena = std::make_unique<tbb::task_arena>(opt.threads);
     arena->execute(body);
   }
 }
@@ -322,7 +364,8 @@ cv::Mat reference_render(const Rig& rig, const MapOptions& opt, const std::vecto
     throw std::invalid_argument("reference_render: need one frame per camera");
   const auto [sub, to_full] = active_cameras(rig, opt.active);
   const PanoGrid& g = opt.grid;
-  const cv::Rect win = opt.window.empty() ? cv::Rect(0, 0, g.width, g.height) : opt.window;  // MapOptions::window
+  const cv::Rect win =
+      opt.window.empty() ? cv::Rect(0, 0, g.width, g.height) : opt.window;  // MapOptions::window
   cv::Mat out(win.height, win.width, CV_8UC3, cv::Scalar::all(0));
   // Bilinear sample with replicated edges; centres at integer + 0.5.
   auto sample = [](const cv::Mat& img, double x, double y, int ch) {
@@ -363,7 +406,8 @@ cv::Mat reference_render(const Rig& rig, const MapOptions& opt, const std::vecto
 }
 
 double psnr_u8(const cv::Mat& a, const cv::Mat& b) {
-  if (a.size() != b.size() || a.type() != b.type()) throw std::invalid_argument("psnr_u8: size/type mismatch");
+  if (a.size() != b.size() || a.type() != b.type())
+    throw std::invalid_argument("psnr_u8: size/type mismatch");
   cv::Mat d;
   cv::absdiff(a, b, d);
   d.convertTo(d, CV_64F);

@@ -7,12 +7,12 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "omma/render/compiled_map.h"
+#include "omma/core/frames.h"
 #include "omma/design/prototype.h"
+#include "omma/pano/stitch.h"
+#include "omma/render/compiled_map.h"
 #include "omma/sim/panorama_views.h"
 #include "omma/testing/synthetic.h"
-#include "omma/pano/stitch.h"
-#include "omma/core/frames.h"
 
 namespace omma::render {
 namespace {
@@ -150,7 +150,8 @@ TEST(EngineRender, ScalarKernelComputesTheMapsFormula) {
       };
       for (int ch = 0; ch < 3; ++ch)
         acc[ch] += taps[t].w[0] * at(x, y, ch) + taps[t].w[1] * at(x, y + 1, ch) +
-                   (taps[t].w[2] ? taps[t].w[2] * at(x + 1, y, ch) : 0) + (taps[t].w[3] ? taps[t].w[3] * at(x + 1, y + 1, ch) : 0);
+                   (taps[t].w[2] ? taps[t].w[2] * at(x + 1, y, ch) : 0) +
+                   (taps[t].w[3] ? taps[t].w[3] * at(x + 1, y + 1, ch) : 0);
     }
     for (int ch = 0; ch < 3; ++ch) expect.at<cv::Vec3b>(row, col)[ch] = n ? uint8_t(acc[ch] >> 7) : 0;
   });
@@ -200,8 +201,8 @@ TEST(EngineMap, BytesPerPixelAt1080x1080) {
     opt.method = m;
     const CompiledMap map = compile_map(rig, opt);
     const double px = double(map.width) * map.height;
-    std::printf("  %s 1080x1080: %.3f taps/pixel, %.2f bytes/pixel\n", pano::to_string(m).c_str(), map.taps() / px,
-                map.bytes_per_pixel());
+    std::printf("  %s 1080x1080: %.3f taps/pixel, %.2f bytes/pixel\n", pano::to_string(m).c_str(),
+                map.taps() / px, map.bytes_per_pixel());
     EXPECT_LE(map.bytes_per_pixel(), m == pano::Method::kNearest ? 6.5 : 12.0);
   }
 }

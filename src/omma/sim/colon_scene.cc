@@ -8,10 +8,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <vector>
 #include <limits>
 #include <memory>
 #include <mutex>
+#include <vector>
 
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
@@ -26,8 +26,8 @@ constexpr double kGeoCell = 0.3;   // mm, radius table cell along z (and about a
 constexpr double kTexCell = 0.15;  // mm, albedo table cell
 constexpr double kMaxDistance = 400.0;
 constexpr double kNoHit = std::numeric_limits<double>::infinity();
-constexpr double kBlock = 4.0;     // mm, z blocks of the slope bounds
-constexpr int kSkipBlocks = 4;     // the free-space skip looks this many blocks either way
+constexpr double kBlock = 4.0;  // mm, z blocks of the slope bounds
+constexpr int kSkipBlocks = 4;  // the free-space skip looks this many blocks either way
 constexpr double kTwoPi = 2 * kPi;
 
 // Fast atan2 (max error about 1e-5 rad), result in [0, 2 pi).
@@ -36,7 +36,8 @@ inline double fast_phi(double y, double x) {
   const double mx = std::max(ax, ay), mn = std::min(ax, ay);
   if (mx == 0) return 0;
   const double a = mn / mx, s = a * a;
-  double r = ((((-0.0117212 * s + 0.05265332) * s - 0.11643287) * s + 0.19354346) * s - 0.33262347) * s + 0.99997726;
+  double r =
+      ((((-0.0117212 * s + 0.05265332) * s - 0.11643287) * s + 0.19354346) * s - 0.33262347) * s + 0.99997726;
   r *= a;
   if (ay > ax) r = kPi / 2 - r;
   if (x < 0) r = kPi - r;
@@ -45,7 +46,8 @@ inline double fast_phi(double y, double x) {
 }
 
 inline uint32_t hash3(int32_t a, int32_t b, uint32_t seed) {
-  uint32_t h = static_cast<uint32_t>(a) * 0x8da6b343u ^ static_cast<uint32_t>(b) * 0xd8163841u ^ seed * 0xcb1ab31fu;
+  uint32_t h =
+      static_cast<uint32_t>(a) * 0x8da6b343u ^ static_cast<uint32_t>(b) * 0xd8163841u ^ seed * 0xcb1ab31fu;
   h ^= h >> 13;
   h *= 0x5bd1e995u;
   h ^= h >> 15;
@@ -245,8 +247,8 @@ class ColonScene final : public Scene {
   // Analytic surface (used once, to fill the tables). Returns R and, via out-params, material.
   double analytic_radius(double z, double phi, double* polyp_weight) const {
     const double R0 = p_.radius_mm;
-    double r = R0 + 2.5 * std::sin(kTwoPi * 2 * z / kPeriod + 0.7) +
-               1.0 * std::sin(2 * phi + kTwoPi * z / kPeriod);
+    double r =
+        R0 + 2.5 * std::sin(kTwoPi * 2 * z / kPeriod + 0.7) + 1.0 * std::sin(2 * phi + kTwoPi * z / kPeriod);
     // Haustral folds: ten per period, semilunar (three crescents between the taeniae), wavy.
     const double spacing = kPeriod / 10;
     const int k0 = static_cast<int>(std::floor(z / spacing));
@@ -273,12 +275,15 @@ class ColonScene final : public Scene {
 
   void build_tables() {
     // {z mm, phi, base radius mm, height mm}: within sight of a dome at z = 0, spread around.
-    polyps_ = {{12, deg2rad(40), 6.0, 5.0}, {24, deg2rad(165), 5.0, 4.5}, {33, deg2rad(275), 7.0, 6.0},
+    polyps_ = {{12, deg2rad(40), 6.0, 5.0},
+               {24, deg2rad(165), 5.0, 4.5},
+               {33, deg2rad(275), 7.0, 6.0},
                {58, deg2rad(105), 5.5, 4.5}};
     radius_.assign(geo_.size(), 0);
     tbb::parallel_for(0, geo_.nz, [&](int iz) {
       for (int ip = 0; ip < geo_.nphi; ++ip)
-        radius_[geo_.idx(iz, ip)] = static_cast<float>(analytic_radius(iz * geo_.dz, ip * geo_.dphi, nullptr));
+        radius_[geo_.idx(iz, ip)] =
+            static_cast<float>(analytic_radius(iz * geo_.dz, ip * geo_.dphi, nullptr));
     });
     albedo_.assign(tex_.size(), cv::Vec3f());
     const uint32_t seed = p_.seed;
@@ -316,9 +321,9 @@ class ColonScene final : public Scene {
     slope_.resize(radius_.size());
     for (int iz = 0; iz < g.nz; ++iz)
       for (int ip = 0; ip < g.nphi; ++ip)
-        slope_[g.idx(iz, ip)] =
-            cv::Vec2f(static_cast<float>((radius_[g.idx(iz + 1, ip)] - radius_[g.idx(iz - 1, ip)]) / (2 * g.dz)),
-                      static_cast<float>((radius_[g.idx(iz, ip + 1)] - radius_[g.idx(iz, ip - 1)]) / (2 * g.dphi)));
+        slope_[g.idx(iz, ip)] = cv::Vec2f(
+            static_cast<float>((radius_[g.idx(iz + 1, ip)] - radius_[g.idx(iz - 1, ip)]) / (2 * g.dz)),
+            static_cast<float>((radius_[g.idx(iz, ip + 1)] - radius_[g.idx(iz, ip - 1)]) / (2 * g.dphi)));
     r_min_ = 1e9;
     for (float r : radius_) r_min_ = std::min(r_min_, static_cast<double>(r));
     r_min_ -= 0.01;
@@ -330,7 +335,8 @@ class ColonScene final : public Scene {
       for (int ip = 0; ip < g.nphi; ++ip) {
         const double r = radius_[g.idx(iz, ip)];
         const double sz =
-            std::max(std::abs(radius_[g.idx(iz + 1, ip)] - r), std::abs(radius_[g.idx(iz - 1, ip)] - r)) / g.dz;
+            std::max(std::abs(radius_[g.idx(iz + 1, ip)] - r), std::abs(radius_[g.idx(iz - 1, ip)] - r)) /
+            g.dz;
         lz[b] = std::max(lz[b], sz);
         lphi[b] = std::max(lphi[b], std::abs(radius_[g.idx(iz, ip + 1)] - r) / g.dphi);
         rmin[b] = std::min(rmin[b], r);
@@ -374,8 +380,8 @@ class ColonScene final : public Scene {
 
   ColonParams p_;
   std::vector<Polyp> polyps_;
-  TableGrid geo_;  // radius and slopes (kGeoCell)
-  TableGrid tex_;  // albedo (kTexCell)
+  TableGrid geo_;                 // radius and slopes (kGeoCell)
+  TableGrid tex_;                 // albedo (kTexCell)
   std::vector<cv::Vec2f> slope_;  // dR/dz (mm/mm), dR/dphi (mm/rad), central differences
   std::vector<float> radius_;
   std::vector<cv::Vec3f> albedo_;
@@ -395,7 +401,9 @@ class ColonScene final : public Scene {
 class SharedScene final : public Scene {
  public:
   explicit SharedScene(std::shared_ptr<const Scene> s) : s_(std::move(s)) {}
-  cv::Vec3f radiance(const Vec3& o, const Vec3& d, const Vec3& l) const override { return s_->radiance(o, d, l); }
+  cv::Vec3f radiance(const Vec3& o, const Vec3& d, const Vec3& l) const override {
+    return s_->radiance(o, d, l);
+  }
   double distance(const Vec3& o, const Vec3& d) const override { return s_->distance(o, d); }
   std::string spec() const override { return s_->spec(); }
 
@@ -419,6 +427,5 @@ std::unique_ptr<Scene> make_colon_scene(const ColonParams& params) {
   }
   return std::make_unique<SharedScene>(last);
 }
-
 
 }  // namespace omma::sim

@@ -29,8 +29,7 @@ std::vector<cv::Mat> views_of_panorama(const Rig& rig, const cv::Mat& pano, doub
   std::vector<cv::Mat> out;
   for (const cv::Mat& map : panorama_to_camera_maps(rig, pano.size(), yaw_rad)) {
     cv::Mat v;
-    cv::remap(pano, v, map, cv::noArray(), cv::INTER_LINEAR,
-              cv::BORDER_WRAP);
+    cv::remap(pano, v, map, cv::noArray(), cv::INTER_LINEAR, cv::BORDER_WRAP);
     out.push_back(v);
   }
   return out;

@@ -19,7 +19,8 @@ PerturbSpec parse_perturb(const std::string& text) {
   while (std::getline(ss, item, ',')) {
     const auto eq = item.find('=');
     if (eq == std::string::npos)
-      throw std::invalid_argument(fmt::format("perturb item '{}' must be KEY=VALUE (keys: orient, focal, center, k1, pos)", item));
+      throw std::invalid_argument(
+          fmt::format("perturb item '{}' must be KEY=VALUE (keys: orient, focal, center, k1, pos)", item));
     const std::string key = item.substr(0, eq), val = item.substr(eq + 1);
     double v = 0;
     try {
@@ -35,23 +36,29 @@ PerturbSpec parse_perturb(const std::string& text) {
         throw std::invalid_argument(fmt::format("perturb item '{}': {} must be in [0, {}]", item, key, max));
       return v;
     };
-    if (key == "orient") p.orient_deg = magnitude(45);
-    else if (key == "focal") p.focal_rel = magnitude(0.5);
-    else if (key == "center") p.center_px = magnitude(1000);
-    else if (key == "pos") p.position_mm = magnitude(100);
+    if (key == "orient")
+      p.orient_deg = magnitude(45);
+    else if (key == "focal")
+      p.focal_rel = magnitude(0.5);
+    else if (key == "center")
+      p.center_px = magnitude(1000);
+    else if (key == "pos")
+      p.position_mm = magnitude(100);
     else if (key == "k1") {
-      if (std::abs(v) > 1) throw std::invalid_argument(fmt::format("perturb item '{}': |k1| must be <= 1", item));
+      if (std::abs(v) > 1)
+        throw std::invalid_argument(fmt::format("perturb item '{}': |k1| must be <= 1", item));
       p.k1 = v;
     } else {
-      throw std::invalid_argument(fmt::format("unknown perturb key '{}' (keys: orient, focal, center, k1, pos)", key));
+      throw std::invalid_argument(
+          fmt::format("unknown perturb key '{}' (keys: orient, focal, center, k1, pos)", key));
     }
   }
   return p;
 }
 
 std::string to_string(const PerturbSpec& p) {
-  return fmt::format("orient={},focal={},center={},k1={},pos={}", p.orient_deg, p.focal_rel, p.center_px, p.k1,
-                     p.position_mm);
+  return fmt::format("orient={},focal={},center={},k1={},pos={}", p.orient_deg, p.focal_rel, p.center_px,
+                     p.k1, p.position_mm);
 }
 
 namespace {

@@ -23,7 +23,9 @@ struct PerturbSpec {
   double center_px = 0;
   double k1 = 0;
   double position_mm = 0;
-  bool any() const { return orient_deg != 0 || focal_rel != 0 || center_px != 0 || k1 != 0 || position_mm != 0; }
+  bool any() const {
+    return orient_deg != 0 || focal_rel != 0 || center_px != 0 || k1 != 0 || position_mm != 0;
+  }
 };
 
 // Parses "orient=0.5,focal=0.02,center=3,k1=-0.05,pos=0.1"; "" gives no perturbation. Throws

@@ -91,7 +91,8 @@ Photometric true_photometric(const RigCamera& camera, const CameraEffects& e, do
     for (int r = 0; r < H; ++r)
       for (int c = 0; c < W; ++c)
         mx = std::max(mx, std::abs(vignetting_falloff(p, W, H, c + 0.5, r + 0.5) /
-                                       true_falloff(camera, e, Vec2(c + 0.5, r + 0.5)) - 1));
+                                       true_falloff(camera, e, Vec2(c + 0.5, r + 0.5)) -
+                                   1));
     *max_error = mx;
   }
   return p;
@@ -133,10 +134,17 @@ cv::Mat bayer_rggb(const cv::Mat& bgr) {
       // BGR channel index: R = 2, G = 1, B = 0.
       const int k = (r % 2 == 0) ? (c % 2 == 0 ? 2 : 1) : (c % 2 == 0 ? 1 : 0);
       switch (out.depth()) {
-        case CV_8U: out.at<uchar>(r, c) = ch[k].at<uchar>(r, c); break;
-        case CV_16U: out.at<uint16_t>(r, c) = ch[k].at<uint16_t>(r, c); break;
-        case CV_32F: out.at<float>(r, c) = ch[k].at<float>(r, c); break;
-        default: throw std::invalid_argument("bayer_rggb: unsupported depth");
+        case CV_8U:
+          out.at<uchar>(r, c) = ch[k].at<uchar>(r, c);
+          break;
+        case CV_16U:
+          out.at<uint16_t>(r, c) = ch[k].at<uint16_t>(r, c);
+          break;
+        case CV_32F:
+          out.at<float>(r, c) = ch[k].at<float>(r, c);
+          break;
+        default:
+          throw std::invalid_argument("bayer_rggb: unsupported depth");
       }
     }
   return out;
@@ -185,7 +193,8 @@ CameraFrame apply_sensor(const cv::Mat& radiance, const RigCamera& camera, const
   tbb::parallel_for(tbb::blocked_range<int>(0, H, 4), [&](const tbb::blocked_range<int>& rows) {
     for (int r = rows.begin(); r < rows.end(); ++r) {
       // Shot 0 keeps the single-exposure noise of earlier versions; later shots mix their index in.
-      const uint64_t noise_seed = e.shot == 0 ? e.seed : mix(e.seed, 0x73686f74ull, static_cast<uint64_t>(e.shot));
+      const uint64_t noise_seed =
+          e.shot == 0 ? e.seed : mix(e.seed, 0x73686f74ull, static_cast<uint64_t>(e.shot));
       std::mt19937_64 rng(mix(noise_seed, static_cast<uint64_t>(camera.id) + 1, static_cast<uint64_t>(r)));
       std::normal_distribution<double> normal(0.0, 1.0);
       const cv::Vec3f* src = radiance.ptr<cv::Vec3f>(r);
@@ -222,18 +231,27 @@ std::vector<CameraFrame> render_rig(const Scene& scene, const Rig& rig, const Do
                                     const CameraEffects& effects, bool want_raw) {
   check_effects(effects);
   std::vector<CameraFrame> frames(rig.cameras.size());
-  tbb::parallel_for(size_t{0}, rig.cameras.size(),
-                    [&](size_t i) { frames[i] = render_camera(scene, rig.cameras[i], pose, effects, want_raw); });
+  tbb::parallel_for(size_t{0}, rig.cameras.size(), [&](size_t i) {
+    frames[i] = render_camera(scene, rig.cameras[i], pose, effects, want_raw);
+  });
   return frames;
 }
 
 int auto_truth_supersample(const PanoGrid& grid) {
   double deg_per_px = 0;
   switch (grid.projection) {
-    case Projection::kEquirect: deg_per_px = std::max(360.0 / grid.width, 90.0 / grid.height); break;
-    case Projection::kVr180: deg_per_px = std::max(180.0 / grid.width, 180.0 / grid.height); break;
-    case Projection::kEquirectFull: deg_per_px = std::max(360.0 / grid.width, 180.0 / grid.height); break;
-    case Projection::kEquirect100: deg_per_px = std::max(360.0 / grid.width, 100.0 / grid.height); break;
+    case Projection::kEquirect:
+      deg_per_px = std::max(360.0 / grid.width, 90.0 / grid.height);
+      break;
+    case Projection::kVr180:
+      deg_per_px = std::max(180.0 / grid.width, 180.0 / grid.height);
+      break;
+    case Projection::kEquirectFull:
+      deg_per_px = std::max(360.0 / grid.width, 180.0 / grid.height);
+      break;
+    case Projection::kEquirect100:
+      deg_per_px = std::max(360.0 / grid.width, 100.0 / grid.height);
+      break;
   }
   return std::clamp(static_cast<int>(std::ceil(deg_per_px / 0.09 - 1e-9)), 1, 4);
 }
@@ -269,7 +287,8 @@ cv::Mat render_truth_depth(const Scene& scene, const PanoGrid& grid, const DomeP
   tbb::parallel_for(0, grid.height, [&](int r) {
     float* dst = out.ptr<float>(r);
     for (int c = 0; c < grid.width; ++c)
-      dst[c] = static_cast<float>(scene.distance(pose.translation_mm, pose.rotation * grid.pixel_direction(c, r)));
+      dst[c] =
+          static_cast<float>(scene.distance(pose.translation_mm, pose.rotation * grid.pixel_direction(c, r)));
   });
   return out;
 }

@@ -34,15 +34,15 @@ struct DomePose {
 };
 
 struct CameraEffects {
-  int supersample = 3;            // N: N x N rays per pixel (optical blur); 1 = one ray at the centre
-  double exposure = 1.0;          // scales the radiance before the sensor
-  double vignetting = 0.5;        // strength in [0, 1]: V = 1 - strength (1 - cos^4 a)
-  double color_gain = 0.10;       // per-channel gains uniform in [1 - g, 1 + g]; 0 = none
+  int supersample = 3;                 // N: N x N rays per pixel (optical blur); 1 = one ray at the centre
+  double exposure = 1.0;               // scales the radiance before the sensor
+  double vignetting = 0.5;             // strength in [0, 1]: V = 1 - strength (1 - cos^4 a)
+  double color_gain = 0.10;            // per-channel gains uniform in [1 - g, 1 + g]; 0 = none
   double full_scale_electrons = 4000;  // electrons at signal 1 (shot noise); 0 = no shot noise
-  double read_noise_dn = 2.0;     // read noise sigma in quantiser steps (DN); 0 = none
-  int bits = 10;                  // quantiser bits (8..16); 0 = no quantisation (float)
-  uint64_t seed = 1;              // noise and gains; the camera id is mixed in
-  int shot = 0;                   // exposure index of a static scene: fresh noise, the same gains
+  double read_noise_dn = 2.0;          // read noise sigma in quantiser steps (DN); 0 = none
+  int bits = 10;                       // quantiser bits (8..16); 0 = no quantisation (float)
+  uint64_t seed = 1;                   // noise and gains; the camera id is mixed in
+  int shot = 0;                        // exposure index of a static scene: fresh noise, the same gains
 
   // No vignetting, gains, noise or quantisation; keeps supersample.
   static CameraEffects ideal(int supersample = 1);
@@ -57,17 +57,18 @@ double true_falloff(const RigCamera& camera, const CameraEffects& effects, const
 // gains, and the vignetting polynomial fitted to true_falloff over the pixel centres (minimax in
 // the relative error, fit_vignetting; centred, so x = y = 0). The largest relative error |fit /
 // truth - 1| over the image in *max_error if given.
-Photometric true_photometric(const RigCamera& camera, const CameraEffects& effects, double* max_error = nullptr);
+Photometric true_photometric(const RigCamera& camera, const CameraEffects& effects,
+                             double* max_error = nullptr);
 
 // Mean linear radiance per pixel (CV_32FC3, camera size), before any sensor effect.
 cv::Mat render_radiance(const Scene& scene, const RigCamera& camera, const DomePose& pose = {},
                         int supersample = 3);
 
 struct CameraFrame {
-  cv::Mat signal;      // CV_32FC3 linear sensor signal in [0, 1] (quantised values q / (2^bits - 1))
-  cv::Mat image;       // CV_8UC3 sRGB-encoded frame, as written to DIR/cam_XX.png
-  cv::Mat raw;         // CV_16UC1 RGGB Bayer mosaic of the quantised signal (only if want_raw)
-  cv::Vec3d gains;     // the colour gains applied (BGR)
+  cv::Mat signal;   // CV_32FC3 linear sensor signal in [0, 1] (quantised values q / (2^bits - 1))
+  cv::Mat image;    // CV_8UC3 sRGB-encoded frame, as written to DIR/cam_XX.png
+  cv::Mat raw;      // CV_16UC1 RGGB Bayer mosaic of the quantised signal (only if want_raw)
+  cv::Vec3d gains;  // the colour gains applied (BGR)
 };
 
 // Renders one camera of the (possibly moved) dome. The engine animates a scene by calling this

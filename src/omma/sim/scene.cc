@@ -95,8 +95,9 @@ class CheckerScene final : public Scene {
     const Spherical sp = spherical_from_direction(p);
     const double td = rad2deg(sp.theta), pd = rad2deg(sp.phi);
     const int it = static_cast<int>(std::floor(td / 10)), ip = static_cast<int>(std::floor(pd / 10));
-    static const cv::Vec3f kColours[6] = {{0.60f, 0.15f, 0.10f}, {0.10f, 0.55f, 0.15f}, {0.12f, 0.15f, 0.65f},
-                                          {0.55f, 0.55f, 0.10f}, {0.55f, 0.10f, 0.50f}, {0.10f, 0.50f, 0.55f}};
+    static const cv::Vec3f kColours[6] = {{0.60f, 0.15f, 0.10f}, {0.10f, 0.55f, 0.15f},
+                                          {0.12f, 0.15f, 0.65f}, {0.55f, 0.55f, 0.10f},
+                                          {0.55f, 0.10f, 0.50f}, {0.10f, 0.50f, 0.55f}};
     cv::Vec3f c0 = ((it + ip) % 2 == 0) ? cv::Vec3f(0.8f, 0.8f, 0.8f) : kColours[(hash_cell(it, ip)) % 6];
     // Fine dark lines every 2 degrees (detail for resolution / blur checks).
     const double ft = std::fmod(td, 2.0), fp = std::fmod(pd, 2.0);
@@ -126,9 +127,12 @@ class UsafScene final : public Scene {
     const double s = (distance_ - o.z()) / d.z();
     const Vec2 p(o.x() + s * d.x(), o.y() + s * d.y());
     switch (usaf_paint(p)) {
-      case UsafPaint::kOutside: return {0.18f, 0.18f, 0.18f};
-      case UsafPaint::kWhite: return {0.80f, 0.80f, 0.80f};
-      case UsafPaint::kBlack: return {0.03f, 0.03f, 0.03f};
+      case UsafPaint::kOutside:
+        return {0.18f, 0.18f, 0.18f};
+      case UsafPaint::kWhite:
+        return {0.80f, 0.80f, 0.80f};
+      case UsafPaint::kBlack:
+        return {0.03f, 0.03f, 0.03f};
     }
     return {0, 0, 0};
   }
@@ -173,9 +177,13 @@ std::unique_ptr<Scene> make_photo_scene(const std::string& path) {
   return std::make_unique<PhotoScene>(img, "photo:" + path);
 }
 
-std::unique_ptr<Scene> make_usaf_scene(double distance_mm) { return std::make_unique<UsafScene>(distance_mm); }
+std::unique_ptr<Scene> make_usaf_scene(double distance_mm) {
+  return std::make_unique<UsafScene>(distance_mm);
+}
 
-std::unique_ptr<Scene> make_checker_scene(double radius_mm) { return std::make_unique<CheckerScene>(radius_mm); }
+std::unique_ptr<Scene> make_checker_scene(double radius_mm) {
+  return std::make_unique<CheckerScene>(radius_mm);
+}
 
 std::unique_ptr<Scene> make_scene(const std::string& spec) {
   const auto colon = spec.find(':');
@@ -195,10 +203,11 @@ std::unique_ptr<Scene> make_scene(const std::string& spec) {
     return make_tube_scene(p);
   }
   if (kind == "flat") return make_flat_scene(has_arg ? parse_number(arg, spec) : 0.6);
-  throw SceneError(fmt::format(
-      "unknown scene '{}' (use photo:PATH, colon, usaf[:DISTANCE_MM], checker[:RADIUS_MM], tube[:DIAMETER_MM] or "
-      "flat[:LEVEL])",
-      spec));
+  throw SceneError(
+      fmt::format("unknown scene '{}' (use photo:PATH, colon, usaf[:DISTANCE_MM], checker[:RADIUS_MM], "
+                  "tube[:DIAMETER_MM] or "
+                  "flat[:LEVEL])",
+                  spec));
 }
 
 }  // namespace omma::sim

@@ -73,7 +73,8 @@ TEST(SimPhoto, IdealCameraMatchesPhotoResampled) {
   const RigCamera cam = test_camera(3, direction_from_spherical(deg2rad(60), deg2rad(100)), 128, 60, -0.08);
   const CameraFrame f = render_camera(*scene, cam, {}, CameraEffects::ideal(1));
   const CameraModel m = cam.model();
-  const cv::Mat ref = remap_photo(photo(), 128, 128, [&](int c, int r) { return m.unproject(Vec2(c + 0.5, r + 0.5)); });
+  const cv::Mat ref =
+      remap_photo(photo(), 128, 128, [&](int c, int r) { return m.unproject(Vec2(c + 0.5, r + 0.5)); });
   const double psnr = cv::PSNR(f.image, ref);
   EXPECT_GT(psnr, 35.0);
   // With 3x3 supersampling (optical blur) the image is close but not identical.
@@ -202,7 +203,8 @@ TEST(SimSensor, RawBayerMosaicIsRggb) {
   EXPECT_EQ(f.raw.at<uint16_t>(6, 7), std::lround(0.5 * 1023));
   EXPECT_EQ(f.raw.at<uint16_t>(7, 7), std::lround(0.2 * 1023));
   // The 8-bit frame is the sRGB encoding of the same quantised signal.
-  EXPECT_EQ(f.image.at<cv::Vec3b>(0, 0)[2], std::lround(255 * linear_to_srgb(std::lround(0.8 * 1023) / 1023.0f)));
+  EXPECT_EQ(f.image.at<cv::Vec3b>(0, 0)[2],
+            std::lround(255 * linear_to_srgb(std::lround(0.8 * 1023) / 1023.0f)));
 }
 
 TEST(SimSensor, NoiseStatisticsAsConfigured) {
@@ -343,8 +345,8 @@ TEST(SimUsaf, TruthResolutionFollowsThePanoramaPixelSize) {
   };
   const double px360 = 180.0 / 360, px900 = 180.0 / 900;
   const double coarse = limit_bar_deg(360), fine = limit_bar_deg(900);
-  std::printf("  truth USAF limit: %.3f deg/bar at 360 px (%.3f deg/px), %.3f at 900 px (%.3f deg/px)\n", coarse,
-              px360, fine, px900);
+  std::printf("  truth USAF limit: %.3f deg/bar at 360 px (%.3f deg/px), %.3f at 900 px (%.3f deg/px)\n",
+              coarse, px360, fine, px900);
   EXPECT_LT(fine, coarse);
   // A bar needs at least about one pixel, and about two pixels suffice (box-filtered truth).
   EXPECT_GE(coarse, 0.9 * px360);

@@ -1,8 +1,9 @@
 #include "omma/sim/simulate.h"
 
+#include <unistd.h>
+
 #include <chrono>
 #include <system_error>
-#include <unistd.h>
 
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
@@ -79,8 +80,8 @@ ColonCase colon_case(uint64_t seed) {
   return c;
 }
 
-
-nlohmann::json simulation_summary(const SimulateSummary& r, const SimulateOptions& o, const Scene& scene, int shot) {
+nlohmann::json simulation_summary(const SimulateSummary& r, const SimulateOptions& o, const Scene& scene,
+                                  int shot) {
   nlohmann::json cams = nlohmann::json::array();
   for (size_t i = 0; i < r.frames.size(); ++i) {
     const auto& c = r.true_rig.cameras[i];
@@ -95,47 +96,50 @@ nlohmann::json simulation_summary(const SimulateSummary& r, const SimulateOption
                     {"vignetting_fit_max_error", fit_err}});
   }
   const auto& e = o.effects;
-  return {{"format", "omma-sim"},
-          {"version", 1},
-          {"scene", scene.spec()},
-          {"seed", e.seed},
-          {"shot", shot},
-          {"shots", o.shots},
-          {"encoding", "srgb"},
-          {"effects",
-           {{"supersample", e.supersample},
-            {"exposure", e.exposure},
-            {"vignetting", e.vignetting},
-            {"color_gain", e.color_gain},
-            {"full_scale_electrons", e.full_scale_electrons},
-            {"read_noise_dn", e.read_noise_dn},
-            {"bits", e.bits}}},
-          {"perturb",
-           {{"orient_deg", o.perturb.orient_deg},
-            {"focal_rel", o.perturb.focal_rel},
-            {"center_px", o.perturb.center_px},
-            {"k1", o.perturb.k1},
-            {"pos_mm", o.perturb.position_mm}}},
-          {"truth",
-           o.truth ? nlohmann::json{{"projection", to_string(o.truth_grid.projection)},
-                                    {"width", o.truth_grid.width},
-                                    {"height", o.truth_grid.height},
-                                    {"depth", "truth_depth.tiff: float32 mm from the dome centre, inf = none"},
-                                    {"supersample", o.truth_supersample > 0 ? o.truth_supersample
-                                                                            : auto_truth_supersample(o.truth_grid)}}
-                   : nlohmann::json(nullptr)},
-          {"dome_translation_mm", {o.pose.translation_mm.x(), o.pose.translation_mm.y(), o.pose.translation_mm.z()}},
-          {"raw", o.raw},
-          {"cameras", cams},
-          {"cameras_ms", r.cameras_ms},
-          {"truth_ms", r.truth_ms}};
+  return {
+      {"format", "omma-sim"},
+      {"version", 1},
+      {"scene", scene.spec()},
+      {"seed", e.seed},
+      {"shot", shot},
+      {"shots", o.shots},
+      {"encoding", "srgb"},
+      {"effects",
+       {{"supersample", e.supersample},
+        {"exposure", e.exposure},
+        {"vignetting", e.vignetting},
+        {"color_gain", e.color_gain},
+        {"full_scale_electrons", e.full_scale_electrons},
+        {"read_noise_dn", e.read_noise_dn},
+        {"bits", e.bits}}},
+      {"perturb",
+       {{"orient_deg", o.perturb.orient_deg},
+        {"focal_rel", o.perturb.focal_rel},
+        {"center_px", o.perturb.center_px},
+        {"k1", o.perturb.k1},
+        {"pos_mm", o.perturb.position_mm}}},
+      {"truth",
+       o.truth
+           ? nlohmann::json{{"projection", to_string(o.truth_grid.projection)},
+                            {"width", o.truth_grid.width},
+                            {"height", o.truth_grid.height},
+                            {"depth", "truth_depth.tiff: float32 mm from the dome centre, inf = none"},
+                            {"supersample", o.truth_supersample > 0 ? o.truth_supersample
+                                                                    : auto_truth_supersample(o.truth_grid)}}
+           : nlohmann::json(nullptr)},
+      {"dome_translation_mm",
+       {o.pose.translation_mm.x(), o.pose.translation_mm.y(), o.pose.translation_mm.z()}},
+      {"raw", o.raw},
+      {"cameras", cams},
+      {"cameras_ms", r.cameras_ms},
+      {"truth_ms", r.truth_ms}};
 }
 
 namespace {
 
 // Writes one shot's frames folder into `target` (which exists).
-void write_shot(const fs::path& target, const SimulateSummary& r, const SimulateOptions& o, const Scene& scene,
-                int shot) {
+void write_shot(const fs::path& target, const SimulateSummary& r, const SimulateOptions& o,
+                const Scene& scene, int shot) {
   const std::vector<CameraFrame>& frames = shot == 0 ? r.frames : r.more_shots[size_t(shot - 1)];
   for (size_t i = 0; i < frames.size(); ++i) {
     const int id = r.true_rig.cameras[i].id;
@@ -160,7 +164,8 @@ void write_folder(const fs::path& dir, Write write) {
   if (fresh) {
     const fs::path parent = dir.has_parent_path() ? dir.parent_path() : fs::path(".");
     if (!fs::is_directory(parent))
-      throw IoError(fmt::format("cannot create '{}': folder '{}' does not exist", dir.string(), parent.string()));
+      throw IoError(
+          fmt::format("cannot create '{}': folder '{}' does not exist", dir.string(), parent.string()));
     target = parent / fmt::format(".{}.tmp-{}", dir.filename().string(), ::getpid());
     std::error_code ec;
     fs::remove_all(target, ec);
@@ -172,7 +177,9 @@ void write_folder(const fs::path& dir, Write write) {
     if (fresh) {
       std::error_code ec;
       fs::rename(target, dir, ec);
-      if (ec) throw IoError(fmt::format("cannot rename '{}' to '{}': {}", target.string(), dir.string(), ec.message()));
+      if (ec)
+        throw IoError(
+            fmt::format("cannot rename '{}' to '{}': {}", target.string(), dir.string(), ec.message()));
     }
   } catch (...) {
     if (fresh) {
@@ -185,13 +192,15 @@ void write_folder(const fs::path& dir, Write write) {
 
 }  // namespace
 
-void write_frames_folder(const fs::path& dir, const SimulateSummary& r, const SimulateOptions& o, const Scene& scene) {
+void write_frames_folder(const fs::path& dir, const SimulateSummary& r, const SimulateOptions& o,
+                         const Scene& scene) {
   write_folder(dir, [&](const fs::path& target) { write_shot(target, r, o, scene, 0); });
 }
 
 std::string shot_folder_name(int shot) { return fmt::format("shot_{:02d}", shot); }
 
-void write_shots_folder(const fs::path& dir, const SimulateSummary& r, const SimulateOptions& o, const Scene& scene) {
+void write_shots_folder(const fs::path& dir, const SimulateSummary& r, const SimulateOptions& o,
+                        const Scene& scene) {
   write_folder(dir, [&](const fs::path& target) {
     for (int k = 0; k <= static_cast<int>(r.more_shots.size()); ++k) {
       const fs::path sub = target / shot_folder_name(k);

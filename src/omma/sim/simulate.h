@@ -27,27 +27,27 @@
 namespace omma::sim {
 
 struct SimulateOptions {
-  CameraEffects effects;                                 // effects.seed is the simulation seed
-  PerturbSpec perturb;                                   // errors of the true rig (none by default)
-  PanoGrid truth_grid{Projection::kVr180, 1080, 1080};   // grid of truth.png
-  int truth_supersample = 0;                             // N x N rays per truth pixel; 0: auto_truth_supersample
-  bool truth = true;                                     // render the truth at all
-  bool raw = false;                                      // also produce Bayer raw frames
-  DomePose pose;                                         // where the dome is in the scene
-  bool progress = true;                                  // progress bar on stderr
-  int shots = 1;                                         // exposures of the static scene (>= 1)
+  CameraEffects effects;                                // effects.seed is the simulation seed
+  PerturbSpec perturb;                                  // errors of the true rig (none by default)
+  PanoGrid truth_grid{Projection::kVr180, 1080, 1080};  // grid of truth.png
+  int truth_supersample = 0;  // N x N rays per truth pixel; 0: auto_truth_supersample
+  bool truth = true;          // render the truth at all
+  bool raw = false;           // also produce Bayer raw frames
+  DomePose pose;              // where the dome is in the scene
+  bool progress = true;       // progress bar on stderr
+  int shots = 1;              // exposures of the static scene (>= 1)
 
   // False (with the reason in *why) when a value lies outside the range the code relies on.
   bool IsValid(std::string* why = nullptr) const;
 };
 
 struct SimulateSummary {
-  Rig nominal;                      // the rig given
-  Rig true_rig;                     // the rig rendered (perturbed)
-  std::vector<CameraFrame> frames;  // in rig order (shot 0)
+  Rig nominal;                                       // the rig given
+  Rig true_rig;                                      // the rig rendered (perturbed)
+  std::vector<CameraFrame> frames;                   // in rig order (shot 0)
   std::vector<std::vector<CameraFrame>> more_shots;  // shots 1 .. shots-1, each in rig order
-  cv::Mat truth;                    // CV_8UC3 sRGB (empty if options.truth is false)
-  cv::Mat truth_depth;              // CV_32FC1 mm (render_truth_depth; empty if options.truth is false)
+  cv::Mat truth;                                     // CV_8UC3 sRGB (empty if options.truth is false)
+  cv::Mat truth_depth;  // CV_32FC1 mm (render_truth_depth; empty if options.truth is false)
   double cameras_ms = 0, truth_ms = 0;
 };
 

@@ -12,7 +12,8 @@ namespace omma::sim {
 namespace {
 
 inline uint32_t hash2(int64_t a, int64_t b, uint32_t seed) {
-  uint64_t h = static_cast<uint64_t>(a) * 0x9e3779b97f4a7c15ull ^ static_cast<uint64_t>(b) * 0xc2b2ae3d27d4eb4full ^
+  uint64_t h = static_cast<uint64_t>(a) * 0x9e3779b97f4a7c15ull ^
+               static_cast<uint64_t>(b) * 0xc2b2ae3d27d4eb4full ^
                (uint64_t(seed) + 1) * 0x165667b19e3779f9ull;
   h ^= h >> 31;
   h *= 0xbf58476d1ce4e5b9ull;
@@ -40,8 +41,8 @@ class TubeScene final : public Scene {
  public:
   explicit TubeScene(const TubeParams& p) : p_(p) {
     if (!(p.diameter_mm > 2 * 5.5) || !std::isfinite(p.diameter_mm) || p.diameter_mm > 1000)
-      throw SceneError(fmt::format("tube scene: diameter must be 11..1000 mm (the dome has a 5 mm radius), got {}",
-                                   p.diameter_mm));
+      throw SceneError(fmt::format(
+          "tube scene: diameter must be 11..1000 mm (the dome has a 5 mm radius), got {}", p.diameter_mm));
     if (!(p.length_mm > 0) || !(p.back_mm > 0) || !(p.brightness > 0))
       throw SceneError("tube scene: length, back and brightness must be positive");
     radius_ = p.diameter_mm / 2;
@@ -117,7 +118,9 @@ class FlatScene final : public Scene {
 
 }  // namespace
 
-std::unique_ptr<Scene> make_tube_scene(const TubeParams& params) { return std::make_unique<TubeScene>(params); }
+std::unique_ptr<Scene> make_tube_scene(const TubeParams& params) {
+  return std::make_unique<TubeScene>(params);
+}
 std::unique_ptr<Scene> make_flat_scene(double level) { return std::make_unique<FlatScene>(level); }
 
 }  // namespace omma::sim

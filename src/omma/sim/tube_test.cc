@@ -1,9 +1,10 @@
 // The calibration tube and the flat-field target (scene.h), several shots of a static scene
 // (simulate.h), and the simulator's true photometric model (render.h).
+#include <unistd.h>
+
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <unistd.h>
 
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
@@ -20,7 +21,8 @@ namespace {
 RigCamera side_camera(int id, const Vec3& t, int size = 128) {
   RigCamera c;
   c.id = id;
-  c.frame = frame_looking_at(t.normalized(), std::abs(t.normalized().z()) > 0.9 ? Vec3::UnitX() : Vec3(-Vec3::UnitZ()));
+  c.frame = frame_looking_at(t.normalized(),
+                             std::abs(t.normalized().z()) > 0.9 ? Vec3::UnitX() : Vec3(-Vec3::UnitZ()));
   c.position_mm = 5 * t.normalized();
   c.in.width = c.in.height = size;
   c.in.aov = deg2rad(64);
@@ -66,7 +68,8 @@ TEST(SimTube, HighContrastTextureAtEveryScale) {
     gray.convertTo(gray, CV_32F, 1.0 / 255);
     cv::Mat sorted = gray.reshape(1, 1).clone();
     cv::sort(sorted, sorted, cv::SORT_ASCENDING);
-    const float p5 = sorted.at<float>(int(sorted.total() * 0.05)), p95 = sorted.at<float>(int(sorted.total() * 0.95));
+    const float p5 = sorted.at<float>(int(sorted.total() * 0.05)),
+                p95 = sorted.at<float>(int(sorted.total() * 0.95));
     EXPECT_GT(p95 - p5, 0.5) << t.transpose();
     EXPECT_GT(band_std(gray, 0, 1), 0.02) << "finest band, " << t.transpose();
     EXPECT_GT(band_std(gray, 1, 3), 0.04) << t.transpose();
@@ -94,8 +97,8 @@ TEST(SimShots, SameGainsFreshNoiseOneFolderPerShot) {
     cv::Mat d = a.signal - b.signal;
     cv::Scalar mean, sd;
     cv::meanStdDev(d.reshape(1), mean, sd);
-    EXPECT_GT(sd[0], 1e-3);               // independent noise ...
-    EXPECT_LT(std::abs(mean[0]), 1e-3);   // ... of the same signal
+    EXPECT_GT(sd[0], 1e-3);              // independent noise ...
+    EXPECT_LT(std::abs(mean[0]), 1e-3);  // ... of the same signal
   }
   // Shot 0 is the single-shot simulation (same seed, same noise).
   o.shots = 1;

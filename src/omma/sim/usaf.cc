@@ -30,7 +30,8 @@ Layout make_layout() {
     const double b1 = 0.5 / usaf_lp_per_mm(g, 1);
     col_width.push_back(12 * b1);
     double h = 0;
-    for (int e = 1; e <= 6; ++e) h += (e > 1 ? 2 : 0) * (0.5 / usaf_lp_per_mm(g, e)) + 5 * (0.5 / usaf_lp_per_mm(g, e));
+    for (int e = 1; e <= 6; ++e)
+      h += (e > 1 ? 2 : 0) * (0.5 / usaf_lp_per_mm(g, e)) + 5 * (0.5 / usaf_lp_per_mm(g, e));
     col_height.push_back(h);
   }
   const double gap = 2.0;  // mm between columns
@@ -102,14 +103,17 @@ double luma_at(const cv::Mat& img, const PanoGrid& grid, double x, double y) {
   const double sx = x - 0.5, sy = std::clamp(y - 0.5, 0.0, img.rows - 1.0);
   const int x0f = static_cast<int>(std::floor(sx)), y0 = static_cast<int>(std::floor(sy));
   const double ax = sx - x0f, ay = sy - y0;
-  auto col = [&](int c) { return wrap ? ((c % img.cols) + img.cols) % img.cols : std::clamp(c, 0, img.cols - 1); };
+  auto col = [&](int c) {
+    return wrap ? ((c % img.cols) + img.cols) % img.cols : std::clamp(c, 0, img.cols - 1);
+  };
   const int xa = col(x0f), xb = col(x0f + 1), y1 = std::min(y0 + 1, img.rows - 1);
   auto px = [&](int r, int c) {
     if (img.channels() == 1) return static_cast<double>(img.at<float>(r, c));
     const cv::Vec3f v = img.at<cv::Vec3f>(r, c);
     return 0.114 * v[0] + 0.587 * v[1] + 0.299 * v[2];
   };
-  return (px(y0, xa) * (1 - ax) + px(y0, xb) * ax) * (1 - ay) + (px(y1, xa) * (1 - ax) + px(y1, xb) * ax) * ay;
+  return (px(y0, xa) * (1 - ax) + px(y0, xb) * ax) * (1 - ay) +
+         (px(y1, xa) * (1 - ax) + px(y1, xb) * ax) * ay;
 }
 
 }  // namespace
@@ -155,14 +159,15 @@ UsafMeasurement measure_usaf(const cv::Mat& pano, const PanoGrid& grid, double d
     for (int i = -2; i <= 2; ++i)
       for (int j = -3; j <= 3; ++j) {
         const double a = (k + 0.25 * i / 2) * b;  // across: within +-0.25 b of the centre
-        const double l = 1.5 * b * j / 3;          // along: within +-1.5 b (60 % of 5 b)
+        const double l = 1.5 * b * j / 3;         // along: within +-1.5 b (60 % of 5 b)
         sum += sample(across_x ? c + Vec2(a, l) : c + Vec2(l, a));
         ++n;
       }
     return sum / n;
   };
   auto contrast = [&](const Vec2& c, double b, bool across_x) {
-    const double bar = std::max({level(c, b, across_x, -2), level(c, b, across_x, 0), level(c, b, across_x, 2)});
+    const double bar =
+        std::max({level(c, b, across_x, -2), level(c, b, across_x, 0), level(c, b, across_x, 2)});
     const double gap = std::min(level(c, b, across_x, -1), level(c, b, across_x, 1));
     return (gap - bar) / std::max(gap + bar, 1e-9);
   };

@@ -21,11 +21,11 @@ namespace omma::sim {
 
 struct UsafElement {
   int group = 0;
-  int element = 1;             // 1..6
-  double lp_per_mm = 1;        // line pairs per mm, 2^(group + (element - 1) / 6)
-  double bar_mm = 0.5;         // bar width (= gap width) = 1 / (2 lp_per_mm); bar length = 5 bar_mm
-  Vec2 vertical_bars_mm;       // centre of the 3 vertical bars (a 5 x 5 bar_mm square)
-  Vec2 horizontal_bars_mm;     // centre of the 3 horizontal bars (a 5 x 5 bar_mm square)
+  int element = 1;          // 1..6
+  double lp_per_mm = 1;     // line pairs per mm, 2^(group + (element - 1) / 6)
+  double bar_mm = 0.5;      // bar width (= gap width) = 1 / (2 lp_per_mm); bar length = 5 bar_mm
+  Vec2 vertical_bars_mm;    // centre of the 3 vertical bars (a 5 x 5 bar_mm square)
+  Vec2 horizontal_bars_mm;  // centre of the 3 horizontal bars (a 5 x 5 bar_mm square)
 };
 
 // Line pairs per mm of USAF 1951 group/element.
@@ -48,12 +48,12 @@ Vec2 usaf_card_half_size_mm();
 // resolved in that direction if the modulation (Igap - Ibar) / (Igap + Ibar) >= min_contrast.
 struct UsafReading {
   UsafElement element;
-  double contrast_x = 0;    // vertical bars, detail along chart x
-  double contrast_y = 0;    // horizontal bars, detail along chart y
-  double bar_deg = 0;       // angle of one bar seen from the viewpoint, degrees
+  double contrast_x = 0;      // vertical bars, detail along chart x
+  double contrast_y = 0;      // horizontal bars, detail along chart y
+  double bar_deg = 0;         // angle of one bar seen from the viewpoint, degrees
   double bar_deg_centre = 0;  // atan(bar / distance): the thesis's figure (seen from the dome centre)
-  int camera = -1;          // index into `cameras` of the viewpoint used, -1: the dome centre
-  bool resolved = false;    // both directions reach min_contrast
+  int camera = -1;            // index into `cameras` of the viewpoint used, -1: the dome centre
+  bool resolved = false;      // both directions reach min_contrast
 };
 // Reading the limit: `limit` is the finest element resolved together with the next coarser one
 // (two in a row: an isolated pass is aliasing, an isolated failure of a large element is a seam

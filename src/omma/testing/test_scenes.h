@@ -161,16 +161,17 @@ inline Rig test_dome(int size = 250) {
   std::vector<Vec3> axes;
   for (int layer = 0; layer < 3; ++layer)
     for (int j = 0; j < counts[layer]; ++j)
-      axes.push_back(direction_from_spherical(deg2rad(thetas[layer]), 2 * kPi * (j + 0.5 * layer) / counts[layer]));
+      axes.push_back(
+          direction_from_spherical(deg2rad(thetas[layer]), 2 * kPi * (j + 0.5 * layer) / counts[layer]));
   return design::radial_rig(axes, 5.0, design::ideal_intrinsics(deg2rad(64), size, size), false, "test",
                             "calib-test-24");
 }
 
 struct Perturbation {
-  double orient_deg = 2;   // RMS rotation angle per camera
-  double focal = 0.03;     // relative RMS focal change (fu and fv together)
-  double center_px = 5;    // RMS principal point displacement
-  double k1 = 0.05;        // RMS added k1
+  double orient_deg = 2;  // RMS rotation angle per camera
+  double focal = 0.03;    // relative RMS focal change (fu and fv together)
+  double center_px = 5;   // RMS principal point displacement
+  double k1 = 0.05;       // RMS added k1
 };
 
 inline Rig perturb(const Rig& nominal, const Perturbation& p, unsigned seed = 7) {
