@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include "omma/core/frames.h"
+#include "omma/sim/perturb.h"
 #include "omma/testing/test_scenes.h"
 #include "tests/cli/cli_util.h"
 
@@ -105,7 +106,7 @@ TEST(CalibCli, TexturelessFramesFailWithoutOutput) {
 
 TEST(CalibCli, PtoExportImportRoundTripAndBadInput) {
   const fs::path dir = temp_dir("calib-pto");
-  const Rig truth = testing::perturb(testing::test_dome(), {}, 3);
+  const Rig truth = sim::perturb_rig_rms(testing::test_dome(), testing::kCalibrationErrors, 3);
   save_rig(truth, dir / "rig.json");
   const RunResult e =
       run_omma("pto export " + (dir / "rig.json").string() + " " + (dir / "rig.pto").string() + " --json");

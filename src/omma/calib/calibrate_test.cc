@@ -16,6 +16,7 @@
 #include "omma/pano/stitch.h"
 #include "omma/sim/perturb.h"
 #include "omma/sim/simulate.h"
+#include "omma/testing/expect.h"
 #include "omma/testing/test_scenes.h"
 
 namespace omma::calib {
@@ -281,16 +282,7 @@ TEST(RigDiff, IdenticalRigsAndKnownRotation) {
   EXPECT_LT(diff_rigs(g, a, true).orientation_error_deg.max, 1e-6);
 }
 
-// The message of the std::invalid_argument f throws, or "" if it throws none.
-template <typename F>
-std::string refusal(F f) {
-  try {
-    f();
-  } catch (const std::invalid_argument& e) {
-    return e.what();
-  }
-  return "";
-}
+using testing::refusal;
 
 TEST(Options, FeatureOptionsRefuseBadValues) {
   FeatureOptions o;

@@ -19,6 +19,8 @@
 #include "omma/design/prototype.h"
 #include "omma/isp/photometric.h"
 #include "omma/pano/stitch.h"
+#include "omma/sim/perturb.h"
+#include "omma/testing/expect.h"
 #include "omma/testing/test_scenes.h"
 
 namespace omma::calib {
@@ -30,8 +32,8 @@ std::string strip_omma_comments(const std::string& text) {
 }
 
 Rig perturbed_k1_rig() {
-  testing::Perturbation p;
-  return testing::perturb(testing::test_dome(), p, 11);  // fu = fv, k1 only, shifted centres
+  // fu = fv, k1 only, shifted centres.
+  return sim::perturb_rig_rms(testing::test_dome(), testing::kCalibrationErrors, 11);
 }
 
 // nona's output: its alpha channel (if any) is returned as the coverage mask and removed from
@@ -371,16 +373,7 @@ TEST(Pto, NonaAppliesOurPhotometricModelLikeWeDo) {
   fs::remove_all(dir);
 }
 
-// The message of the std::invalid_argument f throws, or "" if it throws none.
-template <typename F>
-std::string refusal(F f) {
-  try {
-    f();
-  } catch (const std::invalid_argument& e) {
-    return e.what();
-  }
-  return "";
-}
+using testing::refusal;
 
 TEST(Options, PtoExportOptionsRefuseBadValues) {
   PtoExportOptions o;

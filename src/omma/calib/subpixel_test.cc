@@ -9,6 +9,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "omma/calib/calibrate.h"
+#include "omma/testing/expect.h"
 
 namespace omma::calib {
 namespace {
@@ -69,16 +70,7 @@ TEST(Subpixel, PatchOutsideTheImageGivesNothing) {
   EXPECT_FALSE(align_patch(a, Vec2(125, 125), a, h).has_value());
 }
 
-// The message of the std::invalid_argument f throws, or "" if it throws none.
-template <typename F>
-std::string refusal(F f) {
-  try {
-    f();
-  } catch (const std::invalid_argument& e) {
-    return e.what();
-  }
-  return "";
-}
+using testing::refusal;
 
 TEST(Options, SubpixelOptionsRefuseBadValues) {
   SubpixelOptions o;

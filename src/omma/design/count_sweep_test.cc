@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include "omma/design/svg_plot.h"
+#include "omma/testing/expect.h"
 
 namespace omma::design {
 namespace {
@@ -81,16 +82,7 @@ TEST(SvgPlot, NiceTicksAndEscaping) {
   EXPECT_EQ(count(svg, " M"), 2u);       // and breaks the line
 }
 
-// The message of the std::invalid_argument f throws, or "" if it throws none.
-template <typename F>
-std::string refusal(F f) {
-  try {
-    f();
-  } catch (const std::invalid_argument& e) {
-    return e.what();
-  }
-  return "";
-}
+using testing::refusal;
 
 TEST(CountSweep, OptionsRefuseBadValues) {
   CountSweepOptions p;

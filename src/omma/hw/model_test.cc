@@ -13,6 +13,7 @@
 #include "omma/hw/regmap.h"
 #include "omma/hw/throughput.h"
 #include "omma/hw/width_sweep.h"
+#include "omma/testing/expect.h"
 
 namespace omma::hw {
 namespace {
@@ -304,16 +305,7 @@ TEST(Config, BadWidthsNameTheField) {
   EXPECT_THROW(config_from_json(nlohmann::json{{"angle_bitz", 3}}), std::invalid_argument);
 }
 
-// The message of the std::invalid_argument f throws, or "" if it throws none.
-template <typename F>
-std::string refusal(F f) {
-  try {
-    f();
-  } catch (const std::invalid_argument& e) {
-    return e.what();
-  }
-  return "";
-}
+using testing::refusal;
 
 TEST(Options, ExportOptionsRefuseBadValues) {
   ExportOptions o;

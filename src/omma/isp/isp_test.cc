@@ -9,6 +9,8 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "omma/testing/expect.h"
+
 namespace omma::isp {
 namespace {
 
@@ -204,16 +206,7 @@ TEST(IspTableA1, RankingOnRealPhotos) {
   EXPECT_NEAR(bl.b, cvbl.b, 0.01);
 }
 
-// The message of the std::invalid_argument f throws, or "" if it throws none.
-template <typename F>
-std::string refusal(F f) {
-  try {
-    f();
-  } catch (const std::invalid_argument& e) {
-    return e.what();
-  }
-  return "";
-}
+using testing::refusal;
 
 TEST(Isp, OptionsRefuseBadValues) {
   IspOptions o;

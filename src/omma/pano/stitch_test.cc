@@ -10,6 +10,7 @@
 
 #include "omma/pano/maps.h"
 #include "omma/pano/quality.h"
+#include "omma/testing/expect.h"
 #include "omma/testing/test_scenes.h"
 
 namespace omma::pano {
@@ -205,16 +206,7 @@ TEST(PanoQuality, PsnrAndSsimOnKnownImages) {
   EXPECT_THROW(psnr_db(a, cv::Mat(10, 10, CV_32FC3)), std::invalid_argument);
 }
 
-// The message of the std::invalid_argument f throws, or "" if it throws none.
-template <typename F>
-std::string refusal(F f) {
-  try {
-    f();
-  } catch (const std::invalid_argument& e) {
-    return e.what();
-  }
-  return "";
-}
+using testing::refusal;
 
 TEST(Options, SearchOptionsRefuseBadValues) {
   SearchOptions o;

@@ -104,4 +104,26 @@ Rig perturb_rig(const Rig& nominal, const PerturbSpec& p, uint64_t seed) {
   return rig;
 }
 
+Rig perturb_rig_rms(const Rig& nominal, const PerturbSpec& p, uint64_t seed) {
+  std::mt19937 rng(static_cast<std::mt19937::result_type>(seed));
+  std::normal_distribution<double> g(0, 1);
+  Rig rig = nominal;
+  for (auto& c : rig.cameras) {
+    const Vec3 aa = Vec3(g(rng), g(rng), g(rng)) * deg2rad(p.orient_deg) / std::sqrt(3.0);
+    const Mat3 r = Eigen::AngleAxisd(aa.norm(), aa.normalized()).toRotationMatrix();
+    // Rotate the camera in its own frame: new rows = r * old rows.
+    const Mat3 m = r * c.frame.dome_to_camera();
+    c.frame.t = m.row(0).transpose();
+    c.frame.u = m.row(1).transpose();
+    c.frame.v = m.row(2).transpose();
+    const double s = 1 + p.focal_rel * g(rng);
+    c.in.fu *= s;
+    c.in.fv *= s;
+    c.in.cu += p.center_px / std::sqrt(2.0) * g(rng);
+    c.in.cv += p.center_px / std::sqrt(2.0) * g(rng);
+    c.in.k[0] += p.k1 * g(rng);
+  }
+  return rig;
+}
+
 }  // namespace omma::sim

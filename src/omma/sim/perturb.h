@@ -37,4 +37,11 @@ std::string to_string(const PerturbSpec& spec);
 // The true rig: a copy of `nominal` with every camera perturbed as above (validated).
 Rig perturb_rig(const Rig& nominal, const PerturbSpec& spec, uint64_t seed);
 
+// The same errors, but random in size: each drawn from a normal distribution whose RMS is the spec's
+// value (orientation: a rotation about a random axis with RMS angle orient_deg; focal: fu and fv
+// scaled by 1 + focal_rel * N(0, 1); centre: RMS displacement center_px; k1: k1 * N(0, 1) added;
+// position unchanged), all drawn in camera order from one generator seeded with `seed`. The name is
+// kept. The calibration tests' manufacturing errors.
+Rig perturb_rig_rms(const Rig& nominal, const PerturbSpec& rms, uint64_t seed);
+
 }  // namespace omma::sim

@@ -399,6 +399,7 @@ TEST(SimRender, MovingTheDomeRotatesWhatTheCamerasSee) {
 }  // namespace omma::sim
 
 #include "omma/design/prototype.h"
+#include "omma/testing/expect.h"
 
 namespace omma::sim {
 namespace {
@@ -419,16 +420,7 @@ TEST(SimPrototype, EveryCameraOfTheThesisDomeSeesThePhotoWhereItShould) {
   EXPECT_GT(worst, 35.0);
 }
 
-// The message of the std::invalid_argument f throws, or "" if it throws none.
-template <typename F>
-std::string refusal(F f) {
-  try {
-    f();
-  } catch (const std::invalid_argument& e) {
-    return e.what();
-  }
-  return "";
-}
+using testing::refusal;
 
 TEST(SimOptions, RefuseBadValues) {
   SimulateOptions o;

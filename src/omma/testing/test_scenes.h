@@ -1,13 +1,12 @@
 // Small exact renderers for tests.
 // Beside the full simulator (render.h, simulate.h) they render ideal, effect-free frames fast:
 //
-//   * a far-field environment given as a 360x180 equirectangular texture (PanoGrid kEquirectFull
-//     convention: phi = 2 pi x / W, theta = pi y / H), bilinear in the texture's own values,
-//     optionally with one near sphere of uniform colour in front of it (parallax), on a tiny
+//   * a far-field environment given as a 360x180 equirectangular texture (PanoGrid kEquirectFull,
+//     core/conventions.h (G1): x = equirect_x(phi, W), theta = pi y / H), bilinear in the texture's own
+//     values, optionally with one near sphere of uniform colour in front of it (parallax), on a tiny
 //     15-camera hemispherical rig (small_rig): the pano unit and CLI tests;
 //   * an equirect photo at infinity (cv::remap, bilinear, 8-bit) through any rig, with a 24-camera
-//     test dome (3 + 9 + 12, the thesis's layer counts) and a seeded normal perturbation (unlike
-//     perturb.h's exact magnitudes): the calibration and PTO tests.
+//     test dome (3 + 9 + 12, the thesis's layer counts): the calibration and PTO tests.
 //
 // Header-only on purpose (inline): test programs include it without linking anything new.
 #pragma once
@@ -28,6 +27,7 @@
 #include "omma/core/io.h"
 #include "omma/core/rig.h"
 #include "omma/design/dome.h"
+#include "omma/sim/perturb.h"
 
 namespace omma::testing {
 
@@ -167,34 +167,10 @@ inline Rig test_dome(int size = 250) {
                             "calib-test-24");
 }
 
-struct Perturbation {
-  double orient_deg = 2;  // RMS rotation angle per camera
-  double focal = 0.03;    // relative RMS focal change (fu and fv together)
-  double center_px = 5;   // RMS principal point displacement
-  double k1 = 0.05;       // RMS added k1
-};
-
-inline Rig perturb(const Rig& nominal, const Perturbation& p, unsigned seed = 7) {
-  std::mt19937 rng(seed);
-  std::normal_distribution<double> g(0, 1);
-  Rig rig = nominal;
-  for (auto& c : rig.cameras) {
-    const Vec3 aa = Vec3(g(rng), g(rng), g(rng)) * deg2rad(p.orient_deg) / std::sqrt(3.0);
-    const Mat3 r = Eigen::AngleAxisd(aa.norm(), aa.normalized()).toRotationMatrix();
-    // Rotate the camera in its own frame: new rows = r * old rows.
-    const Mat3 m = r * c.frame.dome_to_camera();
-    c.frame.t = m.row(0).transpose();
-    c.frame.u = m.row(1).transpose();
-    c.frame.v = m.row(2).transpose();
-    const double s = 1 + p.focal * g(rng);
-    c.in.fu *= s;
-    c.in.fv *= s;
-    c.in.cu += p.center_px / std::sqrt(2.0) * g(rng);
-    c.in.cv += p.center_px / std::sqrt(2.0) * g(rng);
-    c.in.k[0] += p.k1 * g(rng);
-  }
-  return rig;
-}
+// The calibration tests' manufacturing errors (RMS, sim::perturb_rig_rms): 2 deg orientation, 3 %
+// focal length, 5 px principal point, 0.05 k1.
+inline const sim::PerturbSpec kCalibrationErrors{
+    .orient_deg = 2, .focal_rel = 0.03, .center_px = 5, .k1 = 0.05};
 
 // The equirect photo (an equirect-full panorama, conventions.h (G1)), downsampled.
 inline cv::Mat load_photo(const std::string& path, int width = 2048) {
