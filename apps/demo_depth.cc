@@ -21,6 +21,60 @@
 
 namespace omma::app {
 
+namespace {
+
+// Boundaries against the true occlusion boundaries, each map at its best threshold: the thesis's
+// L_ob at infinity, L_ob on the estimated depth, and the estimate's own depth jumps (drawn in green on
+// the panorama with depth: boundary_depth.png).
+struct DepthBoundaries {
+  pano::BoundaryScore at_inf, with_depth, from_depth;
+  double th_inf = 0, th_depth = 0, th_jump = 0;
+};
+DepthBoundaries score_boundaries(const Rig& rig, const std::vector<cv::Mat>& frames, const PanoGrid& grid,
+                                 const cv::Mat& truth_depth, const cv::Mat& est_depth,
+                                 const cv::Mat& with_depth, const std::filesystem::path& dir) {
+  DepthBoundaries b;
+  const cv::Mat occl = pano::depth_discontinuities(truth_depth);
+  const int tol = std::max(1, grid.width / 270);
+  b.at_inf = pano::best_boundary_score(pano::boundary_map(rig, frames, grid), occl, tol, &b.th_inf);
+  b.with_depth =
+      pano::best_boundary_score(pano::boundary_map(rig, frames, grid, {}, est_depth), occl, tol, &b.th_depth);
+  const cv::Mat jumps = pano::depth_jump_map(est_depth);
+  b.from_depth = pano::best_boundary_score(jumps, occl, tol, &b.th_jump);
+  cv::Mat overlay = with_depth.clone();
+  cv::Mat grown;
+  cv::dilate(jumps > b.th_jump, grown, cv::Mat());
+  overlay.setTo(cv::Scalar(0, 255, 0), grown);
+  write_image(dir / "boundary_depth.png", overlay);
+  return b;
+}
+
+// The engine's depth-adaptive renderer on the same frames (depth every panorama): panoramas/s, PSNR
+// against the truth and against the reference stitch on the estimate (pano_mrf_engine_depth.png).
+struct EngineDepth {
+  double fps = 0, psnr_db = 0, vs_reference_db = 0;
+};
+EngineDepth engine_depth(const Rig& rig, const PanoGrid& grid, const std::vector<cv::Mat>& frames,
+                         const cv::Mat& truth, const cv::Mat& with_depth, const std::filesystem::path& dir) {
+  spdlog::info("demo: the engine's depth-adaptive renderer");
+  render::DepthRenderOptions dro;
+  dro.map.grid = grid;
+  dro.map.method = pano::Method::kMrf;
+  auto dr = std::make_shared<render::DepthRenderer>(rig, dro);
+  auto store = std::make_shared<render::FrameStore>(dr->layout());
+  for (size_t i = 0; i < frames.size(); ++i) store->set(int(i), frames[i]);
+  auto out = std::make_shared<cv::Mat>();
+  const bench::Workload w{"omma-mrf-depth", 0, [&] { dr->render(*store, frames, *out); }, {}};
+  EngineDepth e;
+  e.fps = bench::measure_fps(w, 2.0, 10);  // 2 s: single seconds vary by +-15 % on the 2-core machine
+  write_image(dir / "pano_mrf_engine_depth.png", *out);
+  e.psnr_db = pano::psnr_db(*out, truth);
+  e.vs_reference_db = render::psnr_u8(*out, with_depth);
+  return e;
+}
+
+}  // namespace
+
 DepthDemo run_depth_demo(const Rig& rig, const PanoGrid& grid, const std::vector<cv::Mat>& frames,
                          const cv::Mat& truth, const cv::Mat& truth_depth, const cv::Mat& pano_inf,
                          const std::filesystem::path& dir, bool progress) {
@@ -48,36 +102,12 @@ DepthDemo run_depth_demo(const Rig& rig, const PanoGrid& grid, const std::vector
   const pano::EvalSummary with_truth = pano::evaluate(to_u8(pano::stitch(rig, frames, opt)), truth, seam);
   const pano::DepthError derr = pano::depth_error(est.depth, truth_depth, 300);
 
-  // Boundaries against the true occlusion boundaries, each map at its best threshold.
-  const cv::Mat occl = pano::depth_discontinuities(truth_depth);
-  const int tol = std::max(1, grid.width / 270);
-  double th_inf = 0, th_depth = 0, th_jump = 0;
-  const pano::BoundaryScore b_inf =
-      pano::best_boundary_score(pano::boundary_map(rig, frames, grid), occl, tol, &th_inf);
-  const pano::BoundaryScore b_with =
-      pano::best_boundary_score(pano::boundary_map(rig, frames, grid, {}, est.depth), occl, tol, &th_depth);
-  const cv::Mat jumps = pano::depth_jump_map(est.depth);
-  const pano::BoundaryScore b_jump = pano::best_boundary_score(jumps, occl, tol, &th_jump);
-  cv::Mat overlay = with_depth.clone();
-  cv::Mat grown;
-  cv::dilate(jumps > th_jump, grown, cv::Mat());
-  overlay.setTo(cv::Scalar(0, 255, 0), grown);
-  write_image(dir / "boundary_depth.png", overlay);
+  const DepthBoundaries bd = score_boundaries(rig, frames, grid, truth_depth, est.depth, with_depth, dir);
+  const pano::BoundaryScore &b_inf = bd.at_inf, &b_with = bd.with_depth, &b_jump = bd.from_depth;
+  const double th_inf = bd.th_inf, th_depth = bd.th_depth, th_jump = bd.th_jump;
 
-  // The engine's depth-adaptive renderer on the same frames (depth every panorama).
-  spdlog::info("demo: the engine's depth-adaptive renderer");
-  render::DepthRenderOptions dro;
-  dro.map.grid = grid;
-  dro.map.method = pano::Method::kMrf;
-  auto dr = std::make_shared<render::DepthRenderer>(rig, dro);
-  auto store = std::make_shared<render::FrameStore>(dr->layout());
-  for (size_t i = 0; i < frames.size(); ++i) store->set(int(i), frames[i]);
-  auto out = std::make_shared<cv::Mat>();
-  const bench::Workload w{"omma-mrf-depth", 0, [&] { dr->render(*store, frames, *out); }, {}};
-  const double fps =
-      bench::measure_fps(w, 2.0, 10);  // 2 s: single seconds vary by +-15 % on the 2-core machine
-  write_image(dir / "pano_mrf_engine_depth.png", *out);
-  const double engine_psnr = pano::psnr_db(*out, truth), engine_vs_ref = render::psnr_u8(*out, with_depth);
+  const EngineDepth eng = engine_depth(rig, grid, frames, truth, with_depth, dir);
+  const double fps = eng.fps, engine_psnr = eng.psnr_db, engine_vs_ref = eng.vs_reference_db;
 
   DepthDemo d;
   const double closed = 100 * (estimate.psnr_db - sphere.psnr_db) / (with_truth.psnr_db - sphere.psnr_db);

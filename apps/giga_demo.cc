@@ -34,27 +34,21 @@
 namespace omma::app {
 namespace fs = std::filesystem;
 
-void run_giga_demo(const GigaDemoOptions& opts) {
-  set_json_mode(opts.json);
-  GigaDemoOptions o = opts;
-  if (o.scene.empty())
-    o.scene = fs::exists("../shared/data/lake.jpg") ? "photo:../shared/data/lake.jpg" : "checker:50000";
-  using clock = std::chrono::steady_clock;
-  const auto t0 = clock::now();
-  auto secs = [](clock::time_point a) { return std::chrono::duration<double>(clock::now() - a).count(); };
-  const Size2 size = parse_size(o.size);
-  if (o.frame_sets < 1 || o.frame_sets > 100) throw std::invalid_argument("--frame-sets must be 1..100");
-  const Rig nominal =
-      design::load_rig_or_builtin("gigaeye-44" + (o.mode == "full" ? std::string() : "-" + o.mode));
-  const sim::PerturbSpec spec = sim::parse_perturb(o.perturb);
-  const Rig truth_rig = sim::perturb_rig(nominal, spec, o.seed);
-  const fs::path dir = o.out;
-  if (fs::exists(dir) && !fs::is_directory(dir)) throw IoError("--out '" + o.out + "' is not a folder");
-  fs::create_directories(dir);
+namespace {
+
+using clock = std::chrono::steady_clock;
+double secs(clock::time_point a) { return std::chrono::duration<double>(clock::now() - a).count(); }
+
+// The report as it grows: Markdown for report.md and stdout, JSON for --json.
+struct GigaReport {
   std::string md = "# omma demo: Giga-Eye (thesis ch. 7)\n\n";
   nlohmann::json js;
+};
 
-  // 1. The plan of Table 7.2 (option 5): 44 cameras, 1296x972, 12 bit, 30 fps, 66 MHz, 17 min.
+void plan_section(GigaReport& r) {
+  std::string& md = r.md;
+  nlohmann::json& js = r.js;
+  // The plan of Table 7.2 (option 5): 44 cameras, 1296x972, 12 bit, 30 fps, 66 MHz, 17 min.
   const design::RecordingPlan plan = design::make_plan(design::plan_input(design::table71()[4]));
   md += fmt::format(
       "## Recording plan (Table 7.2)\n\n44 cameras 1296x972 at 30 fps, 12 bit: {:.2f} MiB/s per camera, "
@@ -67,8 +61,12 @@ void run_giga_demo(const GigaDemoOptions& opts) {
   js["plan"] = {{"feasible", plan.feasible()},
                 {"max_minutes", plan.max_minutes},
                 {"rig_gb_per_s", plan.rig_bytes_per_s / 1e9}};
+}
 
-  // 2. Coverage at 1 m and far away (Fig. 7.5).
+void coverage_section(const fs::path& dir, GigaReport& r) {
+  std::string& md = r.md;
+  nlohmann::json& js = r.js;
+  // Coverage at 1 m and far away (Fig. 7.5).
   md +=
       "## Coverage (Fig. 7.5)\n\n| distance | >= 2 cameras, polar | cameras there | max "
       "|\n|---|---|---|---|\n";
@@ -88,14 +86,18 @@ void run_giga_demo(const GigaDemoOptions& opts) {
                             {"max_cameras", st.max_cameras}};
   }
   md += "\n![coverage](coverage_inf.png)\n\n";
+}
 
-  // 3. The recording: 44 free-running cameras (the perturbed rig) delivering raw 12-bit frames at
-  // 2 fps. The simulator cannot render 44 cameras in real time on a small machine, so each camera
-  // replays its simulated raw frame (sensor noise, vignetting, gains; the scene stands still).
+// The recording: 44 free-running cameras (the perturbed rig) delivering raw 12-bit frames at 2 fps.
+// The simulator cannot render 44 cameras in real time on a small machine, so each camera replays its
+// simulated raw frame (sensor noise, vignetting, gains; the scene stands still). Returns its folder.
+fs::path recording_section(const GigaDemoOptions& o, const Rig& nominal, const Rig& truth_rig,
+                           const sim::Scene& scene, const fs::path& dir, GigaReport& r) {
+  std::string& md = r.md;
+  nlohmann::json& js = r.js;
   const fs::path rec_dir = dir / "recording";
   fs::remove_all(rec_dir);
   auto t = clock::now();
-  const auto scene = sim::make_scene(o.scene);
   sim::SimulateOptions sopt;
   sopt.raw = true;
   sopt.truth = false;
@@ -103,7 +105,7 @@ void run_giga_demo(const GigaDemoOptions& opts) {
   sopt.effects.bits = 12;
   sopt.effects.seed = o.seed;
   sopt.progress = !o.json;
-  const sim::SimulateSummary sr = sim::simulate(truth_rig, *scene, sopt);
+  const sim::SimulateSummary sr = sim::simulate(truth_rig, scene, sopt);
   std::vector<std::unique_ptr<live::CameraSource>> sources;
   for (const auto& f : sr.frames) sources.push_back(live::still_source(f.raw, 2, o.frame_sets));
   live::RecordOptions ro;
@@ -129,11 +131,17 @@ void run_giga_demo(const GigaDemoOptions& opts) {
   js["recording"] = {
       {"frame_sets", rec.frame_sets()}, {"complete_sets", rec.match().complete_sets}, {"seconds", secs(t)}};
 
-  // 4. Calibration from the first frames (far field: rotation only), against the true rig.
-  t = clock::now();
-  isp::IspOptions iso;
-  iso.bits = 12;
-  iso.srgb = true;
+  return rec_dir;
+}
+
+// Calibration from the first frame of every stream (far field: rotation only), against the true rig.
+calib::CalibrationSummary calibration_section(const io::RecordingReader& rec, const Rig& nominal,
+                                              const Rig& truth_rig, const sim::PerturbSpec& spec,
+                                              const isp::IspOptions& iso, const fs::path& dir,
+                                              GigaReport& r) {
+  std::string& md = r.md;
+  nlohmann::json& js = r.js;
+  const auto t = clock::now();
   // The first frame of every stream (the scene stands still).
   std::vector<cv::Mat> raws;
   for (int c = 0; c < rec.cameras(); ++c) {
@@ -169,13 +177,20 @@ void run_giga_demo(const GigaDemoOptions& opts) {
                        {"uncalibrated_ids", cal.uncalibrated_ids},
                        {"seconds", secs(t)}};
 
-  // 5. The 21.6 MP panoramas from the recording with the calibrated rig (BigTIFF), against the truth.
-  t = clock::now();
+  return cal;
+}
+
+// The 21.6 MP panoramas from the recording with the calibrated rig (BigTIFF), against the truth.
+void panorama_section(const io::RecordingReader& rec, const Rig& rig, const isp::IspOptions& iso,
+                      const sim::Scene& scene, const Size2& size, const fs::path& dir, clock::time_point t0,
+                      bool progress, GigaReport& r) {
+  std::string& md = r.md;
+  nlohmann::json& js = r.js;
   render::PanoRenderOptions po;
   po.grid = PanoGrid{Projection::kEquirect100, size.width, size.height};
   po.method = pano::Method::kMrf;
-  po.progress = !o.json;
-  render::PanoRenderer renderer(cal.rig, po);
+  po.progress = progress;
+  render::PanoRenderer renderer(rig, po);
   // The complete frame sets (a camera missing from a set would leave its part black).
   std::vector<int64_t> sets;
   for (int64_t s = 0; s < rec.frame_sets(); ++s) {
@@ -192,7 +207,7 @@ void run_giga_demo(const GigaDemoOptions& opts) {
   cv::Mat preview;
   cv::resize(pano, preview, cv::Size(small.width, small.height), 0, 0, cv::INTER_AREA);
   write_image(dir / "pano_preview.jpg", preview);
-  const cv::Mat truth = sim::render_truth(*scene, small, {}, 3);
+  const cv::Mat truth = sim::render_truth(scene, small, {}, 3);
   write_image(dir / "truth_preview.jpg", truth);
   const double psnr = pano::psnr_db(preview, truth);
   md += fmt::format(
@@ -208,6 +223,38 @@ void run_giga_demo(const GigaDemoOptions& opts) {
                     {"maps_s", renderer.maps_seconds()},
                     {"psnr_db_preview", psnr},
                     {"memory_bytes", renderer.memory().total()}};
+}
+
+}  // namespace
+
+void run_giga_demo(const GigaDemoOptions& opts) {
+  set_json_mode(opts.json);
+  GigaDemoOptions o = opts;
+  if (o.scene.empty())
+    o.scene = fs::exists("../shared/data/lake.jpg") ? "photo:../shared/data/lake.jpg" : "checker:50000";
+  const auto t0 = clock::now();
+  const Size2 size = parse_size(o.size);
+  if (o.frame_sets < 1 || o.frame_sets > 100) throw std::invalid_argument("--frame-sets must be 1..100");
+  const Rig nominal =
+      design::load_rig_or_builtin("gigaeye-44" + (o.mode == "full" ? std::string() : "-" + o.mode));
+  const sim::PerturbSpec spec = sim::parse_perturb(o.perturb);
+  const Rig truth_rig = sim::perturb_rig(nominal, spec, o.seed);
+  const fs::path dir = o.out;
+  if (fs::exists(dir) && !fs::is_directory(dir)) throw IoError("--out '" + o.out + "' is not a folder");
+  fs::create_directories(dir);
+  GigaReport r;
+  std::string& md = r.md;
+  nlohmann::json& js = r.js;
+  plan_section(r);
+  coverage_section(dir, r);
+
+  const auto scene = sim::make_scene(o.scene);
+  io::RecordingReader rec(recording_section(o, nominal, truth_rig, *scene, dir, r));
+  isp::IspOptions iso;
+  iso.bits = 12;
+  iso.srgb = true;
+  const calib::CalibrationSummary cal = calibration_section(rec, nominal, truth_rig, spec, iso, dir, r);
+  panorama_section(rec, cal.rig, iso, *scene, size, dir, t0, !o.json, r);
   js["seconds"] = secs(t0);
   write_text_atomically(dir / "report.md", md);
   if (o.json) {

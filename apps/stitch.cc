@@ -143,10 +143,9 @@ DepthChoice choose_depth(const std::string& spec, const Rig& rig, const std::vec
   return d;
 }
 
-void run_stitch(const StitchArgs& a) {
-  set_json_mode(a.json);
-  // Validate everything before any work or output.
-  const pano::Method method = pano::parse_method(a.method);
+// The panorama grid of --projection and --size (default: 1080x1080 vr180, 1920x512 equirect,
+// 1920x960 equirect-full and others).
+PanoGrid stitch_grid(const StitchArgs& a) {
   PanoGrid grid;
   grid.projection = parse_projection(a.projection);
   if (a.size.empty()) {
@@ -159,10 +158,12 @@ void run_stitch(const StitchArgs& a) {
     grid.width = s.width;
     grid.height = s.height;
   }
-  if (a.threshold < 0 || a.threshold > 1) throw std::invalid_argument("--threshold must be in [0, 1]");
-  const Rig rig = design::load_rig_or_builtin(a.rig);
-  if (rig.cameras.empty()) throw std::invalid_argument("rig " + a.rig + " has no cameras");
-  const bool photometric = has_photometric(rig) && !a.no_photometric;
+  return grid;
+}
+
+// The frames to stitch: raw mosaics developed (with the rig's photometric model in place of the flat
+// field and the white balance when it has one), or developed frames corrected by that model.
+std::vector<cv::Mat> stitch_frames(const StitchArgs& a, const Rig& rig, bool photometric) {
   std::vector<cv::Mat> frames;
   if (a.raw) {
     isp::IspOptions iso;
@@ -182,6 +183,19 @@ void run_stitch(const StitchArgs& a) {
     frames = load_frames(a.frames, rig);
     if (photometric) frames = isp::correct_frames(rig, frames);
   }
+  return frames;
+}
+
+void run_stitch(const StitchArgs& a) {
+  set_json_mode(a.json);
+  // Validate everything before any work or output.
+  const pano::Method method = pano::parse_method(a.method);
+  const PanoGrid grid = stitch_grid(a);
+  if (a.threshold < 0 || a.threshold > 1) throw std::invalid_argument("--threshold must be in [0, 1]");
+  const Rig rig = design::load_rig_or_builtin(a.rig);
+  if (rig.cameras.empty()) throw std::invalid_argument("rig " + a.rig + " has no cameras");
+  const bool photometric = has_photometric(rig) && !a.no_photometric;
+  const std::vector<cv::Mat> frames = stitch_frames(a, rig, photometric);
 
   std::filesystem::path depth_data;
   if (!a.depth_out.empty()) {

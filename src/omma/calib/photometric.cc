@@ -260,67 +260,76 @@ Photometric photometric_from_lens(const RigCamera& camera, const Lens& beta,
   return p;
 }
 
-PhotometricSummary calibrate_photometric(const Rig& rig, const std::vector<std::vector<cv::Mat>>& sets,
-                                         const PhotometricOptions& o) {
-  std::string why;
-  if (!o.IsValid(&why)) throw std::invalid_argument("photometric calibration: " + why);
-  check_sets(rig, sets, "photometric calibration");
-  const int n = static_cast<int>(rig.cameras.size());
-  if (n < 2) throw std::invalid_argument("photometric calibration: the rig needs at least 2 cameras");
-  std::vector<CameraModel> model(n);
-  for (int i = 0; i < n; ++i) model[i] = rig.cameras[i].model();
+namespace {
 
-  // 1. Samples from every overlapping pair of every set.
-  std::vector<Sample> samples;
-  PhotometricSummary res;
-  res.rig = rig;
-  std::vector<char> pair_used(size_t(n) * n, 0);
-  {
-    Progress progress("photometric: overlaps", sets.size() * size_t(n));
-    for (const auto& frames : sets) {
-      std::vector<Prepared> prep(n);
-      tbb::parallel_for(0, n, [&](int i) { prep[size_t(i)] = prepare(frames[size_t(i)], o); });
-      std::mutex mutex;
-      tbb::parallel_for(0, n, [&](int a) {
-        std::vector<Sample> mine;
-        const RigCamera& ca = rig.cameras[a];
-        for (int b = a + 1; b < n; ++b) {
-          const RigCamera& cb = rig.cameras[b];
-          if (ca.frame.t.dot(cb.frame.t) < std::cos(std::min(kPi * 0.9, ca.in.aov + 0.6))) continue;
-          std::vector<Sample> pair;
-          for (int r = o.grid_step_px / 2; r < ca.in.height; r += o.grid_step_px)
-            for (int c = o.grid_step_px / 2; c < ca.in.width; c += o.grid_step_px) {
-              const Vec2 pa(c + 0.5, r + 0.5);
-              if (!prep[a].usable.at<uint8_t>(r, c)) continue;
-              const Vec3 w = model[a].unproject(pa);
-              if (w.dot(cb.frame.t) <= 0.1) continue;
-              const auto pb = model[b].project(w);
-              if (!pb || pb->x() < 2 || pb->y() < 2 || pb->x() > cb.in.width - 2 ||
-                  pb->y() > cb.in.height - 2)
-                continue;
-              if (!usable_at(prep[b].usable, *pb)) continue;
-              Sample s;
-              s.a = a, s.b = b;
-              const cv::Vec3f va = prep[a].log.at<cv::Vec3f>(r, c), vb = bilinear(prep[b].log, *pb);
-              for (int k = 0; k < 3; ++k) s.la[k] = va[k], s.lb[k] = vb[k];
-              s.qa = tan2_angle(model[a], pa);
-              s.qb = tan2_angle(model[b], *pb);
-              pair.push_back(s);
-            }
-          if (pair.size() < 20) continue;
-          const size_t keep = std::min<size_t>(pair.size(), size_t(o.max_samples_per_pair));
-          for (size_t k = 0; k < keep; ++k) mine.push_back(pair[k * pair.size() / keep]);
-          std::lock_guard<std::mutex> lock(mutex);
-          pair_used[size_t(a) * n + b] = 1;
-        }
-        std::lock_guard<std::mutex> lock(mutex);
-        samples.insert(samples.end(), mine.begin(), mine.end());
-        progress.step();
-      });
+// The overlap samples of cameras a and b in one frame set (prepared): the usable pixels of a grid
+// in camera a (every grid_step_px pixels) that camera b sees usable too.
+std::vector<Sample> pair_samples(const Rig& rig, const std::vector<CameraModel>& model,
+                                 const std::vector<Prepared>& prep, const PhotometricOptions& o, int a,
+                                 int b) {
+  const RigCamera& ca = rig.cameras[a];
+  const RigCamera& cb = rig.cameras[b];
+  std::vector<Sample> pair;
+  for (int r = o.grid_step_px / 2; r < ca.in.height; r += o.grid_step_px)
+    for (int c = o.grid_step_px / 2; c < ca.in.width; c += o.grid_step_px) {
+      const Vec2 pa(c + 0.5, r + 0.5);
+      if (!prep[a].usable.at<uint8_t>(r, c)) continue;
+      const Vec3 w = model[a].unproject(pa);
+      if (w.dot(cb.frame.t) <= 0.1) continue;
+      const auto pb = model[b].project(w);
+      if (!pb || pb->x() < 2 || pb->y() < 2 || pb->x() > cb.in.width - 2 || pb->y() > cb.in.height - 2)
+        continue;
+      if (!usable_at(prep[b].usable, *pb)) continue;
+      Sample s;
+      s.a = a, s.b = b;
+      const cv::Vec3f va = prep[a].log.at<cv::Vec3f>(r, c), vb = bilinear(prep[b].log, *pb);
+      for (int k = 0; k < 3; ++k) s.la[k] = va[k], s.lb[k] = vb[k];
+      s.qa = tan2_angle(model[a], pa);
+      s.qb = tan2_angle(model[b], *pb);
+      pair.push_back(s);
     }
-    progress.finish();
+  return pair;
+}
+
+// The samples from every overlapping pair of every set (at most max_samples_per_pair per pair
+// and set); marks the pairs that gave samples in pair_used (n x n, a < b).
+std::vector<Sample> overlap_samples(const Rig& rig, const std::vector<CameraModel>& model,
+                                    const std::vector<std::vector<cv::Mat>>& sets,
+                                    const PhotometricOptions& o, std::vector<char>& pair_used) {
+  const int n = static_cast<int>(rig.cameras.size());
+  std::vector<Sample> samples;
+  Progress progress("photometric: overlaps", sets.size() * size_t(n));
+  for (const auto& frames : sets) {
+    std::vector<Prepared> prep(n);
+    tbb::parallel_for(0, n, [&](int i) { prep[size_t(i)] = prepare(frames[size_t(i)], o); });
+    std::mutex mutex;
+    tbb::parallel_for(0, n, [&](int a) {
+      std::vector<Sample> mine;
+      const RigCamera& ca = rig.cameras[a];
+      for (int b = a + 1; b < n; ++b) {
+        const RigCamera& cb = rig.cameras[b];
+        if (ca.frame.t.dot(cb.frame.t) < std::cos(std::min(kPi * 0.9, ca.in.aov + 0.6))) continue;
+        std::vector<Sample> pair = pair_samples(rig, model, prep, o, a, b);
+        if (pair.size() < 20) continue;
+        const size_t keep = std::min<size_t>(pair.size(), size_t(o.max_samples_per_pair));
+        for (size_t k = 0; k < keep; ++k) mine.push_back(pair[k * pair.size() / keep]);
+        std::lock_guard<std::mutex> lock(mutex);
+        pair_used[size_t(a) * n + b] = 1;
+      }
+      std::lock_guard<std::mutex> lock(mutex);
+      samples.insert(samples.end(), mine.begin(), mine.end());
+      progress.step();
+    });
   }
-  res.pairs = static_cast<int>(std::count(pair_used.begin(), pair_used.end(), 1));
+  progress.finish();
+  return samples;
+}
+
+// Per camera, whether it has at least min_samples samples (those that have not go to
+// res.uncalibrated_ids); sets res.samples_per_camera. Throws if fewer than 2 cameras have.
+std::vector<char> active_cameras(const Rig& rig, const std::vector<Sample>& samples,
+                                 const PhotometricOptions& o, PhotometricSummary& res) {
+  const int n = static_cast<int>(rig.cameras.size());
   res.samples_per_camera.assign(n, 0);
   for (const Sample& s : samples) ++res.samples_per_camera[s.a], ++res.samples_per_camera[s.b];
   std::vector<char> active(n, 0);
@@ -334,6 +343,82 @@ PhotometricSummary calibrate_photometric(const Rig& rig, const std::vector<std::
         "every "
         "camera needs {}): are the frames dark, saturated or flat, or does the rig not match them?",
         samples.size(), res.pairs, o.min_samples));
+  return active;
+}
+
+// The RMS overlap residual (log units) of the samples under log gains lg and lens falloff beta.
+double rms_log_residual(const std::vector<Sample>& samples, const std::vector<std::array<double, 3>>& lg,
+                        const Lens& beta) {
+  double s2 = 0;
+  for (const Sample& s : samples) {
+    double r[3] = {1, 1, 1};  // a falloff <= 0 (rejected by the solver) counts as a unit error
+    if (!OverlapCost{{s.la[0], s.la[1], s.la[2]}, {s.lb[0], s.lb[1], s.lb[2]}, s.qa, s.qb, 1.0}(
+            lg[s.a].data(), lg[s.b].data(), beta.data(), r))
+      r[0] = r[1] = r[2] = 1;
+    s2 += r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
+  }
+  return samples.empty() ? 0.0 : std::sqrt(s2 / (3.0 * samples.size()));
+}
+
+// Joint fit of the lens falloff beta and the log gains lg (per camera and channel, the mean over
+// the active cameras 0), starting from their values; throws if the solver fails.
+void fit_lens_and_gains(const std::vector<Sample>& samples, const std::vector<char>& active,
+                        const PhotometricOptions& o, std::vector<std::array<double, 3>>& lg, Lens& beta) {
+  const int n = static_cast<int>(active.size());
+  ceres::Problem problem;
+  for (const Sample& s : samples) {
+    // Dark samples are noisy in log units (and the log of a noisy value is biased): weight
+    // signal / sqrt(signal^2 + noise_signal^2) by the darkest channel of the two.
+    const double lo = std::exp(double(std::min({s.la[0], s.la[1], s.la[2], s.lb[0], s.lb[1], s.lb[2]})));
+    const double w = lo / std::sqrt(lo * lo + o.noise_signal * o.noise_signal);
+    auto* cost = new ceres::AutoDiffCostFunction<OverlapCost, 3, 3, 3, kLensTerms>(
+        new OverlapCost{{s.la[0], s.la[1], s.la[2]}, {s.lb[0], s.lb[1], s.lb[2]}, s.qa, s.qb, w});
+    problem.AddResidualBlock(cost, new ceres::CauchyLoss(o.loss_scale), lg[s.a].data(), lg[s.b].data(),
+                             beta.data());
+  }
+  auto* gauge = new GaugeCost;
+  auto* gcost = new ceres::DynamicAutoDiffCostFunction<GaugeCost>(gauge);
+  std::vector<double*> blocks;
+  for (int i = 0; i < n; ++i)
+    if (active[i]) {
+      gcost->AddParameterBlock(3);
+      blocks.push_back(lg[i].data());
+    }
+  gauge->n = static_cast<int>(blocks.size());
+  gcost->SetNumResiduals(3);
+  problem.AddResidualBlock(gcost, nullptr, blocks);
+  if (!o.estimate_vignetting) problem.SetParameterBlockConstant(beta.data());
+  ceres::Solver::Options so;
+  solver_options(o, &so);
+  so.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
+  if (!ceres::IsSparseLinearAlgebraLibraryTypeAvailable(ceres::SUITE_SPARSE) &&
+      !ceres::IsSparseLinearAlgebraLibraryTypeAvailable(ceres::EIGEN_SPARSE))
+    so.linear_solver_type = ceres::DENSE_QR;
+  ceres::Solver::Summary sum;
+  ceres::Solve(so, &problem, &sum);
+  if (!sum.IsSolutionUsable())
+    throw std::runtime_error("photometric calibration: the solver failed: " + sum.BriefReport());
+}
+
+}  // namespace
+
+PhotometricSummary calibrate_photometric(const Rig& rig, const std::vector<std::vector<cv::Mat>>& sets,
+                                         const PhotometricOptions& o) {
+  std::string why;
+  if (!o.IsValid(&why)) throw std::invalid_argument("photometric calibration: " + why);
+  check_sets(rig, sets, "photometric calibration");
+  const int n = static_cast<int>(rig.cameras.size());
+  if (n < 2) throw std::invalid_argument("photometric calibration: the rig needs at least 2 cameras");
+  std::vector<CameraModel> model(n);
+  for (int i = 0; i < n; ++i) model[i] = rig.cameras[i].model();
+
+  // 1. Samples from every overlapping pair of every set.
+  PhotometricSummary res;
+  res.rig = rig;
+  std::vector<char> pair_used(size_t(n) * n, 0);
+  std::vector<Sample> samples = overlap_samples(rig, model, sets, o, pair_used);
+  res.pairs = static_cast<int>(std::count(pair_used.begin(), pair_used.end(), 1));
+  const std::vector<char> active = active_cameras(rig, samples, o, res);
   samples.erase(std::remove_if(samples.begin(), samples.end(),
                                [&](const Sample& s) { return !active[s.a] || !active[s.b]; }),
                 samples.end());
@@ -350,54 +435,9 @@ PhotometricSummary calibrate_photometric(const Rig& rig, const std::vector<std::
   // 2. Joint fit of the lens falloff and the gains.
   std::vector<std::array<double, 3>> lg(n, {0, 0, 0});
   Lens beta{};
-  auto rms = [&]() {
-    double s2 = 0;
-    for (const Sample& s : samples) {
-      double r[3] = {1, 1, 1};  // a falloff <= 0 (rejected by the solver) counts as a unit error
-      if (!OverlapCost{{s.la[0], s.la[1], s.la[2]}, {s.lb[0], s.lb[1], s.lb[2]}, s.qa, s.qb, 1.0}(
-              lg[s.a].data(), lg[s.b].data(), beta.data(), r))
-        r[0] = r[1] = r[2] = 1;
-      s2 += r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
-    }
-    return samples.empty() ? 0.0 : std::sqrt(s2 / (3.0 * samples.size()));
-  };
-  res.initial_rms_log = rms();
-  {
-    ceres::Problem problem;
-    for (const Sample& s : samples) {
-      // Dark samples are noisy in log units (and the log of a noisy value is biased): weight
-      // signal / sqrt(signal^2 + noise_signal^2) by the darkest channel of the two.
-      const double lo = std::exp(double(std::min({s.la[0], s.la[1], s.la[2], s.lb[0], s.lb[1], s.lb[2]})));
-      const double w = lo / std::sqrt(lo * lo + o.noise_signal * o.noise_signal);
-      auto* cost = new ceres::AutoDiffCostFunction<OverlapCost, 3, 3, 3, kLensTerms>(
-          new OverlapCost{{s.la[0], s.la[1], s.la[2]}, {s.lb[0], s.lb[1], s.lb[2]}, s.qa, s.qb, w});
-      problem.AddResidualBlock(cost, new ceres::CauchyLoss(o.loss_scale), lg[s.a].data(), lg[s.b].data(),
-                               beta.data());
-    }
-    auto* gauge = new GaugeCost;
-    auto* gcost = new ceres::DynamicAutoDiffCostFunction<GaugeCost>(gauge);
-    std::vector<double*> blocks;
-    for (int i = 0; i < n; ++i)
-      if (active[i]) {
-        gcost->AddParameterBlock(3);
-        blocks.push_back(lg[i].data());
-      }
-    gauge->n = static_cast<int>(blocks.size());
-    gcost->SetNumResiduals(3);
-    problem.AddResidualBlock(gcost, nullptr, blocks);
-    if (!o.estimate_vignetting) problem.SetParameterBlockConstant(beta.data());
-    ceres::Solver::Options so;
-    solver_options(o, &so);
-    so.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
-    if (!ceres::IsSparseLinearAlgebraLibraryTypeAvailable(ceres::SUITE_SPARSE) &&
-        !ceres::IsSparseLinearAlgebraLibraryTypeAvailable(ceres::EIGEN_SPARSE))
-      so.linear_solver_type = ceres::DENSE_QR;
-    ceres::Solver::Summary sum;
-    ceres::Solve(so, &problem, &sum);
-    if (!sum.IsSolutionUsable())
-      throw std::runtime_error("photometric calibration: the solver failed: " + sum.BriefReport());
-  }
-  res.rms_log = rms();
+  res.initial_rms_log = rms_log_residual(samples, lg, beta);
+  fit_lens_and_gains(samples, active, o, lg, beta);
+  res.rms_log = rms_log_residual(samples, lg, beta);
   res.lens = beta;
   for (int i = 0; i < n; ++i) {
     double err = 0;

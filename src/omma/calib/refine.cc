@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include <Eigen/Eigenvalues>
 #include <opencv2/calib3d.hpp>
@@ -45,6 +46,142 @@ Eigen::Matrix2d whitening(const Eigen::Matrix2d& cov, double scale, double floor
   const Eigen::Vector2d ev = es.eigenvalues().cwiseMax(floor_px * floor_px);
   return scale *
          (es.eigenvectors() * ev.cwiseSqrt().cwiseInverse().asDiagonal() * es.eigenvectors().transpose());
+}
+
+// A scene point as one camera observed it: its pixel and its index into the scene points.
+struct Seen {
+  Vec2 px;
+  int point;
+};
+
+// A dense alignment job: a reference pixel, its scene plane and the cameras to find it in.
+struct DenseJob {
+  TrackObservation ref;
+  Vec3 x, normal;
+  std::vector<int> targets;
+};
+
+// One alignment of a dense job: the observation found and its covariance (px^2).
+struct Aligned {
+  TrackObservation obs;
+  Eigen::Matrix2d cov;
+};
+
+// The finite scene points of the solution (dome frame, mm), appended to pts, and per camera
+// where it observed them.
+std::vector<std::vector<Seen>> observed_points(const SolveState& st, int n, std::vector<Vec3>& pts) {
+  std::vector<std::vector<Seen>> seen(n);
+  for (size_t ti = 0; ti < st.tracks.size(); ++ti) {
+    const auto& p = st.points[ti];
+    if (std::abs(p[3]) < 1e-9) continue;
+    const Vec3 x = Vec3(p[0], p[1], p[2]) / p[3];
+    const int id = static_cast<int>(pts.size());
+    pts.push_back(x);
+    for (const auto& o : st.tracks[ti]) seen[o.cam].push_back({o.px, id});
+  }
+  return seen;
+}
+
+// The normal of the scene plane through the k nearest points d (squared distance, index into
+// pts): their smallest principal axis, or -ray when degenerate.
+Vec3 plane_normal(const std::vector<Vec3>& pts, const std::vector<std::pair<double, int>>& d, int k,
+                  const Vec3& ray) {
+  Vec3 normal = -ray;
+  if (k >= 4) {
+    Vec3 mean = Vec3::Zero();
+    for (int j = 0; j < k; ++j) mean += pts[d[j].second];
+    mean /= k;
+    Mat3 cov = Mat3::Zero();
+    for (int j = 0; j < k; ++j) cov += (pts[d[j].second] - mean) * (pts[d[j].second] - mean).transpose();
+    Eigen::SelfAdjointEigenSolver<Mat3> es(cov);
+    if (es.eigenvalues()(0) < 0.2 * es.eigenvalues()(1)) normal = es.eigenvectors().col(0);
+  }
+  return normal;
+}
+
+// The dense job of feature q of camera a (continuous px), its depth and plane from the nearest
+// observed scene points; nullopt if q is too near the border or too far from them, if another
+// camera sees it nearer its principal point, or if no other camera sees it.
+std::optional<DenseJob> dense_job(const Rig& rig, const std::vector<CameraModel>& model,
+                                  const std::vector<Vec3>& pts, const std::vector<Seen>& seen_a, int a,
+                                  const Vec2& q, const CalibrationOptions& opt, double margin) {
+  const int n = static_cast<int>(rig.cameras.size());
+  const RigCamera& ca = rig.cameras[a];
+  if (q.x() < margin || q.y() < margin || q.x() > ca.in.width - margin || q.y() > ca.in.height - margin)
+    return std::nullopt;
+  // The nearest observed scene points in this camera.
+  std::vector<std::pair<double, int>> d;
+  d.reserve(seen_a.size());
+  for (const Seen& sp : seen_a) d.emplace_back((sp.px - q).squaredNorm(), sp.point);
+  const int k = std::min<int>(opt.dense_neighbours, static_cast<int>(d.size()));
+  std::partial_sort(d.begin(), d.begin() + k, d.end());
+  if (d[0].first > opt.dense_max_gap_px * opt.dense_max_gap_px) return std::nullopt;
+  std::vector<double> depth;
+  for (int j = 0; j < k; ++j)
+    if (d[j].first <= 4 * d[0].first + 100) depth.push_back((pts[d[j].second] - ca.position_mm).norm());
+  std::nth_element(depth.begin(), depth.begin() + depth.size() / 2, depth.end());
+  const Vec3 ray = model[a].unproject(q);
+  const Vec3 x = ca.position_mm + depth[depth.size() / 2] * ray;
+  // Plane normal: smallest principal axis of the neighbours (the ray when degenerate).
+  const Vec3 normal = plane_normal(pts, d, k, ray);
+  // Reference camera: where the point lies nearest the principal point.
+  const double ra = (q - Vec2(ca.in.cu, ca.in.cv)).norm() / ca.in.fu;
+  DenseJob job{{a, q}, x, normal, {}};
+  bool is_ref = true;
+  for (int b = 0; b < n && is_ref; ++b) {
+    if (b == a) continue;
+    const RigCamera& cb = rig.cameras[b];
+    const Vec3 w = x - cb.position_mm;
+    if (!model[b].sees(w)) continue;
+    const auto pb = model[b].project(w);
+    if (!pb || pb->x() < margin || pb->y() < margin || pb->x() > cb.in.width - margin ||
+        pb->y() > cb.in.height - margin)
+      continue;
+    if ((*pb - Vec2(cb.in.cu, cb.in.cv)).norm() / cb.in.fu < ra) is_ref = false;
+    job.targets.push_back(b);
+  }
+  if (is_ref && !job.targets.empty()) return job;
+  return std::nullopt;
+}
+
+// The dense jobs of every feature of every camera that observed at least 3 scene points.
+std::vector<DenseJob> dense_jobs(const Rig& rig, const std::vector<CameraModel>& model,
+                                 const std::vector<CameraFeatures>& feats, const std::vector<Vec3>& pts,
+                                 const std::vector<std::vector<Seen>>& seen, const CalibrationOptions& opt,
+                                 double margin) {
+  const int n = static_cast<int>(rig.cameras.size());
+  std::vector<DenseJob> jobs;
+  for (int a = 0; a < n; ++a) {
+    if (seen[a].size() < 3) continue;
+    for (const Vec2& q : feats[a].px) {
+      auto job = dense_job(rig, model, pts, seen[a], a, q, opt, margin);
+      if (job) jobs.push_back(std::move(*job));
+    }
+  }
+  return jobs;
+}
+
+// Per job, the alignments of its reference patch (half-size half px) in its target cameras that
+// succeeded.
+std::vector<std::vector<Aligned>> align_dense_jobs(const Rig& rig, const std::vector<cv::Mat>& gray,
+                                                   const std::vector<DenseJob>& jobs,
+                                                   const SubpixelOptions& so, int half) {
+  std::vector<std::vector<Aligned>> done(jobs.size());
+  cv::parallel_for_(cv::Range(0, static_cast<int>(jobs.size())), [&](const cv::Range& r) {
+    for (int k = r.start; k < r.end; ++k) {
+      const DenseJob& job = jobs[k];
+      for (int b : job.targets) {
+        Eigen::Matrix3d h;
+        if (!plane_homography(rig.cameras[job.ref.cam], rig.cameras[b], job.ref.px, job.x, job.normal, half,
+                              &h))
+          continue;
+        AlignInfo info;
+        const auto p = align_patch(gray[job.ref.cam], job.ref.px, gray[b], h, so, &info);
+        if (p) done[k].push_back({{b, *p}, info.covariance});
+      }
+    }
+  });
+  return done;
 }
 
 }  // namespace
@@ -144,95 +281,11 @@ std::vector<std::vector<TrackObservation>> dense_tracks(const Rig& rig, const st
   for (int i = 0; i < n; ++i) model[i] = rig.cameras[i].model();
   // Scene points of the solution (finite ones) and, per camera, where it observed them.
   std::vector<Vec3> pts;
-  struct Seen {
-    Vec2 px;
-    int point;
-  };
-  std::vector<std::vector<Seen>> seen(n);
-  for (size_t ti = 0; ti < st.tracks.size(); ++ti) {
-    const auto& p = st.points[ti];
-    if (std::abs(p[3]) < 1e-9) continue;
-    const Vec3 x = Vec3(p[0], p[1], p[2]) / p[3];
-    const int id = static_cast<int>(pts.size());
-    pts.push_back(x);
-    for (const auto& o : st.tracks[ti]) seen[o.cam].push_back({o.px, id});
-  }
+  const std::vector<std::vector<Seen>> seen = observed_points(st, n, pts);
   const int half = so.patch_px / 2;
   const double margin = half + 2;
-  struct Job {
-    TrackObservation ref;
-    Vec3 x, normal;
-    std::vector<int> targets;
-  };
-  std::vector<Job> jobs;
-  for (int a = 0; a < n; ++a) {
-    const RigCamera& ca = rig.cameras[a];
-    if (seen[a].size() < 3) continue;
-    for (const Vec2& q : feats[a].px) {
-      if (q.x() < margin || q.y() < margin || q.x() > ca.in.width - margin || q.y() > ca.in.height - margin)
-        continue;
-      // The nearest observed scene points in this camera.
-      std::vector<std::pair<double, int>> d;
-      d.reserve(seen[a].size());
-      for (const Seen& sp : seen[a]) d.emplace_back((sp.px - q).squaredNorm(), sp.point);
-      const int k = std::min<int>(opt.dense_neighbours, static_cast<int>(d.size()));
-      std::partial_sort(d.begin(), d.begin() + k, d.end());
-      if (d[0].first > opt.dense_max_gap_px * opt.dense_max_gap_px) continue;
-      std::vector<double> depth;
-      for (int j = 0; j < k; ++j)
-        if (d[j].first <= 4 * d[0].first + 100) depth.push_back((pts[d[j].second] - ca.position_mm).norm());
-      std::nth_element(depth.begin(), depth.begin() + depth.size() / 2, depth.end());
-      const Vec3 ray = model[a].unproject(q);
-      const Vec3 x = ca.position_mm + depth[depth.size() / 2] * ray;
-      // Plane normal: smallest principal axis of the neighbours (the ray when degenerate).
-      Vec3 normal = -ray;
-      if (k >= 4) {
-        Vec3 mean = Vec3::Zero();
-        for (int j = 0; j < k; ++j) mean += pts[d[j].second];
-        mean /= k;
-        Mat3 cov = Mat3::Zero();
-        for (int j = 0; j < k; ++j) cov += (pts[d[j].second] - mean) * (pts[d[j].second] - mean).transpose();
-        Eigen::SelfAdjointEigenSolver<Mat3> es(cov);
-        if (es.eigenvalues()(0) < 0.2 * es.eigenvalues()(1)) normal = es.eigenvectors().col(0);
-      }
-      // Reference camera: where the point lies nearest the principal point.
-      const double ra = (q - Vec2(ca.in.cu, ca.in.cv)).norm() / ca.in.fu;
-      Job job{{a, q}, x, normal, {}};
-      bool is_ref = true;
-      for (int b = 0; b < n && is_ref; ++b) {
-        if (b == a) continue;
-        const RigCamera& cb = rig.cameras[b];
-        const Vec3 w = x - cb.position_mm;
-        if (!model[b].sees(w)) continue;
-        const auto pb = model[b].project(w);
-        if (!pb || pb->x() < margin || pb->y() < margin || pb->x() > cb.in.width - margin ||
-            pb->y() > cb.in.height - margin)
-          continue;
-        if ((*pb - Vec2(cb.in.cu, cb.in.cv)).norm() / cb.in.fu < ra) is_ref = false;
-        job.targets.push_back(b);
-      }
-      if (is_ref && !job.targets.empty()) jobs.push_back(std::move(job));
-    }
-  }
-  struct Aligned {
-    TrackObservation obs;
-    Eigen::Matrix2d cov;
-  };
-  std::vector<std::vector<Aligned>> done(jobs.size());
-  cv::parallel_for_(cv::Range(0, static_cast<int>(jobs.size())), [&](const cv::Range& r) {
-    for (int k = r.start; k < r.end; ++k) {
-      const Job& job = jobs[k];
-      for (int b : job.targets) {
-        Eigen::Matrix3d h;
-        if (!plane_homography(rig.cameras[job.ref.cam], rig.cameras[b], job.ref.px, job.x, job.normal, half,
-                              &h))
-          continue;
-        AlignInfo info;
-        const auto p = align_patch(gray[job.ref.cam], job.ref.px, gray[b], h, so, &info);
-        if (p) done[k].push_back({{b, *p}, info.covariance});
-      }
-    }
-  });
+  const std::vector<DenseJob> jobs = dense_jobs(rig, model, feats, pts, seen, opt, margin);
+  std::vector<std::vector<Aligned>> done = align_dense_jobs(rig, gray, jobs, so, half);
   std::vector<double> sig;
   for (size_t k = 0; k < jobs.size(); ++k) {
     *attempted += static_cast<int>(jobs[k].targets.size());

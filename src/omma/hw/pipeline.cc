@@ -110,41 +110,43 @@ Omega omega_at(const Ctx& x, int64_t col, int64_t row) {
   return cartesian(x.cfg, x.rom, a, x.regs.axes);
 }
 
-// One output pixel through every block. Fills `tr` when given.
-std::array<uint32_t, 3> process(const Ctx& x, int col, int row, pano::Method method, bool boundary_on,
-                                PixelTrace* tr, bool* boundary_hit, bool* fallback, int* n_out,
-                                int* cone_out) {
-  const HwConfig& cfg = x.cfg;
-  const Omega o = omega_at(x, col, row);                  // B1 + B2
-  const SearchResult sr = camera_search(cfg, x.cams, o);  // B3
+// The cameras whose projection of a direction is valid (B4): their ids, pixel positions and B3
+// distances, the first n entries used.
+struct Contributors {
   int n = 0;
   std::array<int, 8> cam{};
   std::array<PixelPos, 8> pos{};
   std::array<uint32_t, 8> dist{};
+};
+
+// Per contributor (up to 8), its samples (R, G, B).
+using Samples = std::array<std::array<uint32_t, 3>, 8>;
+
+// The contributors of direction o among the cameras found by the search sr (B4 + B3 distance).
+Contributors contributors(const Ctx& x, const Omega& o, const SearchResult& sr) {
+  const HwConfig& cfg = x.cfg;
+  Contributors ct;
   for (int i = 0; i < sr.count; ++i) {
     const CameraRegs& c = x.cams[sr.camera[i]];
     const PixelPos p = project(cfg, c, o, sr.dot_t[i]);  // B4
     if (!p.valid) continue;
-    cam[n] = sr.camera[i];
-    pos[n] = p;
-    dist[n] = distance_unit(cfg, c.c, o);  // B3 distance
-    ++n;
+    ct.cam[ct.n] = sr.camera[i];
+    ct.pos[ct.n] = p;
+    ct.dist[ct.n] = distance_unit(cfg, c.c, o);  // B3 distance
+    ++ct.n;
   }
-  *n_out = n;
-  *cone_out = sr.cone_count;
-  if (tr) {
-    tr->angles = angles_at(cfg, x.regs, col, row);
-    tr->omega = o;
-    tr->search = sr;
-    tr->n = n;
-    tr->camera = cam;
-    tr->pos = pos;
-    tr->dist = dist;
-    tr->cycles = pixel_cycles(x.timing, n);
-  }
-  if (n == 0) return {0, 0, 0};
+  return ct;
+}
+
+// The vignetting-corrected bilinear samples of every contributor (B5 + B6); records the tap
+// addresses in `tr` when given.
+Samples contributor_samples(const Ctx& x, const Contributors& ct, PixelTrace* tr) {
+  const HwConfig& cfg = x.cfg;
+  const int n = ct.n;
+  const auto& cam = ct.cam;
+  const auto& pos = ct.pos;
   // B5 + B6 samples (R, G, B), uQ8.S (or uQ5.S / uQ6.S with expand_at_output)
-  std::array<std::array<uint32_t, 3>, 8> smp{};
+  Samples smp{};
   const uint32_t max8 = 255;
   for (int i = 0; i < n; ++i) {
     const TapAddress ta = tap_address(cfg, x.cams[cam[i]], cam[i], pos[i]);
@@ -165,7 +167,53 @@ std::array<uint32_t, 3> process(const Ctx& x, int col, int row, pano::Method met
     }
     if (tr) tr->addr[i] = ta;
   }
-  // Weights
+  return smp;
+}
+
+// The MRF distance products (block float) of the contributors that see all the pixel's grid
+// neighbours, written to D; false if none does.
+bool mrf_distances(const Ctx& x, int col, int row, const Contributors& ct, std::array<BlockFloat, 8>& D) {
+  const HwConfig& cfg = x.cfg;
+  const int n = ct.n;
+  const auto& cam = ct.cam;
+  const auto& dist = ct.dist;
+  bool used_mrf = false;
+  // Neighbours (left, right, up, down) that exist on the grid.
+  const std::array<std::array<int, 2>, 4> nb{
+      {{col - 1, row}, {col + 1, row}, {col, row - 1}, {col, row + 1}}};
+  std::array<bool, 4> exists{};
+  std::array<Omega, 4> onb{};
+  for (int k = 0; k < 4; ++k) {
+    const int c = nb[k][0], r = nb[k][1];
+    exists[k] = r >= 0 && r < x.regs.rows && ((c >= 0 && c < x.regs.cols) || x.regs.wrap_cols);
+    if (exists[k]) onb[k] = omega_at(x, c, r);
+  }
+  for (int i = 0; i < n; ++i) {
+    const CameraRegs& c = x.cams[cam[i]];
+    BlockFloat p = block_float(cfg, dist[i]);
+    bool complete = true;
+    for (int k = 0; k < 4 && complete; ++k) {
+      if (!exists[k]) continue;
+      if (!cone_test(cfg, dot_omega(onb[k], c.t), c.cos_half_aov)) {
+        complete = false;
+        break;
+      }
+      p = block_float_mul(cfg, p, distance_unit(cfg, c.c, onb[k]));
+    }
+    if (complete) {
+      D[i] = p;
+      used_mrf = true;
+    }
+  }
+  return used_mrf;
+}
+
+// The contributors' blend weights for `method`; sets *fallback when MRF falls back to distances.
+std::array<uint32_t, 8> blend_weights(const Ctx& x, int col, int row, pano::Method method,
+                                      const Contributors& ct, bool* fallback) {
+  const HwConfig& cfg = x.cfg;
+  const int n = ct.n;
+  const auto& dist = ct.dist;
   std::array<uint32_t, 8> w{};
   if (method == pano::Method::kNearest) {
     int best = 0;
@@ -176,39 +224,20 @@ std::array<uint32_t, 3> process(const Ctx& x, int col, int row, pano::Method met
     std::array<BlockFloat, 8> D{};
     bool used_mrf = false;
     if (method == pano::Method::kMrf) {
-      // Neighbours (left, right, up, down) that exist on the grid.
-      const std::array<std::array<int, 2>, 4> nb{
-          {{col - 1, row}, {col + 1, row}, {col, row - 1}, {col, row + 1}}};
-      std::array<bool, 4> exists{};
-      std::array<Omega, 4> onb{};
-      for (int k = 0; k < 4; ++k) {
-        const int c = nb[k][0], r = nb[k][1];
-        exists[k] = r >= 0 && r < x.regs.rows && ((c >= 0 && c < x.regs.cols) || x.regs.wrap_cols);
-        if (exists[k]) onb[k] = omega_at(x, c, r);
-      }
-      for (int i = 0; i < n; ++i) {
-        const CameraRegs& c = x.cams[cam[i]];
-        BlockFloat p = block_float(cfg, dist[i]);
-        bool complete = true;
-        for (int k = 0; k < 4 && complete; ++k) {
-          if (!exists[k]) continue;
-          if (!cone_test(cfg, dot_omega(onb[k], c.t), c.cos_half_aov)) {
-            complete = false;
-            break;
-          }
-          p = block_float_mul(cfg, p, distance_unit(cfg, c.c, onb[k]));
-        }
-        if (complete) {
-          D[i] = p;
-          used_mrf = true;
-        }
-      }
+      used_mrf = mrf_distances(x, col, row, ct, D);
       if (!used_mrf) *fallback = true;
     }
     if (!used_mrf)
       for (int i = 0; i < n; ++i) D[i] = block_float(cfg, dist[i]);
     reciprocal_weights(cfg, D.data(), n, w.data());
   }
+  return w;
+}
+
+// The blended output pixel (R, G, B), 8 bits per channel (B8 expansion included).
+std::array<uint32_t, 3> blended_rgb(const HwConfig& cfg, const std::array<uint32_t, 8>& w, const Samples& smp,
+                                    int n) {
+  const uint32_t max8 = 255;
   std::array<uint32_t, 3> rgb{};
   for (int ch = 0; ch < 3; ++ch) {
     std::array<uint32_t, 8> s{};
@@ -219,6 +248,36 @@ std::array<uint32_t, 3> process(const Ctx& x, int col, int row, pano::Method met
   if (cfg.expand_at_output) {  // B8 RGB565 -> RGB888 at the output (thesis order)
     rgb = rgb565_to_rgb888(static_cast<uint16_t>((rgb[0] << 11) | (rgb[1] << 5) | rgb[2]));
   }
+  return rgb;
+}
+
+// One output pixel through every block. Fills `tr` when given.
+std::array<uint32_t, 3> process(const Ctx& x, int col, int row, pano::Method method, bool boundary_on,
+                                PixelTrace* tr, bool* boundary_hit, bool* fallback, int* n_out,
+                                int* cone_out) {
+  const HwConfig& cfg = x.cfg;
+  const Omega o = omega_at(x, col, row);                  // B1 + B2
+  const SearchResult sr = camera_search(cfg, x.cams, o);  // B3
+  const Contributors ct = contributors(x, o, sr);
+  const int n = ct.n;
+  const auto& dist = ct.dist;
+  *n_out = n;
+  *cone_out = sr.cone_count;
+  if (tr) {
+    tr->angles = angles_at(cfg, x.regs, col, row);
+    tr->omega = o;
+    tr->search = sr;
+    tr->n = n;
+    tr->camera = ct.cam;
+    tr->pos = ct.pos;
+    tr->dist = dist;
+    tr->cycles = pixel_cycles(x.timing, n);
+  }
+  if (n == 0) return {0, 0, 0};
+  const Samples smp = contributor_samples(x, ct, tr);
+  // Weights
+  const std::array<uint32_t, 8> w = blend_weights(x, col, row, method, ct, fallback);
+  std::array<uint32_t, 3> rgb = blended_rgb(cfg, w, smp, n);
   BoundaryResult br;
   if (boundary_on && n >= 2) {  // B7
     std::array<uint32_t, 8> gray{};

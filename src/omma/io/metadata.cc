@@ -178,6 +178,90 @@ std::string spherical_v2_boxes(const PanoGrid& grid) {
   return st3d + plain_box("sv3d", svhd + proj);
 }
 
+// The movie box of the MP4 file read by `in` (file_size bytes), found from the top-level box
+// headers; throws (message prefix `what`) if the box structure is damaged or there is not
+// exactly one.
+Box movie_box(std::ifstream& in, uint64_t file_size, const std::string& what) {
+  std::optional<Box> moov;
+  for (uint64_t at = 0; at < file_size;) {
+    std::string head(16, '\0');
+    in.seekg(std::streamoff(at));
+    in.read(head.data(), 16);
+    head.resize(size_t(in.gcount()));
+    in.clear();
+    if (head.size() < 8) throw IoError(what + "not an MP4 file (damaged box structure)");
+    Box b{size_t(at), 8, get_u32(head, 0), head.substr(4, 4)};
+    if (b.size == 1 && head.size() == 16)
+      b.size = get_u64(head, 8), b.header = 16;
+    else if (b.size == 0)
+      b.size = file_size - at;  // "to the end of the file"
+    if (b.size < b.header || b.size > file_size - at)
+      throw IoError(what + "not an MP4 file (damaged box structure)");
+    if (b.type == "moov") {
+      if (moov) throw IoError(what + "two movie boxes");
+      if (b.size > (uint64_t(1) << 30)) throw IoError(what + "movie box too large");
+      moov = b;
+    }
+    at += b.size;
+  }
+  if (!moov) throw IoError(what + "no movie box (not an MP4 file?)");
+  return *moov;
+}
+
+// The boxes from the movie box `root` (in m) down to the first sample entry of the first video
+// track, outermost first: moov/trak (handler 'vide')/mdia/minf/stbl/stsd/entry; empty if none.
+std::vector<Box> video_sample_entry_path(const std::string& m, const Box& root) {
+  for (const Box& trak : children(m, root)) {
+    if (trak.type != "trak") continue;
+    const auto mdia = child(m, trak, "mdia");
+    if (!mdia) continue;
+    const auto hdlr = child(m, *mdia, "hdlr");
+    if (!hdlr || hdlr->size < hdlr->header + 12 || m.substr(hdlr->start + hdlr->header + 8, 4) != "vide")
+      continue;
+    const auto minf = child(m, *mdia, "minf");
+    const auto stbl = minf ? child(m, *minf, "stbl") : std::nullopt;
+    const auto stsd = stbl ? child(m, *stbl, "stsd") : std::nullopt;
+    if (!stsd) continue;
+    const auto entries = children(m, *stsd, 8);  // after version/flags and entry_count
+    if (entries.empty()) continue;
+    const Box entry = entries.front();
+    return {root, trak, *mdia, *minf, *stbl, *stsd, entry};
+  }
+  return {};
+}
+
+// Adds delta (bytes) to every chunk offset (stco / co64) of every track of the movie box `root`
+// (in m) at or behind the file position moved_from; throws (message prefix `what`) if a table is
+// damaged or a 32-bit offset overflows.
+void shift_chunk_offsets(std::string& m, const Box& root, uint64_t moved_from, size_t delta,
+                         const std::string& what) {
+  for (const Box& trak : children(m, root)) {
+    if (trak.type != "trak") continue;
+    const auto mdia = child(m, trak, "mdia");
+    const auto minf = mdia ? child(m, *mdia, "minf") : std::nullopt;
+    const auto stbl = minf ? child(m, *minf, "stbl") : std::nullopt;
+    if (!stbl) continue;
+    for (const Box& t : children(m, *stbl)) {
+      const bool co64 = t.type == "co64";
+      if ((t.type != "stco" && !co64) || t.size < t.header + 8) continue;
+      const size_t first = t.start + t.header + 8, n = get_u32(m, t.start + t.header + 4);
+      const size_t width = co64 ? 8 : 4;
+      if (n > (t.end() - first) / width) throw IoError(what + "damaged chunk offset table");
+      for (size_t i = 0; i < n; ++i) {
+        const size_t at = first + i * width;
+        const uint64_t off = co64 ? get_u64(m, at) : get_u32(m, at);
+        if (off < moved_from) continue;
+        if (co64)
+          set_u64(m, at, off + delta);
+        else if (off + delta > 0xFFFFFFFFull)
+          throw IoError(what + "chunk offset overflow");
+        else
+          set_u32(m, at, uint32_t(off + delta));
+      }
+    }
+  }
+}
+
 }  // namespace
 
 SphericalLayout spherical_layout(const PanoGrid& g) {
@@ -271,90 +355,28 @@ void add_spherical_video_metadata(const fs::path& path, const PanoGrid& grid) {
   if (!in || ec) throw IoError("cannot open video '" + path.string() + "'");
   // Top-level boxes (headers only): exactly one moov, which is read into memory; the media data
   // around it is copied in blocks.
-  std::optional<Box> moov;
-  for (uint64_t at = 0; at < file_size;) {
-    std::string head(16, '\0');
-    in.seekg(std::streamoff(at));
-    in.read(head.data(), 16);
-    head.resize(size_t(in.gcount()));
-    in.clear();
-    if (head.size() < 8) throw IoError(what + "not an MP4 file (damaged box structure)");
-    Box b{size_t(at), 8, get_u32(head, 0), head.substr(4, 4)};
-    if (b.size == 1 && head.size() == 16)
-      b.size = get_u64(head, 8), b.header = 16;
-    else if (b.size == 0)
-      b.size = file_size - at;  // "to the end of the file"
-    if (b.size < b.header || b.size > file_size - at)
-      throw IoError(what + "not an MP4 file (damaged box structure)");
-    if (b.type == "moov") {
-      if (moov) throw IoError(what + "two movie boxes");
-      if (b.size > (uint64_t(1) << 30)) throw IoError(what + "movie box too large");
-      moov = b;
-    }
-    at += b.size;
-  }
-  if (!moov) throw IoError(what + "no movie box (not an MP4 file?)");
-  std::string m(size_t(moov->size), '\0');
-  in.seekg(std::streamoff(moov->start));
+  const Box moov = movie_box(in, file_size, what);
+  std::string m(size_t(moov.size), '\0');
+  in.seekg(std::streamoff(moov.start));
   if (!in.read(m.data(), std::streamsize(m.size()))) throw IoError(what + "cannot read the movie box");
-  const Box root{0, moov->header, moov->size, "moov"};
+  const Box root{0, moov.header, moov.size, "moov"};
   // moov/trak (handler 'vide')/mdia/minf/stbl/stsd/first sample entry.
-  std::vector<Box> path_boxes;  // the ancestors to grow, outermost first
-  std::optional<Box> entry;
-  for (const Box& trak : children(m, root)) {
-    if (trak.type != "trak") continue;
-    const auto mdia = child(m, trak, "mdia");
-    if (!mdia) continue;
-    const auto hdlr = child(m, *mdia, "hdlr");
-    if (!hdlr || hdlr->size < hdlr->header + 12 || m.substr(hdlr->start + hdlr->header + 8, 4) != "vide")
-      continue;
-    const auto minf = child(m, *mdia, "minf");
-    const auto stbl = minf ? child(m, *minf, "stbl") : std::nullopt;
-    const auto stsd = stbl ? child(m, *stbl, "stsd") : std::nullopt;
-    if (!stsd) continue;
-    const auto entries = children(m, *stsd, 8);  // after version/flags and entry_count
-    if (entries.empty()) continue;
-    entry = entries.front();
-    path_boxes = {root, trak, *mdia, *minf, *stbl, *stsd, *entry};
-    break;
-  }
-  if (!entry) throw IoError(what + "no video track");
+  // path_boxes: the ancestors to grow, outermost first.
+  const std::vector<Box> path_boxes = video_sample_entry_path(m, root);
+  if (path_boxes.empty()) throw IoError(what + "no video track");
+  const Box entry = path_boxes.back();
   constexpr size_t kVisualSampleEntry = 78;  // fields of a VisualSampleEntry before its child boxes
-  if (entry->size < entry->header + kVisualSampleEntry) throw IoError(what + "damaged video sample entry");
-  if (child(m, *entry, "sv3d", kVisualSampleEntry)) return;  // already spherical
+  if (entry.size < entry.header + kVisualSampleEntry) throw IoError(what + "damaged video sample entry");
+  if (child(m, entry, "sv3d", kVisualSampleEntry)) return;  // already spherical
   const std::string boxes = spherical_v2_boxes(grid);
-  const size_t insert_at = entry->end();
+  const size_t insert_at = entry.end();
   m.insert(insert_at, boxes);
   for (const Box& b : path_boxes) grow(m, b, boxes.size());
   // Chunk offsets (absolute file positions) behind the insertion move with it: the media data
   // when the movie box comes first ("fast start").
-  const uint64_t moved_from = moov->start + insert_at;
-  const Box root2{0, moov->header, moov->size + boxes.size(), "moov"};
-  for (const Box& trak : children(m, root2)) {
-    if (trak.type != "trak") continue;
-    const auto mdia = child(m, trak, "mdia");
-    const auto minf = mdia ? child(m, *mdia, "minf") : std::nullopt;
-    const auto stbl = minf ? child(m, *minf, "stbl") : std::nullopt;
-    if (!stbl) continue;
-    for (const Box& t : children(m, *stbl)) {
-      const bool co64 = t.type == "co64";
-      if ((t.type != "stco" && !co64) || t.size < t.header + 8) continue;
-      const size_t first = t.start + t.header + 8, n = get_u32(m, t.start + t.header + 4);
-      const size_t width = co64 ? 8 : 4;
-      if (n > (t.end() - first) / width) throw IoError(what + "damaged chunk offset table");
-      for (size_t i = 0; i < n; ++i) {
-        const size_t at = first + i * width;
-        const uint64_t off = co64 ? get_u64(m, at) : get_u32(m, at);
-        if (off < moved_from) continue;
-        if (co64)
-          set_u64(m, at, off + boxes.size());
-        else if (off + boxes.size() > 0xFFFFFFFFull)
-          throw IoError(what + "chunk offset overflow");
-        else
-          set_u32(m, at, uint32_t(off + boxes.size()));
-      }
-    }
-  }
+  const uint64_t moved_from = moov.start + insert_at;
+  const Box root2{0, moov.header, moov.size + boxes.size(), "moov"};
+  shift_chunk_offsets(m, root2, moved_from, boxes.size(), what);
   write_atomically(path, [&](const fs::path& tmp) {
     std::ofstream o(tmp, std::ios::binary);
     std::vector<char> block(1 << 20);
@@ -367,9 +389,9 @@ void add_spherical_video_metadata(const fs::path& path, const PanoGrid& grid) {
         left -= n;
       }
     };
-    copy(0, moov->start);
+    copy(0, moov.start);
     o.write(m.data(), std::streamsize(m.size()));
-    copy(moov->end(), file_size);
+    copy(moov.end(), file_size);
     if (!o.flush()) throw IoError("cannot write video '" + path.string() + "'");
   });
 }

@@ -535,17 +535,12 @@ void linear_planar16(const cv::Mat& pad, bool hybrid, int maxv, cv::Mat planes[3
 inline int16_t abs16(int v) { return int16_t(v < 0 ? -v : v); }
 inline int16_t clamp16(int v, int16_t mx) { return int16_t(v < 0 ? 0 : (v > mx ? mx : v)); }
 
-// Adams-Hamilton / colour correlation for raw values of at most 10 bits, planar and vectorisable
-// (same arithmetic as green_ah_fast / ah_fast; every intermediate fits in int16: the largest,
-// LH + MH, is at most 3069 + 24552). Pass 1 computes the green estimate at every x of a row and
-// keeps it at the R/B sites; pass 2 computes the three chroma estimates at every x and picks.
+// Pass 1 of ah_planar16: the green plane (H x W, CV_16UC1): the raw value at the green sites, the
+// estimate at the R/B sites; t0 is scratch (W entries).
 template <bool cc>
-void ah_planar16(const cv::Mat& pad, int maxv, cv::Mat planes[3]) {
+cv::Mat ah_green_plane16(const cv::Mat& pad, int16_t mx, const std::vector<int16_t>& odd,
+                         std::vector<int16_t>& t0) {
   const int W = pad.cols - 4, H = pad.rows - 4;
-  const int16_t mx = int16_t(maxv);
-  std::vector<int16_t> odd(static_cast<size_t>(W)), t0(static_cast<size_t>(W)), t1(static_cast<size_t>(W)),
-      t2(static_cast<size_t>(W));
-  for (int x = 0; x < W; ++x) odd[size_t(x)] = int16_t((x & 1) ? -1 : 0);
   cv::Mat green(H, W, CV_16UC1);
   for (int y = 0; y < H; ++y) {
     const uint16_t* uu = pad.ptr<uint16_t>(y) + 2;
@@ -591,6 +586,15 @@ void ah_planar16(const cv::Mat& pad, int maxv, cv::Mat planes[3]) {
       for (int x = 0; x < W; ++x) gp[x] = int16_t((est[x] & m[x]) | (int16_t(c[x]) & ~m[x]));
     }
   }
+  return green;
+}
+
+// Pass 2 of ah_planar16: the planes (B, G, R) from the padded raw values and the green plane;
+// t0, t1 and t2 are scratch (W entries each).
+void ah_chroma_planes16(const cv::Mat& pad, const cv::Mat& green, int16_t mx, const std::vector<int16_t>& odd,
+                        std::vector<int16_t>& t0, std::vector<int16_t>& t1, std::vector<int16_t>& t2,
+                        cv::Mat planes[3]) {
+  const int W = pad.cols - 4, H = pad.rows - 4;
   cv::Mat gpad;
   cv::copyMakeBorder(green, gpad, 1, 1, 1, 1, cv::BORDER_REFLECT_101);
   for (int y = 0; y < H; ++y) {
@@ -635,6 +639,21 @@ void ah_planar16(const cv::Mat& pad, int maxv, cv::Mat planes[3]) {
       }
     }
   }
+}
+
+// Adams-Hamilton / colour correlation for raw values of at most 10 bits, planar and vectorisable
+// (same arithmetic as green_ah_fast / ah_fast; every intermediate fits in int16: the largest,
+// LH + MH, is at most 3069 + 24552). Pass 1 computes the green estimate at every x of a row and
+// keeps it at the R/B sites; pass 2 computes the three chroma estimates at every x and picks.
+template <bool cc>
+void ah_planar16(const cv::Mat& pad, int maxv, cv::Mat planes[3]) {
+  const int W = pad.cols - 4;
+  const int16_t mx = int16_t(maxv);
+  std::vector<int16_t> odd(static_cast<size_t>(W)), t0(static_cast<size_t>(W)), t1(static_cast<size_t>(W)),
+      t2(static_cast<size_t>(W));
+  for (int x = 0; x < W; ++x) odd[size_t(x)] = int16_t((x & 1) ? -1 : 0);
+  const cv::Mat green = ah_green_plane16<cc>(pad, mx, odd, t0);
+  ah_chroma_planes16(pad, green, mx, odd, t0, t1, t2, planes);
 }
 }  // namespace
 
