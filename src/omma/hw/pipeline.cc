@@ -212,7 +212,8 @@ bool mrf_distances(const Ctx& x, int col, int row, const Contributors& ct, std::
 std::array<uint32_t, 8> blend_weights(const Ctx& x, int col, int row, pano::Method method,
                                       const Contributors& ct, bool* fallback) {
   const HwConfig& cfg = x.cfg;
-  const int n = ct.n;
+  // At most 8 contributors (Contributors); the bound is stated for the compiler, which cannot see it.
+  const int n = std::min(ct.n, static_cast<int>(ct.dist.size()));
   const auto& dist = ct.dist;
   std::array<uint32_t, 8> w{};
   if (method == pano::Method::kNearest) {
