@@ -83,7 +83,7 @@ TEST(CalibCli, CalibrateThenRigDiffMeetsTargets) {
 
 TEST(CalibCli, TexturelessFramesFailWithoutOutput) {
   const fs::path dir = temp_dir("calib-flat");
-  const Rig nominal = testing::test_dome();
+  const Rig nominal = testing::test_rig_24();
   save_rig(nominal, dir / "rig.json");
   fs::create_directories(dir / "frames");
   for (const auto& c : nominal.cameras)
@@ -106,7 +106,7 @@ TEST(CalibCli, TexturelessFramesFailWithoutOutput) {
 
 TEST(CalibCli, PtoExportImportRoundTripAndBadInput) {
   const fs::path dir = temp_dir("calib-pto");
-  const Rig truth = sim::perturb_rig_rms(testing::test_dome(), testing::kCalibrationErrors, 3);
+  const Rig truth = sim::perturb_rig_rms(testing::test_rig_24(), testing::kCalibrationErrors, 3);
   save_rig(truth, dir / "rig.json");
   const RunResult e =
       run_omma("pto export " + (dir / "rig.json").string() + " " + (dir / "rig.pto").string() + " --json");

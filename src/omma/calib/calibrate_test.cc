@@ -250,19 +250,19 @@ TEST(Calibrate, NearFieldModelRecoversTrueRigFromPerfectTracks) {
 }
 
 TEST(Calibrate, TexturelessFramesThrow) {
-  const Rig nominal = testing::test_dome();
+  const Rig nominal = testing::test_rig_24();
   std::vector<cv::Mat> frames(nominal.cameras.size(), cv::Mat(250, 250, CV_8UC3, cv::Scalar(90, 90, 90)));
   EXPECT_THROW(calibrate_rig(nominal, frames), std::runtime_error);
 }
 
 TEST(Calibrate, FramesMustMatchTheRig) {
-  const Rig nominal = testing::test_dome();
+  const Rig nominal = testing::test_rig_24();
   std::vector<cv::Mat> frames(3, cv::Mat(250, 250, CV_8UC3, cv::Scalar(0)));
   EXPECT_THROW(calibrate_rig(nominal, frames), std::invalid_argument);
 }
 
 TEST(RigDiff, IdenticalRigsAndKnownRotation) {
-  const Rig a = testing::test_dome();
+  const Rig a = testing::test_rig_24();
   const RigDiff same = diff_rigs(a, a);
   EXPECT_NEAR(same.orientation_error_deg.max, 0, 1e-6);
   Rig b = a;

@@ -33,7 +33,7 @@ std::string strip_omma_comments(const std::string& text) {
 
 Rig perturbed_k1_rig() {
   // fu = fv, k1 only, shifted centres.
-  return sim::perturb_rig_rms(testing::test_dome(), testing::kCalibrationErrors, 11);
+  return sim::perturb_rig_rms(testing::test_rig_24(), testing::kCalibrationErrors, 11);
 }
 
 // nona's output: its alpha channel (if any) is returned as the coverage mask and removed from
@@ -96,7 +96,7 @@ TEST(Pto, RoundTripIsLosslessForWhatBothHold) {
 }
 
 TEST(Pto, HigherRadialTermsAreFittedWithASmallResidual) {
-  Rig rig = testing::test_dome();
+  Rig rig = testing::test_rig_24();
   rig.cameras.resize(1);
   rig.cameras[0].in.k = {0.05, -0.02, 0, 0, 0.01};
   LensFit fit;

@@ -18,7 +18,7 @@ RigCamera rotated(RigCamera c, const Vec3& axis_camera, double angle_rad) {
 }
 
 TEST(RigDiff, RayErrorIsWhatTheStitchSees) {
-  const Rig rig = testing::test_dome();
+  const Rig rig = testing::test_rig_24();
   const RigCamera& c = rig.cameras[4];
   EXPECT_NEAR(ray_error_deg(c, c), 0, 1e-9);
   // A rotation of 1.5 deg about the image's u axis turns every ray by at most 1.5 deg (exactly for

@@ -5,8 +5,8 @@
 //     core/conventions.h (G1): x = equirect_x(phi, W), theta = pi y / H), bilinear in the texture's own
 //     values, optionally with one near sphere of uniform colour in front of it (parallax), on a tiny
 //     15-camera hemispherical rig (small_rig): the pano unit and CLI tests;
-//   * an equirect photo at infinity (cv::remap, bilinear, 8-bit) through any rig, with a 24-camera
-//     test dome (3 + 9 + 12, the thesis's layer counts): the calibration and PTO tests.
+//   * an equirect photo at infinity (cv::remap, bilinear, 8-bit) through any rig (the calibration and
+//     PTO tests use the shared test rig, synthetic.h's test_rig_24).
 //
 // Header-only on purpose (inline): test programs include it without linking anything new.
 #pragma once
@@ -28,6 +28,7 @@
 #include "omma/core/rig.h"
 #include "omma/design/dome.h"
 #include "omma/sim/perturb.h"
+#include "omma/testing/synthetic.h"
 
 namespace omma::testing {
 
@@ -152,20 +153,6 @@ inline void write_frames_folder(const std::filesystem::path& dir, const Rig& rig
 }
 
 // ---- An equirect photo at infinity through a rig (calibration and PTO tests) --------------------
-
-// 3 + 9 + 12 cameras on a 5 mm hemisphere (the layer counts of the thesis' max-volume dome, Fig.
-// 3.8), 250x250 pixels, 64 deg angle of view (f = 200 px).
-inline Rig test_dome(int size = 250) {
-  const int counts[3] = {3, 9, 12};
-  const double thetas[3] = {22, 52, 80};
-  std::vector<Vec3> axes;
-  for (int layer = 0; layer < 3; ++layer)
-    for (int j = 0; j < counts[layer]; ++j)
-      axes.push_back(
-          direction_from_spherical(deg2rad(thetas[layer]), 2 * kPi * (j + 0.5 * layer) / counts[layer]));
-  return design::radial_rig(axes, 5.0, design::ideal_intrinsics(deg2rad(64), size, size), false, "test",
-                            "calib-test-24");
-}
 
 // The calibration tests' manufacturing errors (RMS, sim::perturb_rig_rms): 2 deg orientation, 3 %
 // focal length, 5 px principal point, 0.05 k1.
