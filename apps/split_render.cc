@@ -11,6 +11,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "omma/core/valid.h"
 #include "omma/dist/worker_thread.h"
 #include "omma/io/tiff_writer.h"
 
@@ -20,10 +21,7 @@ using json = nlohmann::json;
 using Clock = std::chrono::steady_clock;
 
 bool SplitOptions::IsValid(std::string* why) const {
-  if (window < 0) {
-    if (why) *why = "window must be >= 0";
-    return false;
-  }
+  if (window < 0) return invalid(why, "window must be >= 0");
   return true;
 }
 

@@ -15,6 +15,7 @@
 #include <tbb/parallel_for.h>
 
 #include "omma/core/log.h"
+#include "omma/core/valid.h"
 #include "omma/design/prototype.h"
 #include "omma/isp/isp.h"
 #include "omma/isp/photometric.h"
@@ -308,12 +309,9 @@ std::vector<cv::Mat> random_raw_frames(const Rig& rig, uint32_t seed) {
 }  // namespace
 
 bool BenchOptions::IsValid(std::string* why) const {
-  auto fail = [&](const std::string& m) {
-    if (why) *why = m;
-    return false;
-  };
-  if (!(min_seconds > 0) || !std::isfinite(min_seconds)) return fail("min_seconds must be a positive number");
-  if (rounds < 1) return fail("rounds must be >= 1");
+  if (!(min_seconds > 0) || !std::isfinite(min_seconds))
+    return invalid(why, "min_seconds must be a positive number");
+  if (rounds < 1) return invalid(why, "rounds must be >= 1");
   return true;
 }
 

@@ -17,44 +17,42 @@
 #include "omma/core/log.h"
 #include "omma/core/progress.h"
 #include "omma/core/srgb.h"
+#include "omma/core/valid.h"
 
 namespace omma::calib {
 
 bool CalibrationOptions::IsValid(std::string* why) const {
-  auto fail = [&](const std::string& m) {
-    if (why) *why = m;
-    return false;
-  };
   std::string sub;
-  if (!features.IsValid(&sub)) return fail("features: " + sub);
-  if (!match.IsValid(&sub)) return fail("match: " + sub);
-  if (!subpixel.IsValid(&sub)) return fail("subpixel: " + sub);
-  if (!dense_subpixel.IsValid(&sub)) return fail("dense_subpixel: " + sub);
-  if (!(near_ratio > 0)) return fail("near_ratio must be > 0");
+  if (!features.IsValid(&sub)) return invalid(why, "features: " + sub);
+  if (!match.IsValid(&sub)) return invalid(why, "match: " + sub);
+  if (!subpixel.IsValid(&sub)) return invalid(why, "subpixel: " + sub);
+  if (!dense_subpixel.IsValid(&sub)) return invalid(why, "dense_subpixel: " + sub);
+  if (!(near_ratio > 0)) return invalid(why, "near_ratio must be > 0");
   if (!(overlap_margin_deg >= 0 && overlap_margin_deg < 180))
-    return fail("overlap_margin_deg must be in [0, 180)");
+    return invalid(why, "overlap_margin_deg must be in [0, 180)");
   if (radial_terms < 0 || radial_terms > 3)
-    return fail(fmt::format("radial_terms must be 0..3, got {}", radial_terms));
+    return invalid(why, fmt::format("radial_terms must be 0..3, got {}", radial_terms));
   if (loss != "auto" && loss != "huber" && loss != "cauchy" && loss != "none")
-    return fail("loss must be auto, huber, cauchy or none, got '" + loss + "'");
+    return invalid(why, "loss must be auto, huber, cauchy or none, got '" + loss + "'");
   if (!(loss_scale_px > 0) || !(outlier_px > 0) || !(refine_outlier_px > 0))
-    return fail("loss_scale_px, outlier_px and refine_outlier_px must be > 0");
+    return invalid(why, "loss_scale_px, outlier_px and refine_outlier_px must be > 0");
   if (!(prior_rotation_deg >= 0) || !(prior_mean_focal >= 0))
-    return fail("prior_rotation_deg and prior_mean_focal must be >= 0");
-  if (refine_rounds < 0 || dense_rounds < 0) return fail("refine_rounds and dense_rounds must be >= 0");
+    return invalid(why, "prior_rotation_deg and prior_mean_focal must be >= 0");
+  if (refine_rounds < 0 || dense_rounds < 0)
+    return invalid(why, "refine_rounds and dense_rounds must be >= 0");
   if (!(refine_min_fraction >= 0 && refine_min_fraction <= 1))
-    return fail("refine_min_fraction must be in [0, 1]");
-  if (dense_neighbours < 1) return fail("dense_neighbours must be >= 1");
+    return invalid(why, "refine_min_fraction must be in [0, 1]");
+  if (dense_neighbours < 1) return invalid(why, "dense_neighbours must be >= 1");
   if (!(dense_max_gap_px > 0) || !(dense_weight_floor > 0) || !(dense_reference_weight > 0))
-    return fail("dense_max_gap_px, dense_weight_floor and dense_reference_weight must be > 0");
+    return invalid(why, "dense_max_gap_px, dense_weight_floor and dense_reference_weight must be > 0");
   if (!(tube_diameter_mm >= 0) || !std::isfinite(tube_diameter_mm))
-    return fail("tube_diameter_mm must be a diameter in mm (> 0), or 0 for none");
+    return invalid(why, "tube_diameter_mm must be a diameter in mm (> 0), or 0 for none");
   if (!(tube_tolerance > 0 && tube_tolerance < 1) ||
       !(tube_tolerance_refined > 0 && tube_tolerance_refined < 1))
-    return fail("tube_tolerance and tube_tolerance_refined must be in (0, 1)");
-  if (max_iterations < 1) return fail("max_iterations must be >= 1");
-  if (min_observations < 0) return fail("min_observations must be >= 0");
-  if (threads < 1) return fail("threads must be >= 1");
+    return invalid(why, "tube_tolerance and tube_tolerance_refined must be in (0, 1)");
+  if (max_iterations < 1) return invalid(why, "max_iterations must be >= 1");
+  if (min_observations < 0) return invalid(why, "min_observations must be >= 0");
+  if (threads < 1) return invalid(why, "threads must be >= 1");
   return true;
 }
 

@@ -11,33 +11,27 @@
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "omma/core/valid.h"
+
 namespace omma::calib {
 
 bool FeatureOptions::IsValid(std::string* why) const {
-  auto fail = [&](const std::string& m) {
-    if (why) *why = m;
-    return false;
-  };
-  if (max_features < 0) return fail("max_features must be >= 0 (0: every keypoint SIFT finds)");
-  if (!(contrast_threshold > 0)) return fail("contrast_threshold must be > 0");
-  if (border_px < 0) return fail("border_px must be >= 0");
-  if (upsample < 1 || upsample > 8) return fail("upsample must be 1..8");
+  if (max_features < 0) return invalid(why, "max_features must be >= 0 (0: every keypoint SIFT finds)");
+  if (!(contrast_threshold > 0)) return invalid(why, "contrast_threshold must be > 0");
+  if (border_px < 0) return invalid(why, "border_px must be >= 0");
+  if (upsample < 1 || upsample > 8) return invalid(why, "upsample must be 1..8");
   if (!(blur_sigma >= 0) || !(clahe_clip >= 0) || clahe_below < 0)
-    return fail("blur_sigma, clahe_clip and clahe_below must be >= 0");
+    return invalid(why, "blur_sigma, clahe_clip and clahe_below must be >= 0");
   return true;
 }
 
 bool MatchOptions::IsValid(std::string* why) const {
-  auto fail = [&](const std::string& m) {
-    if (why) *why = m;
-    return false;
-  };
-  if (!(ratio > 0 && ratio <= 1)) return fail("ratio must be in (0, 1]");
+  if (!(ratio > 0 && ratio <= 1)) return invalid(why, "ratio must be in (0, 1]");
   if (!(overlap_margin_deg >= 0 && overlap_margin_deg < 180))
-    return fail("overlap_margin_deg must be in [0, 180)");
-  if (!(ransac_threshold_px > 0)) return fail("ransac_threshold_px must be > 0");
-  if (ransac_iterations < 1) return fail("ransac_iterations must be >= 1");
-  if (min_inliers < 1) return fail("min_inliers must be >= 1");
+    return invalid(why, "overlap_margin_deg must be in [0, 180)");
+  if (!(ransac_threshold_px > 0)) return invalid(why, "ransac_threshold_px must be > 0");
+  if (ransac_iterations < 1) return invalid(why, "ransac_iterations must be >= 1");
+  if (min_inliers < 1) return invalid(why, "min_inliers must be >= 1");
   return true;
 }
 

@@ -15,6 +15,7 @@
 #include "omma/core/log.h"
 #include "omma/core/progress.h"
 #include "omma/core/srgb.h"
+#include "omma/core/valid.h"
 
 namespace omma::calib {
 namespace {
@@ -151,21 +152,18 @@ void solver_options(const PhotometricOptions& o, ceres::Solver::Options* so) {
 }  // namespace
 
 bool PhotometricOptions::IsValid(std::string* why) const {
-  auto fail = [&](const std::string& m) {
-    if (why) *why = m;
-    return false;
-  };
-  if (grid_step_px < 1 || grid_step_px > 64) return fail("grid_step_px must be 1..64");
-  if (!(smooth_sigma_px >= 0 && smooth_sigma_px <= 20)) return fail("smooth_sigma_px must be in [0, 20]");
+  if (grid_step_px < 1 || grid_step_px > 64) return invalid(why, "grid_step_px must be 1..64");
+  if (!(smooth_sigma_px >= 0 && smooth_sigma_px <= 20))
+    return invalid(why, "smooth_sigma_px must be in [0, 20]");
   if (!(min_signal >= 0 && max_signal <= 1 && min_signal < max_signal))
-    return fail("need 0 <= min_signal < max_signal <= 1");
+    return invalid(why, "need 0 <= min_signal < max_signal <= 1");
   if (!(registration_px > 0) || !(max_log_change > 0))
-    return fail("registration_px and max_log_change must be > 0");
-  if (!(loss_scale > 0)) return fail("loss_scale must be > 0");
-  if (!(noise_signal >= 0)) return fail("noise_signal must be >= 0");
+    return invalid(why, "registration_px and max_log_change must be > 0");
+  if (!(loss_scale > 0)) return invalid(why, "loss_scale must be > 0");
+  if (!(noise_signal >= 0)) return invalid(why, "noise_signal must be >= 0");
   if (min_samples < 1 || max_samples_per_pair < 10)
-    return fail("min_samples >= 1, max_samples_per_pair >= 10");
-  if (threads < 1 || max_iterations < 1) return fail("threads and max_iterations must be >= 1");
+    return invalid(why, "min_samples >= 1, max_samples_per_pair >= 10");
+  if (threads < 1 || max_iterations < 1) return invalid(why, "threads and max_iterations must be >= 1");
   return true;
 }
 

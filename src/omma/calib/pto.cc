@@ -12,18 +12,15 @@
 
 #include "omma/core/frames.h"
 #include "omma/core/limits.h"
+#include "omma/core/valid.h"
 
 namespace omma::calib {
 namespace fs = std::filesystem;
 
 bool PtoExportOptions::IsValid(std::string* why) const {
-  auto fail = [&](const std::string& m) {
-    if (why) *why = m;
-    return false;
-  };
   // The p-line's height is pano_width / 2.
-  if (pano_width < 2) return fail(fmt::format("pano_width must be at least 2, got {}", pano_width));
-  if (interpolator < 0) return fail(fmt::format("interpolator must be >= 0, got {}", interpolator));
+  if (pano_width < 2) return invalid(why, fmt::format("pano_width must be at least 2, got {}", pano_width));
+  if (interpolator < 0) return invalid(why, fmt::format("interpolator must be >= 0, got {}", interpolator));
   return true;
 }
 

@@ -9,23 +9,21 @@
 #include <opencv2/video/tracking.hpp>
 
 #include "omma/core/srgb.h"
+#include "omma/core/valid.h"
 
 namespace omma::calib {
 
 bool SubpixelOptions::IsValid(std::string* why) const {
-  auto fail = [&](const std::string& m) {
-    if (why) *why = m;
-    return false;
-  };
-  if (patch_px < 3) return fail("patch_px must be >= 3");
-  if (search_margin_px < 0) return fail("search_margin_px must be >= 0");
+  if (patch_px < 3) return invalid(why, "patch_px must be >= 3");
+  if (search_margin_px < 0) return invalid(why, "search_margin_px must be >= 0");
   if (gauss_px < 0 || (gauss_px > 1 && gauss_px % 2 == 0))
-    return fail("gauss_px must be 0, 1 or odd (a Gaussian kernel size)");
-  if (max_iterations < 1) return fail("max_iterations must be >= 1");
-  if (!(epsilon > 0)) return fail("epsilon must be > 0");
-  if (!(min_correlation >= -1 && min_correlation <= 1)) return fail("min_correlation must be in [-1, 1]");
-  if (!(max_shift_px > 0)) return fail("max_shift_px must be > 0");
-  if (!(flatfield_sigma_px >= 0)) return fail("flatfield_sigma_px must be >= 0");
+    return invalid(why, "gauss_px must be 0, 1 or odd (a Gaussian kernel size)");
+  if (max_iterations < 1) return invalid(why, "max_iterations must be >= 1");
+  if (!(epsilon > 0)) return invalid(why, "epsilon must be > 0");
+  if (!(min_correlation >= -1 && min_correlation <= 1))
+    return invalid(why, "min_correlation must be in [-1, 1]");
+  if (!(max_shift_px > 0)) return invalid(why, "max_shift_px must be > 0");
+  if (!(flatfield_sigma_px >= 0)) return invalid(why, "flatfield_sigma_px must be >= 0");
   return true;
 }
 

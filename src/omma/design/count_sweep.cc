@@ -7,26 +7,24 @@
 #include <tbb/parallel_for.h>
 
 #include "omma/core/progress.h"
+#include "omma/core/valid.h"
 #include "omma/design/svg_plot.h"
 
 namespace omma::design {
 
 bool CountSweepOptions::IsValid(std::string* why) const {
-  auto fail = [&](const std::string& m) {
-    if (why) *why = m;
-    return false;
-  };
-  if (!(r_phys_mm > 0)) return fail("r_phys must be positive");
+  if (!(r_phys_mm > 0)) return invalid(why, "r_phys must be positive");
   for (double rv : r_virtual_mm)
     if (!(rv > 0) || !std::isfinite(rv))
-      return fail(fmt::format("R_vir {} mm must be a positive number", rv));
+      return invalid(why, fmt::format("R_vir {} mm must be a positive number", rv));
   // The ranges are walked from min to max in steps: a step <= 0 would never end.
   if (!(aov_min_deg > 0 && aov_max_deg >= aov_min_deg && aov_max_deg < 360 && aov_step_deg > 0))
-    return fail("angle of view range: need 0 < aov_min_deg <= aov_max_deg < 360 and aov_step_deg > 0");
-  if (!(fixed_aov_deg > 0 && fixed_aov_deg < 360)) return fail("fixed_aov_deg must be in (0, 360)");
+    return invalid(why,
+                   "angle of view range: need 0 < aov_min_deg <= aov_max_deg < 360 and aov_step_deg > 0");
+  if (!(fixed_aov_deg > 0 && fixed_aov_deg < 360)) return invalid(why, "fixed_aov_deg must be in (0, 360)");
   if (!(ratio_min > 0 && ratio_max >= ratio_min && ratio_step > 0))
-    return fail("ratio range: need 0 < ratio_min <= ratio_max and ratio_step > 0");
-  if (!(check_step_deg > 0)) return fail("check_step_deg must be positive");
+    return invalid(why, "ratio range: need 0 < ratio_min <= ratio_max and ratio_step > 0");
+  if (!(check_step_deg > 0)) return invalid(why, "check_step_deg must be positive");
   return true;
 }
 

@@ -6,25 +6,26 @@
 
 #include <fmt/format.h>
 
+#include "omma/core/valid.h"
+
 namespace omma::design {
 
 bool RecordingPlanInput::IsValid(std::string* why) const {
-  auto fail = [&](const std::string& m) {
-    if (why) *why = m;
-    return false;
-  };
   if (width <= 0 || height <= 0 || width > 65536 || height > 65536)
-    return fail(fmt::format("resolution {}x{} must be positive (at most 65536 per side)", width, height));
-  if (bits < 1 || bits > 16) return fail(fmt::format("bits per pixel {} must be 1..16", bits));
-  if (!(fps > 0 && fps <= 10000)) return fail("frame rate must be in (0, 10000] fps");
-  if (!(clock_mhz > 0 && clock_mhz < 1e5)) return fail("pixel clock must be a positive number of MHz");
-  if (!(max_clock_mhz > 0)) return fail("the clock limit must be positive");
-  if (cameras < 1 || cameras > 100000) return fail("cameras must be 1..100000");
+    return invalid(why,
+                   fmt::format("resolution {}x{} must be positive (at most 65536 per side)", width, height));
+  if (bits < 1 || bits > 16) return invalid(why, fmt::format("bits per pixel {} must be 1..16", bits));
+  if (!(fps > 0 && fps <= 10000)) return invalid(why, "frame rate must be in (0, 10000] fps");
+  if (!(clock_mhz > 0 && clock_mhz < 1e5))
+    return invalid(why, "pixel clock must be a positive number of MHz");
+  if (!(max_clock_mhz > 0)) return invalid(why, "the clock limit must be positive");
+  if (cameras < 1 || cameras > 100000) return invalid(why, "cameras must be 1..100000");
   if (cameras_per_device < 1 || cameras_per_device > cameras)
-    return fail(fmt::format("cameras per device must be 1..{} (the number of cameras)", cameras));
-  if (!(device_bytes > 0 && std::isfinite(device_bytes))) return fail("device size must be positive");
-  if (!(device_rate > 0 && std::isfinite(device_rate))) return fail("device write rate must be positive");
-  if (!(minutes > 0 && minutes < 1e7)) return fail("duration must be a positive number of minutes");
+    return invalid(why, fmt::format("cameras per device must be 1..{} (the number of cameras)", cameras));
+  if (!(device_bytes > 0 && std::isfinite(device_bytes))) return invalid(why, "device size must be positive");
+  if (!(device_rate > 0 && std::isfinite(device_rate)))
+    return invalid(why, "device write rate must be positive");
+  if (!(minutes > 0 && minutes < 1e7)) return invalid(why, "duration must be a positive number of minutes");
   return true;
 }
 

@@ -25,6 +25,7 @@
 #include "omma/core/io.h"
 #include "omma/core/log.h"
 #include "omma/core/progress.h"
+#include "omma/core/valid.h"
 #include "omma/dist/worker_thread.h"
 
 namespace omma::dist {
@@ -85,10 +86,7 @@ Rank0 parse_rank0(const std::string& s) {
 const char* rank0_name(Rank0 r) { return r == Rank0::kWorks ? "works" : "serves"; }
 
 bool RunOptions::IsValid(std::string* why) const {
-  if (manifest.empty()) {
-    if (why) *why = "a manifest path is required";
-    return false;
-  }
+  if (manifest.empty()) return invalid(why, "a manifest path is required");
   return true;
 }
 
@@ -380,22 +378,21 @@ namespace {
 
 // Phase 1, rank 0: options, ranks against items, output folders, set-up, the earlier run's records
 // (item -> its record) when resuming. Returns the error ("" if none), named by rank where needed.
-std::string prepare_root(Comm& comm, Job& job, const RunOptions& options, const RunSummary& sum, json& params,
+std::string prepare_root(Comm& comm, Job& job, const RunOptions& options, Rank0 rank0, json& params,
                          std::map<int64_t, ItemRecord>& previous) {
   const int size = comm.size();
-  bool own = false;  // the runner's own checks need no rank name
+  const int serving = rank0 == Rank0::kServes ? 1 : 0;  // rank 0 only serves: one worker fewer
+  bool own = false;                                     // the runner's own checks need no rank name
   try {
     if (std::string why; !options.IsValid(&why)) throw std::invalid_argument(why);
     job.open();
     const int64_t n = job.items();
     if (n < 1) throw std::invalid_argument("there is nothing to make (0 items)");
-    const int workers = size - (sum.rank0 == Rank0::kServes ? 1 : 0);
-    own = workers > n;
+    own = size - serving > n;
     if (own)
       throw std::invalid_argument(fmt::format("{} ranks{} for {} {}: start at most {} (mpirun -np {})", size,
-                                              sum.rank0 == Rank0::kServes ? " (rank 0 only serves)" : "", n,
-                                              options.label, n + (sum.rank0 == Rank0::kServes ? 1 : 0),
-                                              n + (sum.rank0 == Rank0::kServes ? 1 : 0)));
+                                              serving ? " (rank 0 only serves)" : "", n, options.label,
+                                              n + serving, n + serving));
     for (const auto& d : output_folders(job, options.manifest)) check_writable(d, 0);
     job.setup();
     params = job.parameters();
@@ -544,7 +541,7 @@ RunSummary run_job(Comm& comm, Job& job, const RunOptions& options) {
 
   json params;
   std::map<int64_t, ItemRecord> previous;  // item -> the earlier run's record of its output
-  broadcast_verdict(comm, root ? prepare_root(comm, job, options, sum, params, previous) : "");
+  broadcast_verdict(comm, root ? prepare_root(comm, job, options, sum.rank0, params, previous) : "");
   check_all_ranks(comm, root ? "" : prepare_worker(comm, job, options), "");
   const auto all_verified = verify_previous(comm, job, options, previous);
   if (!root) {

@@ -9,19 +9,14 @@
 #include <fmt/format.h>
 
 #include "omma/core/io.h"
+#include "omma/core/valid.h"
 
 namespace omma::hw {
 
 bool ExportOptions::IsValid(std::string* why) const {
   std::string sub;
-  if (!config.IsValid(&sub)) {
-    if (why) *why = "hardware configuration: " + sub;
-    return false;
-  }
-  if (grid.width <= 0 || grid.height <= 0) {
-    if (why) *why = "panorama size must be positive";
-    return false;
-  }
+  if (!config.IsValid(&sub)) return invalid(why, "hardware configuration: " + sub);
+  if (grid.width <= 0 || grid.height <= 0) return invalid(why, "panorama size must be positive");
   return true;
 }
 

@@ -6,6 +6,8 @@
 
 #include <fmt/format.h>
 
+#include "omma/core/valid.h"
+
 namespace omma::hw {
 namespace {
 
@@ -14,35 +16,33 @@ bool in_range(int v, int lo, int hi) { return v >= lo && v <= hi; }
 }  // namespace
 
 bool HwConfig::IsValid(std::string* error) const {
-  auto fail = [&](const std::string& msg) {
-    if (error) *error = msg;
-    return false;
-  };
   auto range = [&](const char* name, int v, int lo, int hi) {
-    return in_range(v, lo, hi) ? true
-                               : fail(fmt::format("{} = {} is out of range [{}, {}]", name, v, lo, hi));
+    return in_range(v, lo, hi)
+               ? true
+               : invalid(error, fmt::format("{} = {} is out of range [{}, {}]", name, v, lo, hi));
   };
   if (!range("angle_bits", angle_bits, 4, 32)) return false;
   if (!range("sincos_addr_bits", sincos_addr_bits, 2, 20)) return false;
   if (!range("sincos_word_bits", sincos_word_bits, 4, 24)) return false;
   if (angle_bits < sincos_addr_bits + 2)
-    return fail(
-        fmt::format("sincos_addr_bits = {} needs angle_bits >= {} (quadrant + table address), "
-                    "angle_bits is {}",
-                    sincos_addr_bits, sincos_addr_bits + 2, angle_bits));
+    return invalid(error,
+                   fmt::format("sincos_addr_bits = {} needs angle_bits >= {} (quadrant + table address), "
+                               "angle_bits is {}",
+                               sincos_addr_bits, sincos_addr_bits + 2, angle_bits));
   if (!range("vec_frac_bits", vec_frac_bits, 2, 14)) return false;
   if (!range("pos_frac_bits", pos_frac_bits, 0, 14)) return false;
   if (!range("dist_frac_bits", dist_frac_bits, 2, 16)) return false;
   if (dist_frac_bits < pos_frac_bits)
-    return fail(
-        fmt::format("dist_frac_bits = {} must be >= pos_frac_bits = {}", dist_frac_bits, pos_frac_bits));
+    return invalid(error, fmt::format("dist_frac_bits = {} must be >= pos_frac_bits = {}", dist_frac_bits,
+                                      pos_frac_bits));
   if (!range("camera_bits", camera_bits, 1, 8)) return false;
   if (!range("max_contributors", max_contributors, 1, 8)) return false;
   if (!range("proj_bits", proj_bits, 8, 24)) return false;
   if (!range("proj_frac_bits", proj_frac_bits, 2, 20)) return false;
   if (proj_frac_bits > proj_bits - 2)
-    return fail(fmt::format("proj_frac_bits = {} leaves no integer bits in proj_bits = {} (need <= {})",
-                            proj_frac_bits, proj_bits, proj_bits - 2));
+    return invalid(error,
+                   fmt::format("proj_frac_bits = {} leaves no integer bits in proj_bits = {} (need <= {})",
+                               proj_frac_bits, proj_bits, proj_bits - 2));
   if (!range("k_frac_bits", k_frac_bits, 2, 15)) return false;
   if (!range("focal_frac_bits", focal_frac_bits, 0, 8)) return false;
   if (!range("centre_frac_bits", centre_frac_bits, 0, 8)) return false;
@@ -50,10 +50,10 @@ bool HwConfig::IsValid(std::string* error) const {
   if (!range("frame_addr_bits", frame_addr_bits, 4, 24)) return false;
   if (!range("sample_frac_bits", sample_frac_bits, 0, 8)) return false;
   if (sample_frac_bits > 2 * pix_frac_bits)
-    return fail(
-        fmt::format("sample_frac_bits = {} exceeds the {} fraction bits of a bilinear product "
-                    "(2 * pix_frac_bits)",
-                    sample_frac_bits, 2 * pix_frac_bits));
+    return invalid(error,
+                   fmt::format("sample_frac_bits = {} exceeds the {} fraction bits of a bilinear product "
+                               "(2 * pix_frac_bits)",
+                               sample_frac_bits, 2 * pix_frac_bits));
   if (!range("weight_mant_bits", weight_mant_bits, 4, 24)) return false;
   if (!range("recip_bits", recip_bits, 2, 24)) return false;
   if (!range("vig_addr_bits", vig_addr_bits, 1, 12)) return false;

@@ -7,6 +7,8 @@
 
 #include <fmt/format.h>
 
+#include "omma/core/valid.h"
+
 namespace omma::hw {
 namespace {
 
@@ -63,20 +65,17 @@ std::string to_string(MacroKind k) {
 }
 
 bool MemoryOptions::IsValid(std::string* error) const {
-  auto fail = [&](const std::string& m) {
-    if (error) *error = m;
-    return false;
-  };
-  if (cameras < 1 || cameras > 4096) return fail(fmt::format("cameras = {} must be in [1, 4096]", cameras));
+  if (cameras < 1 || cameras > 4096)
+    return invalid(error, fmt::format("cameras = {} must be in [1, 4096]", cameras));
   if (frame_width < 1 || frame_height < 1 || frame_width > 16384 || frame_height > 16384)
-    return fail("frame size must be in [1, 16384]");
-  if (bits_per_pixel < 1 || bits_per_pixel > 64) return fail("bits_per_pixel must be in [1, 64]");
+    return invalid(error, "frame size must be in [1, 16384]");
+  if (bits_per_pixel < 1 || bits_per_pixel > 64) return invalid(error, "bits_per_pixel must be in [1, 64]");
   if (pano_width < 1 || pano_height < 1 || pano_width > 65535 || pano_height > 65535)
-    return fail("panorama size must be in [1, 65535]");
+    return invalid(error, "panorama size must be in [1, 65535]");
   if (sincos_words < 1 || sincos_bits < 1 || vig_rom_words < 1 || vig_bits < 1)
-    return fail("table sizes must be positive");
-  if (cartesian_units < 1) return fail("cartesian_units must be >= 1");
-  if (!(fps > 0) || th_sys < 1) return fail("fps must be > 0 and th_sys >= 1");
+    return invalid(error, "table sizes must be positive");
+  if (cartesian_units < 1) return invalid(error, "cartesian_units must be >= 1");
+  if (!(fps > 0) || th_sys < 1) return invalid(error, "fps must be > 0 and th_sys >= 1");
   return true;
 }
 

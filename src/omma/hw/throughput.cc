@@ -6,22 +6,22 @@
 
 #include <fmt/format.h>
 
+#include "omma/core/valid.h"
+
 namespace omma::hw {
 
 bool ThroughputOptions::IsValid(std::string* error) const {
-  auto fail = [&](const std::string& m) {
-    if (error) *error = m;
-    return false;
-  };
-  if (cameras < 1 || cameras > 4096) return fail(fmt::format("cameras = {} must be in [1, 4096]", cameras));
+  if (cameras < 1 || cameras > 4096)
+    return invalid(error, fmt::format("cameras = {} must be in [1, 4096]", cameras));
   if (max_contributors < 1 || max_contributors > cameras)
-    return fail(fmt::format("max_contributors = {} must be in [1, cameras = {}]", max_contributors, cameras));
-  if (angle_th < 1 || memory_th < 1) return fail("angle_th and memory_th must be >= 1");
+    return invalid(
+        error, fmt::format("max_contributors = {} must be in [1, cameras = {}]", max_contributors, cameras));
+  if (angle_th < 1 || memory_th < 1) return invalid(error, "angle_th and memory_th must be >= 1");
   if (table_sets != 1 && table_sets != 3)
-    return fail(fmt::format("table_sets = {} must be 1 or 3", table_sets));
-  if (width < 1 || height < 1) return fail("width and height must be >= 1");
-  if (!(fps > 0)) return fail("fps must be > 0");
-  if (!(clock_mhz > 0)) return fail("clock_mhz must be > 0");
+    return invalid(error, fmt::format("table_sets = {} must be 1 or 3", table_sets));
+  if (width < 1 || height < 1) return invalid(error, "width and height must be >= 1");
+  if (!(fps > 0)) return invalid(error, "fps must be > 0");
+  if (!(clock_mhz > 0)) return invalid(error, "clock_mhz must be > 0");
   return true;
 }
 

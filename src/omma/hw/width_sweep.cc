@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "omma/core/frames.h"
+#include "omma/core/valid.h"
 #include "omma/design/svg_plot.h"
 #include "omma/hw/pipeline.h"
 #include "omma/pano/quality.h"
@@ -15,18 +16,14 @@
 namespace omma::hw {
 
 bool WidthSweepOptions::IsValid(std::string* why) const {
-  auto fail = [&](const std::string& m) {
-    if (why) *why = m;
-    return false;
-  };
   std::string sub;
-  if (!base.IsValid(&sub)) return fail("hardware configuration: " + sub);
-  if (grid.width <= 0 || grid.height <= 0) return fail("panorama size must be positive");
-  if (!std::isfinite(target_db)) return fail("target PSNR must be finite");
+  if (!base.IsValid(&sub)) return invalid(why, "hardware configuration: " + sub);
+  if (grid.width <= 0 || grid.height <= 0) return invalid(why, "panorama size must be positive");
+  if (!std::isfinite(target_db)) return invalid(why, "target PSNR must be finite");
   for (const auto& p : params) {
-    if (p.values.empty()) return fail("parameter " + p.name + " has no values");
+    if (p.values.empty()) return invalid(why, "parameter " + p.name + " has no values");
     if (!std::is_sorted(p.values.begin(), p.values.end()))
-      return fail("the values of parameter " + p.name + " must be ascending");
+      return invalid(why, "the values of parameter " + p.name + " must be ascending");
   }
   return true;
 }

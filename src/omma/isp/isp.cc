@@ -9,6 +9,7 @@
 
 #include "omma/core/io.h"
 #include "omma/core/srgb.h"
+#include "omma/core/valid.h"
 
 namespace omma::isp {
 
@@ -18,10 +19,8 @@ bool IspOptions::IsValid(std::string* why) const {
       *why = bits < 8 ? "ISP needs raw values of at least 8 bits" : "ISP needs raw values of at most 16 bits";
     return false;
   }
-  if (!flat_gain.empty() && flat_gain.type() != CV_16UC1) {
-    if (why) *why = "flat-field gain must be CV_16UC1 (Q12)";
-    return false;
-  }
+  if (!flat_gain.empty() && flat_gain.type() != CV_16UC1)
+    return invalid(why, "flat-field gain must be CV_16UC1 (Q12)");
   return true;
 }
 

@@ -14,6 +14,7 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include "omma/core/valid.h"
 #include "omma/isp/photometric.h"
 
 namespace omma::live {
@@ -70,14 +71,10 @@ double ms_between(Clock::time_point a, Clock::time_point b) {
 void request_stop() { g_stop = true; }
 
 bool EngineOptions::IsValid(std::string* why) const {
-  auto fail = [&](const std::string& m) {
-    if (why) *why = m;
-    return false;
-  };
   if (!map.IsValid(why)) return false;
   if (!(duration_s >= 0) || max_frames < 0 || !(fps >= 0) || !(first_frame_timeout_s > 0) || threads < 0)
-    return fail("duration, frames, fps and threads must be >= 0, the first-frame timeout > 0");
-  if (max_camera_threads < 1) return fail("max_camera_threads must be >= 1");
+    return invalid(why, "duration, frames, fps and threads must be >= 0, the first-frame timeout > 0");
+  if (max_camera_threads < 1) return invalid(why, "max_camera_threads must be >= 1");
   return true;
 }
 
@@ -318,7 +315,7 @@ class RenderLoop {
         const double elapsed = std::chrono::duration<double>(Clock::now() - t0_).count();
         if (opt_.duration_s > 0 && elapsed >= opt_.duration_s) break;
         const bool fresh = collect_frames(elapsed);
-        const bool finished = std::none_of(live_.begin(), live_.end(), [](bool b) { return b; });
+        const bool finished = all_ended();
         swap_map_if_ready(false);
         if (!ready_to_render(fresh, finished)) {
           if (finished) break;
@@ -436,6 +433,11 @@ class RenderLoop {
     return fresh;
   }
 
+  // Every camera has ended (or been dropped).
+  bool all_ended() const {
+    return std::none_of(live_.begin(), live_.end(), [](bool b) { return b; });
+  }
+
   // The recompiled map, once ready (or waiting for it: at the end of the run).
   void swap_map_if_ready(bool wait) {
     if (!pending_.valid()) return;
@@ -501,9 +503,9 @@ class RenderLoop {
     *lo = 0;
     *hi = 0;
     bool any = false;
-    const bool all_ended = std::none_of(live_.begin(), live_.end(), [](bool b) { return b; });
+    const bool ended = all_ended();
     for (size_t c = 0; c < n_; ++c) {
-      if (!have_[c] || (!live_[c] && !all_ended)) continue;
+      if (!have_[c] || (!live_[c] && !ended)) continue;
       const double s = std::chrono::duration<double>(t_last_[c] - t[c]).count();
       const double f = s > 0 ? (used_seq_[c] - seq[c]) / s : 0;
       *lo = any ? std::min(*lo, f) : f;

@@ -10,19 +10,17 @@
 
 #include "omma/core/log.h"
 #include "omma/core/progress.h"
+#include "omma/core/valid.h"
 
 namespace omma::live {
 
 bool RecordOptions::IsValid(std::string* why) const {
-  auto fail = [&](const std::string& m) {
-    if (why) *why = m;
-    return false;
-  };
-  if (!(duration_s >= 0)) return fail("duration must be >= 0");
-  if (frames < 0) return fail("frames must be >= 0");
-  if (queue_frames < 1 || queue_frames > 1000) return fail("queue must hold 1..1000 frames");
-  if (!(flush_interval_s > 0 && flush_interval_s <= 1)) return fail("flush interval must be in (0, 1] s");
-  if (!(fps > 0)) return fail("fps must be positive");
+  if (!(duration_s >= 0)) return invalid(why, "duration must be >= 0");
+  if (frames < 0) return invalid(why, "frames must be >= 0");
+  if (queue_frames < 1 || queue_frames > 1000) return invalid(why, "queue must hold 1..1000 frames");
+  if (!(flush_interval_s > 0 && flush_interval_s <= 1))
+    return invalid(why, "flush interval must be in (0, 1] s");
+  if (!(fps > 0)) return invalid(why, "fps must be positive");
   return true;
 }
 

@@ -12,22 +12,20 @@
 #include <tbb/parallel_for.h>
 
 #include "omma/core/progress.h"
+#include "omma/core/valid.h"
 
 namespace omma::live {
 
 bool SimCameraOptions::IsValid(std::string* why) const {
-  auto fail = [&](const std::string& m) {
-    if (why) *why = m;
-    return false;
-  };
   if (!(fps_min > 0 && fps_max >= fps_min && fps_max <= 1000))
-    return fail(
-        fmt::format("simulated camera rates {}-{} fps: need 0 < min <= max <= 1000", fps_min, fps_max));
+    return invalid(
+        why, fmt::format("simulated camera rates {}-{} fps: need 0 < min <= max <= 1000", fps_min, fps_max));
   if (!(jitter_ms >= 0 && jitter_ms <= 1000))
-    return fail(fmt::format("jitter {} ms: need 0-1000 ms", jitter_ms));
+    return invalid(why, fmt::format("jitter {} ms: need 0-1000 ms", jitter_ms));
   if (!(loop_s > 0 && loop_s <= 3600))
-    return fail(fmt::format("loop length {} s: need 0 < loop <= 3600 s", loop_s));
-  if (!(max_memory_mb > 0)) return fail(fmt::format("loop memory bound {} MB: need > 0", max_memory_mb));
+    return invalid(why, fmt::format("loop length {} s: need 0 < loop <= 3600 s", loop_s));
+  if (!(max_memory_mb > 0))
+    return invalid(why, fmt::format("loop memory bound {} MB: need > 0", max_memory_mb));
   return true;
 }
 

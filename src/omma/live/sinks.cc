@@ -16,6 +16,7 @@
 #include <spdlog/spdlog.h>
 
 #include "omma/core/io.h"
+#include "omma/core/valid.h"
 #include "omma/io/metadata.h"
 #include "omma/live/web_assets.h"
 
@@ -374,13 +375,9 @@ int parse_port(const std::string& spec, const std::string& text) {
 }  // namespace
 
 bool SinkOptions::IsValid(std::string* why) const {
-  auto fail = [&](const std::string& m) {
-    if (why) *why = m;
-    return false;
-  };
-  if (!(fps > 0) || !std::isfinite(fps)) return fail("fps must be a positive number");
-  if (jpeg_quality < 1 || jpeg_quality > 100) return fail("jpeg quality must be 1..100");
-  if (max_streams < 1) return fail("max streams must be >= 1");
+  if (!(fps > 0) || !std::isfinite(fps)) return invalid(why, "fps must be a positive number");
+  if (jpeg_quality < 1 || jpeg_quality > 100) return invalid(why, "jpeg quality must be 1..100");
+  if (max_streams < 1) return invalid(why, "max streams must be >= 1");
   return true;
 }
 

@@ -15,6 +15,7 @@
 
 #include "omma/core/frames.h"
 #include "omma/core/io.h"
+#include "omma/core/valid.h"
 #include "omma/isp/isp.h"
 #include "omma/isp/link.h"
 #include "omma/isp/photometric.h"
@@ -301,11 +302,7 @@ std::unique_ptr<CameraSource> still_source(cv::Mat frame, double fps, int limit,
 }
 
 bool SourceOptions::IsValid(std::string* why) const {
-  auto fail = [&](const std::string& m) {
-    if (why) *why = m;
-    return false;
-  };
-  if (!(fps >= 0) || !std::isfinite(fps)) return fail("fps must be >= 0 (0 = as fast as possible)");
+  if (!(fps >= 0) || !std::isfinite(fps)) return invalid(why, "fps must be >= 0 (0 = as fast as possible)");
   return sim.IsValid(why);
 }
 

@@ -4,17 +4,14 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "omma/core/valid.h"
+
 namespace omma::pano {
 
 bool SearchOptions::IsValid(std::string* why) const {
-  if (!q.allFinite()) {
-    if (why) *why = "observer point q must be finite";
-    return false;
-  }
-  if (!(min_r_mm > 0) || !std::isfinite(min_r_mm)) {  // |r| divides the weights (eq. 2.5)
-    if (why) *why = "min_r_mm must be a positive number of mm";
-    return false;
-  }
+  if (!q.allFinite()) return invalid(why, "observer point q must be finite");
+  if (!(min_r_mm > 0) || !std::isfinite(min_r_mm))  // |r| divides the weights (eq. 2.5)
+    return invalid(why, "min_r_mm must be a positive number of mm");
   return true;
 }
 

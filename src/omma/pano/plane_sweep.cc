@@ -12,30 +12,29 @@
 #include <opencv2/imgproc.hpp>
 #include <tbb/parallel_for.h>
 
+#include "omma/core/valid.h"
 #include "omma/pano/stitch.h"
 
 namespace omma::pano {
 
 bool PlaneSweepOptions::IsValid(std::string* why) const {
-  auto fail = [&](const std::string& m) {
-    if (why) *why = m;
-    return false;
-  };
-  if (!(near_mm > 0) || !std::isfinite(near_mm)) return fail("near distance must be a positive number of mm");
+  if (!(near_mm > 0) || !std::isfinite(near_mm))
+    return invalid(why, "near distance must be a positive number of mm");
   if (!(far_mm > near_mm))
-    return fail(fmt::format("far distance {} mm must exceed near {} mm", far_mm, near_mm));
+    return invalid(why, fmt::format("far distance {} mm must exceed near {} mm", far_mm, near_mm));
   // far_mm may be +infinity (the last candidate is then the scene at infinity, s = 0)
   if (steps < 2 || steps > kMaxSteps)
-    return fail(fmt::format("steps must be 2..{}, got {}", kMaxSteps, steps));
-  if (factor < 0 || factor > 64) return fail(fmt::format("coarse factor must be 0..64, got {}", factor));
-  if (factor == 0 && !(pitch_deg > 0)) return fail("coarse pitch must be positive");
-  if (window < 1 || window > 8) return fail(fmt::format("patch radius must be 1..8, got {}", window));
-  if (band_ratio != 0 && !(band_ratio > 1)) return fail("band-pass ratio must be 0 (none) or > 1");
-  if (paths != 4 && paths != 8) return fail("paths must be 4 or 8");
+    return invalid(why, fmt::format("steps must be 2..{}, got {}", kMaxSteps, steps));
+  if (factor < 0 || factor > 64)
+    return invalid(why, fmt::format("coarse factor must be 0..64, got {}", factor));
+  if (factor == 0 && !(pitch_deg > 0)) return invalid(why, "coarse pitch must be positive");
+  if (window < 1 || window > 8) return invalid(why, fmt::format("patch radius must be 1..8, got {}", window));
+  if (band_ratio != 0 && !(band_ratio > 1)) return invalid(why, "band-pass ratio must be 0 (none) or > 1");
+  if (paths != 4 && paths != 8) return invalid(why, "paths must be 4 or 8");
   if (!(noise_sigma > 0) || !(w0 > 0) || !(p1 >= 0) || !(p2 >= p1) || !(edge_gray > 0) ||
       !(margin_scale > 0) || !(fill_sigma > 0) || !(fill_lambda > 0) || !(prior_mm >= 0) ||
       !(temporal_weight >= 0))
-    return fail("sweep weights must be positive (p2 >= p1)");
+    return invalid(why, "sweep weights must be positive (p2 >= p1)");
   return true;
 }
 

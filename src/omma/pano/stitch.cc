@@ -13,18 +13,15 @@
 
 #include "omma/core/frames.h"
 #include "omma/core/progress.h"
+#include "omma/core/valid.h"
 
 namespace omma::pano {
 
 bool StitchOptions::IsValid(std::string* why) const {
-  auto fail = [&](const std::string& m) {
-    if (why) *why = m;
-    return false;
-  };
-  if (grid.width <= 0 || grid.height <= 0) return fail("panorama size must be positive");
+  if (grid.width <= 0 || grid.height <= 0) return invalid(why, "panorama size must be positive");
   if (!blend.search.IsValid(why)) return false;
-  if (!(blend.gaussian_sigma_rel > 0)) return fail("gaussian_sigma_rel must be > 0");
-  if (!(blend.sad_epsilon > 0)) return fail("sad_epsilon must be > 0");
+  if (!(blend.gaussian_sigma_rel > 0)) return invalid(why, "gaussian_sigma_rel must be > 0");
+  if (!(blend.sad_epsilon > 0)) return invalid(why, "sad_epsilon must be > 0");
   return true;
 }
 

@@ -16,6 +16,7 @@
 #include "omma/core/io.h"
 #include "omma/core/limits.h"
 #include "omma/core/log.h"
+#include "omma/core/valid.h"
 
 namespace omma::render {
 namespace {
@@ -234,10 +235,6 @@ ActiveRig active_cameras(const Rig& rig, const std::vector<bool>& active) {
 }
 
 bool MapOptions::IsValid(std::string* why) const {
-  auto fail = [&](const std::string& m) {
-    if (why) *why = m;
-    return false;
-  };
   try {
     // A map of the whole panorama is an image; a band map (window) may belong to a larger
     // panorama rendered band by band (core/limits.h).
@@ -248,16 +245,16 @@ bool MapOptions::IsValid(std::string* why) const {
       // A band spans the panorama's width (up to kMaxBandedSide) but holds at most an image's pixels.
       check_banded_size(window.width, window.height, "map window");
       if (int64_t(window.width) * window.height > kMaxImagePixels)
-        return fail(fmt::format("map window {}x{} holds more than {} pixels", window.width, window.height,
-                                kMaxImagePixels));
+        return invalid(why, fmt::format("map window {}x{} holds more than {} pixels", window.width,
+                                        window.height, kMaxImagePixels));
     }
   } catch (const std::invalid_argument& e) {
-    return fail(e.what());
+    return invalid(why, e.what());
   }
   if (!window.empty() && (window.x < 0 || window.y < 0 || window.x + window.width > grid.width ||
                           window.y + window.height > grid.height))
-    return fail("the map's window must lie inside the panorama");
-  if (!(min_weight >= 0 && min_weight < 0.5)) return fail("min_weight must be in [0, 0.5)");
+    return invalid(why, "the map's window must lie inside the panorama");
+  if (!(min_weight >= 0 && min_weight < 0.5)) return invalid(why, "min_weight must be in [0, 0.5)");
   return true;
 }
 
@@ -309,9 +306,9 @@ class TapCompiler {
     Rig rig;
     std::vector<int> to_full;  // block camera -> rig camera
     int bx0, by0, bx1, by1;
-    mutable std::vector<Node> found;
-    mutable std::vector<uint8_t> done;
-    mutable std::array<Node, 4> outside;
+    std::vector<Node> found;
+    std::vector<uint8_t> done;
+    std::array<Node, 4> outside;
   };
 
   Vec3 grid_dir(double x, double y) const { return opt_.grid.direction(x + wx_, y + wy_); }
@@ -360,7 +357,7 @@ class TapCompiler {
         pano::find_contributors(b.rig, opt_.grid.pixel_direction(col + wx_, row + wy_), opt_.params.search);
     if (needs_nb_) n.phi = pano::node_potentials(n.cs, spherical_);
   }
-  const Node& node(const Block& b, int col, int row, int slot) const {
+  const Node& node(Block& b, int col, int row, int slot) const {
     if (col >= b.bx0 && col < b.bx1 && row >= b.by0 && row < b.by1) {
       const size_t i = size_t(row - b.by0) * (b.bx1 - b.bx0) + (col - b.bx0);
       if (!b.done[i]) {
@@ -377,7 +374,7 @@ class TapCompiler {
   // at most kMaxTaps (the strongest), the faint ones dropped (MapOptions::min_weight), sorted by
   // camera so that tap t of neighbouring pixels usually comes from the same camera (the runs of the
   // map, compiled_map.h). Cameras are the block's.
-  std::vector<pano::Tap> weighted_taps(const Block& b, int col, int row) const {
+  std::vector<pano::Tap> weighted_taps(Block& b, int col, int row) const {
     const Node& u = node(b, col, row, 0);
     const std::vector<pano::Contributor>& cs = u.cs;
     if (cs.empty()) return {};

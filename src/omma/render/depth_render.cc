@@ -12,6 +12,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include "omma/core/valid.h"
 #include "omma/pano/stitch.h"
 #include "omma/pano/surface.h"
 
@@ -27,17 +28,14 @@ pano::PlaneSweepOptions engine_sweep_options() {
 }
 
 bool DepthRenderOptions::IsValid(std::string* why) const {
-  auto fail = [&](const std::string& m) {
-    if (why) *why = m;
-    return false;
-  };
   if (!map.IsValid(why)) return false;
   if (map.method == pano::Method::kSad)
-    return fail("the depth-adaptive renderer does not run sad (per-frame weights)");
+    return invalid(why, "the depth-adaptive renderer does not run sad (per-frame weights)");
   if (!sweep.IsValid(why)) return false;
-  if (!(reference_mm > 0) || !std::isfinite(reference_mm)) return fail("reference distance must be positive");
-  if (threads < 0) return fail("threads must be >= 0");
-  if (!(temporal_alpha > 0 && temporal_alpha <= 1)) return fail("temporal alpha must be in (0, 1]");
+  if (!(reference_mm > 0) || !std::isfinite(reference_mm))
+    return invalid(why, "reference distance must be positive");
+  if (threads < 0) return invalid(why, "threads must be >= 0");
+  if (!(temporal_alpha > 0 && temporal_alpha <= 1)) return invalid(why, "temporal alpha must be in (0, 1]");
   return true;
 }
 

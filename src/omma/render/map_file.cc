@@ -8,6 +8,7 @@
 #include "omma/core/checksum.h"
 #include "omma/core/io.h"
 #include "omma/core/limits.h"
+#include "omma/core/valid.h"
 #include "omma/render/compiled_map.h"
 
 namespace omma::render {
@@ -57,55 +58,49 @@ struct Reader {
 }  // namespace
 
 bool StoreLayout::IsValid(std::string* why) const {
-  auto fail = [&](const std::string& m) {
-    if (why) *why = m;
-    return false;
-  };
   const size_t n = row0.size();
   if (n == 0 || n > size_t(kMaxCameras) || size.size() != n)
-    return fail("bad camera count in the store layout");
+    return invalid(why, "bad camera count in the store layout");
   int64_t next = 0, widest = 0;
   for (size_t c = 0; c < n; ++c) {
     if (size[c].width < 1 || size[c].height < 1 || size[c].width > kMaxImageSide ||
         size[c].height > kMaxImageSide)
-      return fail("camera " + std::to_string(c) + ": frame size out of range");
+      return invalid(why, "camera " + std::to_string(c) + ": frame size out of range");
     if (row0[c] != next)
-      return fail("camera " + std::to_string(c) + ": first store row does not follow the previous camera");
+      return invalid(why,
+                     "camera " + std::to_string(c) + ": first store row does not follow the previous camera");
     next += size[c].height;
     widest = std::max<int64_t>(widest, size[c].width);
   }
-  if (rows != next || stride_px != widest) return fail("store rows or stride do not match the cameras");
-  if (bytes() >= kMaxStoreBytes) return fail("frame store too large");
+  if (rows != next || stride_px != widest)
+    return invalid(why, "store rows or stride do not match the cameras");
+  if (bytes() >= kMaxStoreBytes) return invalid(why, "frame store too large");
   return true;
 }
 
 bool CompiledMap::IsValid(std::string* why) const {
-  auto fail = [&](const std::string& m) {
-    if (why) *why = m;
-    return false;
-  };
   // A whole panorama's map or one band of a larger one (as wide as the panorama, core/limits.h).
   if (width <= 0 || height <= 0 || int64_t(width) * height > kMaxImagePixels || width > kMaxBandedSide ||
       height > kMaxImageSide)
-    return fail("map size out of range");
+    return invalid(why, "map size out of range");
   if (method != pano::Method::kNearest && method != pano::Method::kLinear &&
       method != pano::Method::kGaussian && method != pano::Method::kMrf &&
       method != pano::Method::kMrfSpherical && method != pano::Method::kSad)
-    return fail("unknown method");
-  if (!(std::isfinite(sad_epsilon) && sad_epsilon > 0)) return fail("sad epsilon out of range");
+    return invalid(why, "unknown method");
+  if (!(std::isfinite(sad_epsilon) && sad_epsilon > 0)) return invalid(why, "sad epsilon out of range");
   if (!layout.IsValid(why)) return false;
   const size_t nt = size_t(tiles());
   for (const auto* v : {&tile_run, &tile_tap, &tile_base, &tile_line})
     if (v->size() != nt + 1 || v->front() != 0 || !std::is_sorted(v->begin(), v->end()))
-      return fail("bad tile index");
+      return invalid(why, "bad tile index");
   if (tile_run.back() != runs.size() || tile_tap.back() != weight.size() || tile_base.back() != base.size() ||
       tile_line.back() != lines.size() || delta.size() != weight.size())
-    return fail("tile index does not match the arrays");
+    return invalid(why, "tile index does not match the arrays");
   const bool sad = method == pano::Method::kSad;
-  if (sad ? prior.size() != weight.size() : !prior.empty()) return fail("bad prior array");
+  if (sad ? prior.size() != weight.size() : !prior.empty()) return invalid(why, "bad prior array");
   const size_t store = layout.bytes();
   for (uint32_t l : lines)
-    if (l >= store) return fail("prefetch line outside the frame store");
+    if (l >= store) return invalid(why, "prefetch line outside the frame store");
   // Every run, pixel and tap: the renderers rely on these without checking (compiled_map.h).
   for (int t = 0; t < int(nt); ++t) {
     const int w = std::min(width, (t % tiles_x() + 1) * kTileW) - (t % tiles_x()) * kTileW;
@@ -114,42 +109,43 @@ bool CompiledMap::IsValid(std::string* why) const {
     for (int row = 0; row < h; ++row) {
       int cols = 0;
       for (;; r += 2) {
-        if (r + 1 >= tile_run[t + 1]) return fail("runs overflow their tile");
+        if (r + 1 >= tile_run[t + 1]) return invalid(why, "runs overflow their tile");
         const int n = runs[r], len = runs[r + 1];
         if (len == 0) break;
         if (n > kMaxTaps || b + n > tile_base[t + 1] || k + size_t(n) * len > tile_tap[t + 1] ||
             cols + len > w)
-          return fail("run overflows its tile");
+          return invalid(why, "run overflows its tile");
         for (int p = 0; p < len; ++p) {
           int sum = 0, prior_sum = 0;
           for (int i = 0; i < n; ++i, ++k) {
             const int64_t off = int64_t(base[b + i]) + delta[k];
-            if (off < 0 || size_t(off) * 2 + 16 > store) return fail("tap outside the frame store");
+            if (off < 0 || size_t(off) * 2 + 16 > store) return invalid(why, "tap outside the frame store");
             const uint32_t wk = weight[k];
             int tap = 0;
             for (int j = 0; j < 4; ++j) {
               const int wj = int(wk >> (8 * j) & 0xFF);
-              if (wj > 127) return fail("weight above 127");
+              if (wj > 127) return invalid(why, "weight above 127");
               tap += wj;
             }
             if (sad) {
-              if (tap != 128) return fail("sad tap weights do not sum to 128");
+              if (tap != 128) return invalid(why, "sad tap weights do not sum to 128");
               prior_sum += prior[k] + 1;
             }
             sum += tap;
           }
           // The output is sum(w v) / 128: the weights of a pixel sum to exactly 128 (the AVX2
           // kernel's 16-bit sums are exact only then); sad's priors to 256.
-          if (n > 0 && (sad ? prior_sum != 256 : sum != 128)) return fail("pixel weights do not sum to 128");
+          if (n > 0 && (sad ? prior_sum != 256 : sum != 128))
+            return invalid(why, "pixel weights do not sum to 128");
         }
         b += n;
         cols += len;
       }
       r += 2;
-      if (cols != w) return fail("tile row of the wrong width");
+      if (cols != w) return invalid(why, "tile row of the wrong width");
     }
     if (r != tile_run[t + 1] || k != tile_tap[t + 1] || b != tile_base[t + 1])
-      return fail("tile of the wrong size");
+      return invalid(why, "tile of the wrong size");
   }
   return true;
 }

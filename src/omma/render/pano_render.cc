@@ -8,20 +8,18 @@
 #include "omma/core/io.h"
 #include "omma/core/log.h"
 #include "omma/core/progress.h"
+#include "omma/core/valid.h"
 #include "omma/isp/photometric.h"
 
 namespace omma::render {
 
 bool PanoRenderOptions::IsValid(std::string* why) const {
-  auto fail = [&](const std::string& m) {
-    if (why) *why = m;
-    return false;
-  };
   if (grid.width < 1 || grid.height < 1 || grid.width > 1 << 20 || grid.height > 1 << 20)
-    return fail(fmt::format("panorama size {}x{} must be 1..1048576 per side", grid.width, grid.height));
-  if (band_rows < 1) return fail("band_rows must be >= 1");
-  if (!(min_weight >= 0 && min_weight < 0.5)) return fail("min_weight must be in [0, 0.5)");
-  if (!resident_maps && cache_dir.empty()) return fail("non-resident maps need a cache folder");
+    return invalid(why,
+                   fmt::format("panorama size {}x{} must be 1..1048576 per side", grid.width, grid.height));
+  if (band_rows < 1) return invalid(why, "band_rows must be >= 1");
+  if (!(min_weight >= 0 && min_weight < 0.5)) return invalid(why, "min_weight must be in [0, 0.5)");
+  if (!resident_maps && cache_dir.empty()) return invalid(why, "non-resident maps need a cache folder");
   return true;
 }
 

@@ -11,6 +11,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include "omma/core/valid.h"
 #include "omma/pano/stitch.h"
 
 #if defined(__x86_64__) || defined(__i386__)
@@ -312,14 +313,10 @@ Kernel best_kernel() {
 }
 
 bool RenderOptions::IsValid(std::string* why) const {
-  auto fail = [&](const std::string& m) {
-    if (why) *why = m;
-    return false;
-  };
-  if (threads < 0) return fail("threads must be >= 0 (0 = all)");
+  if (threads < 0) return invalid(why, "threads must be >= 0 (0 = all)");
   if (kernel != Kernel::kAuto && kernel != Kernel::kScalar && kernel != Kernel::kAvx2 &&
       kernel != Kernel::kAvx512Vnni)
-    return fail("unknown render kernel");
+    return invalid(why, "unknown render kernel");
   return true;
 }
 

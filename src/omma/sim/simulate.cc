@@ -11,19 +11,18 @@
 #include "omma/core/frames.h"
 #include "omma/core/io.h"
 #include "omma/core/progress.h"
+#include "omma/core/valid.h"
 
 namespace omma::sim {
 namespace fs = std::filesystem;
 
 bool SimulateOptions::IsValid(std::string* why) const {
-  auto fail = [&](const std::string& m) {
-    if (why) *why = m;
-    return false;
-  };
-  if (truth && (truth_grid.width <= 0 || truth_grid.height <= 0)) return fail("truth size must be positive");
-  if (shots < 1 || shots > 1000) return fail(fmt::format("shots must be 1..1000, got {}", shots));
+  if (truth && (truth_grid.width <= 0 || truth_grid.height <= 0))
+    return invalid(why, "truth size must be positive");
+  if (shots < 1 || shots > 1000) return invalid(why, fmt::format("shots must be 1..1000, got {}", shots));
   if (truth_supersample < 0 || truth_supersample > 16)
-    return fail(fmt::format("truth supersample must be 0 (auto) or 1..16, got {}", truth_supersample));
+    return invalid(why,
+                   fmt::format("truth supersample must be 0 (auto) or 1..16, got {}", truth_supersample));
   return true;
 }
 

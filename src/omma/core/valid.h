@@ -1,0 +1,14 @@
+// The refusal every options struct's IsValid(std::string* why) gives (CONTRIBUTING.md, "IsValid on
+// options"): the reason into *why when the caller asked for it, and false.
+#pragma once
+
+#include <string>
+
+namespace omma {
+
+inline bool invalid(std::string* why, const std::string& reason) {
+  if (why) *why = reason;
+  return false;
+}
+
+}  // namespace omma
