@@ -31,6 +31,12 @@ struct Intrinsics {
   bool has_distortion() const;
   // Focal length (pixels) that makes a centred W x H sensor's half-width see aov/2.
   static double focal_for_aov(int width, double aov);
+  // Why the lens model cannot describe this camera, or "" if it can: the distortion (eq. 5.23-5.26)
+  // must map the camera's field one to one, i.e. the radial mapping increases (radial_fold) and the
+  // Jacobian of distort stays positive over the field's undistorted radius: tan(aov / 2) for kCone,
+  // for kImage the radius at which the radial mapping reaches the image's farthest corner. For
+  // kImage, directions past that radius must not map back inside it.
+  std::string lens_problem() const;
   // Full angle of the smallest cone around the optical axis holding the whole image: twice the
   // largest angle between the axis and the ray through any point of the image border (sampled
   // every pixel along the border, so distortion is included).
@@ -43,8 +49,19 @@ std::string to_string(Intrinsics::Field f);
 // Normalised (undistorted) image-plane coordinates -> distorted normalised coordinates
 // (eq. 5.23-5.26).
 Vec2 distort(const std::array<double, 5>& k, const Vec2& xy);
-// Inverse of distort by fixed-point iteration (converges for the mild distortion of real lenses).
+// Inverse of distort: fixed-point iteration (converges for the mild distortion of real lenses),
+// else Newton's method on the monotonic part of the radial mapping. Always finite and bounded: a
+// point beyond the lens model's reach (past the radius where the radial mapping folds back,
+// radial_fold) comes back at the fold radius in its own direction.
 Vec2 undistort(const std::array<double, 5>& k, const Vec2& xy_distorted, int iterations = 20);
+// The radial mapping of eq. 5.24 (tangential terms aside): r_d(r) = r (1 + k1 r^2 + k2 r^4 + k5 r^6)
+// for the undistorted normalised radius r = tan(angle from the axis).
+double radial_distort(const std::array<double, 5>& k, double r);
+// The smallest undistorted radius r > 0 where r_d(r) stops increasing (dr_d/dr <= 0): beyond it the
+// model folds back and is not a lens. +infinity if r_d increases up to kMaxLensRadius.
+double radial_fold(const std::array<double, 5>& k);
+// tan(89.9 deg): the widest undistorted radius any lens check or inverse considers.
+inline constexpr double kMaxLensRadius = 572.96;
 
 struct CameraModel {
   Frame frame;
@@ -54,7 +71,8 @@ struct CameraModel {
   // kImage: w projects inside the image bounds (w need not be unit).
   bool sees(const Vec3& w) const;
   // eq. 5.21-5.26: continuous pixel coordinates (col, row) of direction w (need not be unit).
-  // nullopt if w is behind the camera (w.t <= 0). Does NOT check the image bounds or the aov.
+  // nullopt if w is behind the camera (w.t <= 0) or where the distortion folds back (the radial
+  // mapping decreases or changes sign there: not a lens). Does NOT check the image bounds or the aov.
   std::optional<Vec2> project(const Vec3& w) const;
   // Is the continuous coordinate inside the image [0, W) x [0, H)?
   bool inside(const Vec2& px) const {

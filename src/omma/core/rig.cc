@@ -152,6 +152,7 @@ void validate_camera(const RigCamera& c) {
                                  where, k, kMaxDistortion));
   if (!std::isfinite(in.aov) || in.aov <= 0 || in.aov >= kPi)
     throw RigError(fmt::format("{}: angle of view {} deg must be in (0, 180)", where, rad2deg(in.aov)));
+  if (const std::string lens = in.lens_problem(); !lens.empty()) throw RigError(where + ": " + lens);
   if (c.photometric) {
     try {
       validate_photometric(*c.photometric, in.width, in.height, where);

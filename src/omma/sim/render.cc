@@ -164,7 +164,8 @@ cv::Mat encode_srgb8(const cv::Mat& linear) {
       const float* s = linear.ptr<float>(r);
       uchar* d = out.ptr<uchar>(r);
       for (int i = 0; i < linear.cols * 3; ++i) {
-        float v = std::clamp(s[i], 0.0f, 1.0f);
+        // NaN -> 0 and +inf -> 1 (std::clamp passes NaN through, and NaN would index the table).
+        const float v = s[i] > 0 ? std::min(s[i], 1.0f) : 0.0f;
         float x = v <= 0.0031308f ? 12.92f * v * 255.0f : -1.0f;
         if (x < 0) {
           const float f = v * 4096.0f;

@@ -21,6 +21,8 @@ class PhotoScene final : public Scene {
  public:
   PhotoScene(const cv::Mat& image, std::string spec) : spec_(std::move(spec)) {
     if (image.empty()) throw SceneError("photo scene: empty image");
+    if (image.depth() != CV_8U && image.depth() != CV_16U && !cv::checkRange(image))
+      throw SceneError("photo scene: the image holds NaN or infinite values");
     cv::Mat bgr = image;
     if (bgr.channels() == 1) cv::cvtColor(bgr, bgr, cv::COLOR_GRAY2BGR);
     if (bgr.channels() == 4) cv::cvtColor(bgr, bgr, cv::COLOR_BGRA2BGR);
@@ -83,8 +85,9 @@ unsigned hash_cell(int a, int b) {
 class CheckerScene final : public Scene {
  public:
   explicit CheckerScene(double radius) : radius_(radius) {
-    if (!(radius > 0) || !std::isfinite(radius))
-      throw SceneError(fmt::format("checker scene: radius must be a positive number of mm, got {}", radius));
+    if (!(radius > 0 && radius <= kMaxSceneMm))
+      throw SceneError(
+          fmt::format("checker scene: radius must be in (0, {}] mm, got {}", kMaxSceneMm, radius));
   }
   cv::Vec3f radiance(const Vec3& o, const Vec3& d, const Vec3&) const override {
     // |o + s d| = R, s > 0 (origin inside the sphere).
@@ -119,8 +122,9 @@ class CheckerScene final : public Scene {
 class UsafScene final : public Scene {
  public:
   explicit UsafScene(double distance) : distance_(distance) {
-    if (!(distance > 0) || !std::isfinite(distance))
-      throw SceneError(fmt::format("usaf scene: distance must be a positive number of mm, got {}", distance));
+    if (!(distance > 0 && distance <= kMaxSceneMm))
+      throw SceneError(
+          fmt::format("usaf scene: distance must be in (0, {}] mm, got {}", kMaxSceneMm, distance));
   }
   cv::Vec3f radiance(const Vec3& o, const Vec3& d, const Vec3&) const override {
     if (d.z() <= 1e-9 || o.z() >= distance_) return {0.01f, 0.01f, 0.01f};

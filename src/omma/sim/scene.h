@@ -73,6 +73,12 @@ struct ColonParams {
 };
 std::unique_ptr<Scene> make_colon_scene(const ColonParams& params = {});
 
+// Bounds of the scene parameters (every make_*_scene refuses values outside them): distances and
+// radii up to 1 km (the dome is 5 mm; farther is the far field), radiance levels up to 1000 x the
+// sensor's full scale (beyond that every pixel clips anyway).
+inline constexpr double kMaxSceneMm = 1e6;
+inline constexpr double kMaxSceneLevel = 1e3;
+
 // USAF 1951 chart on the plane z = distance_mm (default 25 mm, thesis §5.5.2), black bars on a white
 // card, uniformly lit (usaf.h gives the chart geometry). Outside the card: mid grey; rays that never
 // reach the plane (dir.z <= 0): dark.

@@ -43,8 +43,10 @@ class TubeScene final : public Scene {
     if (!(p.diameter_mm > 2 * 5.5) || !std::isfinite(p.diameter_mm) || p.diameter_mm > 1000)
       throw SceneError(fmt::format(
           "tube scene: diameter must be 11..1000 mm (the dome has a 5 mm radius), got {}", p.diameter_mm));
-    if (!(p.length_mm > 0) || !(p.back_mm > 0) || !(p.brightness > 0))
-      throw SceneError("tube scene: length, back and brightness must be positive");
+    if (!(p.length_mm > 0 && p.length_mm <= kMaxSceneMm) || !(p.back_mm > 0 && p.back_mm <= kMaxSceneMm) ||
+        !(p.brightness > 0 && p.brightness <= kMaxSceneLevel))
+      throw SceneError(fmt::format("tube scene: length and back must be in (0, {}] mm, brightness in (0, {}]",
+                                   kMaxSceneMm, kMaxSceneLevel));
     radius_ = p.diameter_mm / 2;
     circumference_ = 2 * kPi * radius_;
   }
@@ -103,8 +105,9 @@ class TubeScene final : public Scene {
 class FlatScene final : public Scene {
  public:
   explicit FlatScene(double level) : level_(level) {
-    if (!(level > 0) || !std::isfinite(level))
-      throw SceneError(fmt::format("flat scene: level must be a positive radiance, got {}", level));
+    if (!(level > 0 && level <= kMaxSceneLevel))
+      throw SceneError(
+          fmt::format("flat scene: level must be a radiance in (0, {}], got {}", kMaxSceneLevel, level));
   }
   cv::Vec3f radiance(const Vec3&, const Vec3&, const Vec3&) const override {
     const float l = static_cast<float>(level_);
