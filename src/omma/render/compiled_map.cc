@@ -1,5 +1,8 @@
 #include "omma/render/compiled_map.h"
 
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <array>
 #include <chrono>
@@ -601,18 +604,55 @@ std::filesystem::path default_cache_dir() {
   if (const char* d = std::getenv("OMMA_CACHE_DIR"); d && *d) return d;
   if (const char* d = std::getenv("XDG_CACHE_HOME"); d && *d) return std::filesystem::path(d) / "omma";
   if (const char* d = std::getenv("HOME"); d && *d) return std::filesystem::path(d) / ".cache" / "omma";
-  return "/tmp/omma-cache";
+  return fmt::format("/tmp/omma-cache-{}", ::getuid());
+}
+
+namespace {
+
+// Who owns `st` and who else may write it: "" if only the user running omma may.
+std::string owner_problem(const struct stat& st, const std::string& what) {
+  if (st.st_uid != ::getuid())
+    return fmt::format("{} belongs to user {}, not to you (user {})", what, st.st_uid, ::getuid());
+  if (st.st_mode & (S_IWGRP | S_IWOTH))
+    return fmt::format("{} may be written by others (mode {:o}; chmod go-w it)", what, st.st_mode & 07777);
+  return "";
+}
+
+// A cached map file: a regular file (not a link) of the user, written by no one else.
+std::string cache_file_problem(const std::filesystem::path& file) {
+  struct stat st {};
+  if (::lstat(file.c_str(), &st) != 0) return "";  // missing: compiled and written
+  if (!S_ISREG(st.st_mode)) return "map cache file " + file.string() + " is not a regular file";
+  return owner_problem(st, "map cache file " + file.string());
+}
+
+}  // namespace
+
+std::string cache_dir_problem(const std::filesystem::path& dir) {
+  struct stat st {};
+  if (::lstat(dir.c_str(), &st) != 0) return "";  // missing: created with mode 0700
+  if (S_ISLNK(st.st_mode) && ::stat(dir.c_str(), &st) != 0)
+    return "map cache folder " + dir.string() + " is a dangling link";
+  if (!S_ISDIR(st.st_mode)) return "map cache folder " + dir.string() + " is not a folder";
+  return owner_problem(st, "map cache folder " + dir.string());
 }
 
 MapLoad compile_map_cached(const Rig& rig, const MapOptions& opt, const std::filesystem::path& cache_dir) {
   const auto t0 = std::chrono::steady_clock::now();
   MapLoad out;
   std::string key;
-  if (!cache_dir.empty()) {
+  std::filesystem::path dir = cache_dir;
+  if (const std::string problem = dir.empty() ? "" : cache_dir_problem(dir); !problem.empty()) {
+    spdlog::warn("map cache not used: {}", problem);
+    dir.clear();
+  }
+  if (!dir.empty()) {
     key = map_key(rig, opt);
-    out.file = cache_dir / ("omma-map-" + key + ".bin");
+    out.file = dir / ("omma-map-" + key + ".bin");
     std::string why;
-    if (auto m = load_map(out.file, rig, opt, &why)) {
+    if (const std::string problem = cache_file_problem(out.file); !problem.empty()) {
+      spdlog::warn("map cache file not used: {}: compiling the map again", problem);
+    } else if (auto m = load_map(out.file, rig, opt, &why)) {
       out.map = std::move(*m);
       out.from_cache = true;
     } else if (std::error_code ec; std::filesystem::exists(out.file, ec)) {
@@ -621,10 +661,15 @@ MapLoad compile_map_cached(const Rig& rig, const MapOptions& opt, const std::fil
   }
   if (!out.from_cache) {
     out.map = compile_map(rig, opt);
-    if (!cache_dir.empty()) {
+    if (!dir.empty()) {
       try {
-        std::filesystem::create_directories(cache_dir);
+        if (!std::filesystem::exists(dir)) {
+          std::filesystem::create_directories(dir);
+          std::filesystem::permissions(dir, std::filesystem::perms::owner_all);  // 0700
+        }
         save_map(out.map, out.file, key);
+        std::filesystem::permissions(
+            out.file, std::filesystem::perms::owner_read | std::filesystem::perms::owner_write);
       } catch (const std::exception& e) {
         spdlog::warn("map cache not written ({})", e.what());
       }

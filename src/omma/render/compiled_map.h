@@ -216,8 +216,18 @@ std::optional<CompiledMap> load_map(const std::filesystem::path& path, const Rig
                                     std::string* why = nullptr);
 
 // Default cache folder: $OMMA_CACHE_DIR, else $XDG_CACHE_HOME/omma, else ~/.cache/omma, else
-// /tmp/omma-cache.
+// /tmp/omma-cache-UID (the user's own folder in /tmp, never one shared between users).
 std::filesystem::path default_cache_dir();
+
+// The cache's trust model. A cached map decides every output pixel, and its name is a public hash of
+// the rig and the options while its checksums can be recomputed by anyone: a map file is trusted
+// only because nobody but the user could have put it there. So, as ssh checks ~/.ssh, the cache is
+// used only if its folder belongs to the user running omma and no one else may write it (mode
+// without group/other write), and a map file only if it is a regular file (not a link) of that user
+// not writable by others. cache_dir_problem says why a folder fails ("" if it may be used; a missing
+// folder may be: it is created with mode 0700); compile_map_cached then warns and compiles without
+// the cache.
+std::string cache_dir_problem(const std::filesystem::path& dir);
 
 struct MapLoad {
   CompiledMap map;
@@ -228,7 +238,8 @@ struct MapLoad {
 // Loads the map from `cache_dir`/omma-map-<key>.bin, or compiles and stores it there (atomically).
 // A cached file that fails load_map (damaged, truncated, written for other options) is never used:
 // a warning names the reason, and the map is compiled and the file replaced.
-// An empty cache_dir disables the cache. A cache write failure is logged, not fatal.
+// An empty cache_dir disables the cache, and so does one that fails cache_dir_problem (with a
+// warning). A cache write failure is logged, not fatal.
 MapLoad compile_map_cached(const Rig& rig, const MapOptions& opt, const std::filesystem::path& cache_dir);
 
 // ---------------------------------------------------------------------------------------------

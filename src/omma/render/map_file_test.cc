@@ -1,5 +1,7 @@
 // Compiled-map files are untrusted input: a damaged cache file is refused
 // and recompiled, never rendered from.
+#include <unistd.h>
+
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -169,6 +171,51 @@ TEST(MapFile, DamagedCacheFileIsRecompiledAndReplaced) {
   std::filesystem::resize_file(first.file, good.size() / 2);
   EXPECT_FALSE(compile_map_cached(f.rig, f.opt, dir).from_cache);
   std::filesystem::remove_all(dir);
+}
+
+// The cache is used only where no one but the user could have planted a map (compiled_map.h: the
+// trust model): a folder or file others may write is passed over, with the same result.
+TEST(MapFile, CacheOthersCanWriteIsNotUsed) {
+  namespace fs = std::filesystem;
+  const Fixture f;
+  const auto dir = fs::temp_directory_path() / "omma_map_cache_trust_test";
+  fs::remove_all(dir);
+  const MapLoad first = compile_map_cached(f.rig, f.opt, dir);  // creates the folder, mode 0700
+  EXPECT_EQ(fs::status(dir).permissions() & fs::perms::all, fs::perms::owner_all);
+  EXPECT_EQ(fs::status(first.file).permissions() & fs::perms::all,
+            fs::perms::owner_read | fs::perms::owner_write);
+  EXPECT_TRUE(compile_map_cached(f.rig, f.opt, dir).from_cache);
+  EXPECT_EQ(cache_dir_problem(dir), "");
+  // A folder anyone may write, like a shared /tmp/omma-cache: not used, the map compiled.
+  fs::permissions(dir, fs::perms::all);
+  EXPECT_NE(cache_dir_problem(dir).find("may be written by others"), std::string::npos)
+      << cache_dir_problem(dir);
+  const MapLoad shared = compile_map_cached(f.rig, f.opt, dir);
+  EXPECT_FALSE(shared.from_cache);
+  EXPECT_TRUE(same(f.render_of(shared.map), f.want));
+  fs::permissions(dir, fs::perms::owner_all);
+  // A map file others may write, or a link in place of one: not used.
+  fs::permissions(first.file, fs::perms::group_write, fs::perm_options::add);
+  EXPECT_FALSE(compile_map_cached(f.rig, f.opt, dir).from_cache);  // ... and replaced by a private one
+  EXPECT_TRUE(compile_map_cached(f.rig, f.opt, dir).from_cache);
+  const fs::path elsewhere = dir.string() + "_planted.bin";
+  fs::copy_file(first.file, elsewhere, fs::copy_options::overwrite_existing);
+  fs::remove(first.file);
+  fs::create_symlink(elsewhere, first.file);
+  EXPECT_FALSE(compile_map_cached(f.rig, f.opt, dir).from_cache);
+  // A link to a folder of someone else's, or a file in place of the folder.
+  if (::getuid() == 0) {
+    const fs::path other = dir.string() + "_other";
+    fs::create_directories(other);
+    ASSERT_EQ(::chown(other.c_str(), 65534, 65534), 0);
+    EXPECT_NE(cache_dir_problem(other).find("belongs to user 65534"), std::string::npos);
+    fs::remove_all(other);
+  }
+  std::ofstream(dir.string() + "_file") << "x";
+  EXPECT_NE(cache_dir_problem(dir.string() + "_file").find("not a folder"), std::string::npos);
+  fs::remove(dir.string() + "_file");
+  fs::remove(elsewhere);
+  fs::remove_all(dir);
 }
 
 }  // namespace

@@ -26,6 +26,10 @@ bool PanoRenderOptions::IsValid(std::string* why) const {
 PanoRenderer::PanoRenderer(const Rig& rig, const PanoRenderOptions& options) : rig_(rig), opt_(options) {
   if (std::string why; !opt_.IsValid(&why)) throw std::invalid_argument("render: " + why);
   rig_.validate();
+  if (const std::string problem = opt_.resident_maps ? "" : cache_dir_problem(opt_.cache_dir);
+      !problem.empty())
+    throw std::invalid_argument("render: maps kept out of memory need a map cache only you can write: " +
+                                problem);
   store_ = FrameStore(StoreLayout::for_rig(rig_));
   if (opt_.offline) return;  // the offline blend needs no maps
   const auto t0 = std::chrono::steady_clock::now();
