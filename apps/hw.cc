@@ -451,7 +451,10 @@ void run_export(const ExArgs& a) {
   const Rig rig = design::load_rig_or_builtin(a.rig);
   const double exponent = memory_exponent(a.memory_encoding);
   const bool photometric = !a.no_photometric && has_photometric(rig);
-  if (photometric) o.vignetting = hw::vignetting_from_rig(rig, exponent);
+  if (photometric) {
+    o.vignetting = hw::vignetting_from_rig(rig, exponent);
+    o.vignetting_exponent = exponent;
+  }
   const hw::ExportSummary s = hw::export_chip(rig, o, a.dir);
   nlohmann::json j = {
       {"dir", a.dir},
@@ -501,7 +504,10 @@ void run_import(const ImArgs& a) {
       {"method", pano::to_string(r.chip.method)},
       {"grid",
        {{"projection", to_string(r.grid.projection)}, {"width", r.grid.width}, {"height", r.grid.height}}},
-      {"quantisation_bound", diff_json(b)}};
+      {"quantisation_bound", diff_json(b)},
+      {"photometric_cameras", std::count_if(r.rig.cameras.begin(), r.rig.cameras.end(),
+                                            [](const RigCamera& c) { return c.photometric.has_value(); })},
+      {"vignetting_fit_error", r.vignetting_error}};
   if (!a.compare.empty())
     j["difference"] = diff_json(hw::rig_difference(design::load_rig_or_builtin(a.compare), r.rig));
   if (a.json)

@@ -9,7 +9,10 @@
 #include <fmt/format.h>
 
 #include "omma/core/io.h"
+#include "omma/core/limits.h"
+#include "omma/core/photometric.h"
 #include "omma/core/valid.h"
+#include "omma/hw/tables.h"
 
 namespace omma::hw {
 
@@ -21,6 +24,19 @@ bool ExportOptions::IsValid(std::string* why) const {
 }
 
 namespace {
+
+// A JSON integer within [lo, hi]: not a float, a bool or a value that would wrap in an int.
+int json_int(const nlohmann::json& j, const std::string& what, int64_t lo, int64_t hi) {
+  bool ok = j.is_number_integer();
+  int64_t v = 0;
+  if (ok && j.is_number_unsigned())
+    ok = j.get<uint64_t>() <= uint64_t(hi), v = ok ? int64_t(j.get<uint64_t>()) : 0;
+  else if (ok)
+    v = j.get<int64_t>();
+  if (!ok || v < lo || v > hi)
+    throw std::invalid_argument(fmt::format("{} must be an integer {}..{}, got {}", what, lo, hi, j.dump()));
+  return static_cast<int>(v);
+}
 
 struct IntField {
   const char* name;
@@ -145,9 +161,8 @@ HwConfig config_from_json(const nlohmann::json& j) {
     bool found = false;
     for (const auto& f : int_fields())
       if (it.key() == f.name) {
-        if (!it->is_number_integer())
-          throw std::invalid_argument(fmt::format("hardware configuration: {} must be an integer", f.name));
-        cfg.*(f.member) = it->get<int>();
+        cfg.*(f.member) =
+            json_int(*it, "hardware configuration: " + std::string(f.name), -(1 << 30), 1 << 30);
         found = true;
       }
     for (const auto& f : bool_fields())
@@ -240,6 +255,7 @@ ExportSummary export_chip(const Rig& rig, const ExportOptions& opt, const std::f
                          {"height", opt.grid.height}}},
                        {"method", pano::to_string(opt.method)},
                        {"boundary", opt.boundary}};
+  if (opt.vignetting_exponent > 0) cj["vignetting_exponent"] = opt.vignetting_exponent;
   write_text(dir / "config.json", cj.dump(2) + "\n", s);
   write_text(dir / "regs.hex",
              readmemh_text(ws.reg, 8, "omma hw: global register writes [31]=we [30:16]=address [15:0]=data"),
@@ -294,6 +310,49 @@ ExportSummary export_chip(const Rig& rig, const ExportOptions& opt, const std::f
   return s;
 }
 
+namespace {
+
+// The rig's photometric model back from the vignetting memory (the inverse of make_vignetting_tables
+// with vignetting_from_rig): per camera V = g^(-1/e) at each table radius within the image, fitted
+// by core/photometric.h's fit_vignetting, the centre at the principal point (what the table is
+// indexed by), gains from the channel words. Cameras whose tables are all 1.0 get no model. Returns
+// the largest relative error of the fits.
+double photometric_from_tables(const HwConfig& cfg, const VignettingTables& vt, double exponent, Rig& rig) {
+  const double one = std::ldexp(1.0, cfg.vig_frac_bits);
+  double worst = 0;
+  for (size_t i = 0; i < rig.cameras.size(); ++i) {
+    RigCamera& c = rig.cameras[i];
+    const auto& radial = vt.radial.at(i);
+    const auto& ch = vt.channel.at(i);
+    const bool unit = std::all_of(radial.begin(), radial.end(), [&](uint32_t g) { return g == one; }) &&
+                      ch[0] == one && ch[1] == one && ch[2] == one;
+    if (unit) continue;
+    const double rmax = vignetting_rmax(c.in), rnorm = std::hypot(c.in.width / 2.0, c.in.height / 2.0);
+    std::vector<double> s, v;
+    for (size_t e = 0; e < radial.size(); ++e) {
+      const double rho = std::sqrt((e + 0.5) * std::ldexp(1.0, vt.vig_shift)) / rmax;
+      if (rho > 1) break;
+      if (radial[e] == 0)
+        throw std::invalid_argument(fmt::format("pix_val.hex: camera {}'s vignetting entry {} is 0", i, e));
+      s.push_back(std::pow(rho * rmax / rnorm, 2));
+      v.push_back(std::pow(radial[e] / one, -1 / exponent));
+    }
+    if (std::any_of(ch.begin(), ch.end(), [](uint32_t g) { return g == 0; }))
+      throw std::invalid_argument(fmt::format("pix_val.hex: camera {} has a channel gain of 0", i));
+    Photometric p;
+    double err = 0;
+    if (s.size() >= 3) p.vignetting = fit_vignetting(s, v, &err);
+    worst = std::max(worst, err);
+    p.center_px = Vec2(c.in.cu - c.in.width / 2.0, c.in.cv - c.in.height / 2.0);
+    p.gains = {std::pow(ch[2] / one, -1 / exponent), std::pow(ch[1] / one, -1 / exponent),
+               std::pow(ch[0] / one, -1 / exponent)};  // B, G, R from the R, G, B words
+    c.photometric = p;
+  }
+  return worst;
+}
+
+}  // namespace
+
 ImportSummary import_chip(const std::filesystem::path& dir) {
   ImportSummary r;
   nlohmann::json cj;
@@ -309,9 +368,15 @@ ImportSummary import_chip(const std::filesystem::path& dir) {
   r.config = config_from_json(cj["hw"]);
   if (cj.contains("grid")) {
     const auto& g = cj["grid"];
+    if (!g.is_object() || !g.value("projection", nlohmann::json("vr180")).is_string())
+      throw std::invalid_argument((dir / "config.json").string() +
+                                  ": grid must be {projection, width, height}");
     r.grid.projection = parse_projection(g.value("projection", "vr180"));
-    r.grid.width = g.value("width", 1080);
-    r.grid.height = g.value("height", 1080);
+    r.grid.width =
+        json_int(g.value("width", nlohmann::json(1080)), "config.json: grid width", 1, kMaxImageSide);
+    r.grid.height =
+        json_int(g.value("height", nlohmann::json(1080)), "config.json: grid height", 1, kMaxImageSide);
+    check_image_size(r.grid.width, r.grid.height, "config.json: grid");
   }
   WordStreams ws;
   ws.reg = parse_words(read_text_file(dir / "regs.hex"), "regs.hex");
@@ -327,6 +392,12 @@ ImportSummary import_chip(const std::filesystem::path& dir) {
   }
   r.rig.dome.radius_mm = rmax > 0 ? rmax : 5.0;
   r.rig.dome.method = "imported";
+  if (cj.contains("vignetting_exponent")) {
+    const auto& e = cj["vignetting_exponent"];
+    if (!e.is_number() || !(e.get<double>() > 0 && e.get<double>() <= 1))
+      throw std::invalid_argument((dir / "config.json").string() + ": vignetting_exponent must be in (0, 1]");
+    r.vignetting_error = photometric_from_tables(r.config, r.chip.vignetting, e.get<double>(), r.rig);
+  }
   r.rig.validate();
   return r;
 }

@@ -37,6 +37,10 @@ struct ExportOptions {
   pano::Method method = pano::Method::kLinear;
   bool boundary = false;
   VignettingModel vignetting;  // empty: unit tables (no correction)
+  // The exponent e of `vignetting` when it is the rig's photometric model (vignetting_from_rig; 1 or
+  // kSrgbVignettingExponent), written to config.json so that import_chip can give the model back;
+  // 0: the tables hold no model.
+  double vignetting_exponent = 0;
 
   // False (with the reason in *why) when a value lies outside the range the code relies on.
   bool IsValid(std::string* why = nullptr) const;
@@ -55,10 +59,14 @@ struct ImportSummary {
   HwConfig config;
   PanoGrid grid;
   ChipConfig chip;
-  Rig rig;  // cameras from the registers (tables.h camera_from_regs)
+  Rig rig;  // cameras from the registers (tables.h camera_from_regs), with the photometric model
+            // fitted to the vignetting memory where config.json names its exponent
+  double vignetting_error = 0;  // largest relative error of that fit (0 without a model)
 };
 // Reads config.json and the four word streams. Throws std::invalid_argument / IoError naming the
-// file, line and field on corrupt input.
+// file, line and field on corrupt input: integers that are not JSON integers in their field's range,
+// a grid outside core/limits.h, a vignetting memory (pix_val.hex) that does not set every entry of
+// every camera exactly once.
 ImportSummary import_chip(const std::filesystem::path& dir);
 
 // Largest differences between two rigs with the same cameras (the round trip's error).

@@ -348,7 +348,24 @@ ChipConfig decode(const HwConfig& cfg, const WordStreams& s) {
           fmt::format("pix_val stream word {}: address 0x{:04X} is beyond the vignetting "
                       "memory ({} words)",
                       i, addr, words));
+    if (mem[addr] >= 0)
+      throw std::invalid_argument(
+          fmt::format("pix_val stream word {}: address 0x{:04X} is written a second time", i, addr));
     mem[addr] = static_cast<int>(w & 0xFFFF);
+  }
+  // Every camera's table must be there: an empty, truncated or foreign stream is refused, not read
+  // as unit gains.
+  for (int cam = 0; cam < ncams; ++cam) {
+    for (int i = 0; i < cfg.vig_entries(); ++i)
+      if (mem[vig_radial_address(cfg, cam, i)] < 0)
+        throw std::invalid_argument(fmt::format(
+            "pix_val stream: camera {}'s vignetting entry {} is missing ({} words for {} cameras of {} "
+            "entries and 3 channel gains)",
+            cam, i, s.pix_val.size(), ncams, cfg.vig_entries()));
+    for (int k = 0; k < 3; ++k)
+      if (mem[vig_channel_address(cfg, cam, k)] < 0)
+        throw std::invalid_argument(
+            fmt::format("pix_val stream: camera {}'s channel gain {} is missing", cam, "RGB"[k]));
   }
   c.vignetting.vig_shift = c.vig_shift;
   const uint32_t one = 1u << cfg.vig_frac_bits;
