@@ -11,6 +11,7 @@
 #include "apps/command.h"
 #include "omma/core/grid.h"
 #include "omma/core/io.h"
+#include "omma/core/limits.h"
 #include "omma/core/log.h"
 #include "omma/core/rig.h"
 #include "omma/design/dome.h"
@@ -29,8 +30,11 @@ double parse_distance(const std::string& text) {
   } catch (const std::exception&) {
     used = 0;
   }
-  if (used != text.size() || !(d > 0) || !std::isfinite(d))
-    throw std::invalid_argument("--distance must be a positive number of mm or 'inf', got '" + text + "'");
+  if (used != text.size() || !(d > 0 && d <= kMaxPositionMm))
+    throw std::invalid_argument(fmt::format(
+        "--distance must be a number of mm in (0, {}] or 'inf' (beyond 1 km every direction is at infinity), "
+        "got '{}'",
+        kMaxPositionMm, text));
   return d;
 }
 

@@ -1,5 +1,10 @@
 // omma: compound-eye camera toolkit. The command is a table of subcommands over the library.
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <exception>
 #include <iostream>
 
@@ -45,6 +50,48 @@ static const CommandEntry kCommands[] = {
     {"demo", add_demo_command},
 };
 
+// Every numeric option of every command takes only what its type holds, checked where the value
+// enters: FLOAT options a finite number (CLI11's own parsing and its Range checks let NaN and inf
+// through), INT and UINT options a plain decimal integer in range (strtoull reads "-1" as 2^64 - 1,
+// base 0 reads "010" as 8 and "0x10" as 16, and an overflow saturates).
+void check_numeric_options(CLI::App& app) {
+  static const CLI::Validator finite(
+      [](std::string& text) -> std::string {
+        char* end = nullptr;
+        const double v = std::strtod(text.c_str(), &end);
+        if (end == text.c_str() || *end != '\0') return "";  // not a number: CLI11 says so itself
+        return std::isfinite(v) ? "" : "must be a finite number, got '" + text + "'";
+      },
+      "");
+  auto integer = [](bool is_signed) {
+    return CLI::Validator(
+        [is_signed](std::string& text) -> std::string {
+          const size_t digits = is_signed && !text.empty() && text[0] == '-' ? 1 : 0;
+          if (text.size() == digits ||
+              !std::all_of(text.begin() + digits, text.end(), [](char c) { return c >= '0' && c <= '9'; }))
+            return "must be a whole number" + std::string(is_signed ? "" : " >= 0") + ", got '" + text + "'";
+          // Decimal: "010" is ten (CLI11 would read it as octal).
+          const size_t zeros = std::min(text.find_first_not_of('0', digits), text.size() - 1) - digits;
+          text.erase(digits, zeros);
+          errno = 0;
+          if (is_signed)
+            (void)std::strtoll(text.c_str(), nullptr, 10);
+          else
+            (void)std::strtoull(text.c_str(), nullptr, 10);
+          return errno == ERANGE ? "'" + text + "' is out of range" : "";
+        },
+        "");
+  };
+  static const CLI::Validator whole = integer(true), natural = integer(false);
+  for (CLI::Option* opt : app.get_options()) {
+    const std::string type = opt->get_type_name();
+    if (type.rfind("FLOAT", 0) == 0) opt->check(finite);
+    if (type.rfind("INT", 0) == 0) opt->transform(whole);
+    if (type.rfind("UINT", 0) == 0) opt->transform(natural);
+  }
+  for (CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) check_numeric_options(*sub);
+}
+
 }  // namespace omma::app
 
 int main(int argc, char** argv) {
@@ -52,12 +99,16 @@ int main(int argc, char** argv) {
       "omma: design, calibrate and run compound-eye (multi-camera dome) panoramic cameras.\n"
       "Conventions: dome axis +z, theta polar from +z, phi azimuth from +x; mm and degrees in\n"
       "files and options; pixel centres at integer + 0.5. See README.md."};
+  // A file-size limit (ulimit -f) makes a write fail with EFBIG, reported and cleaned up like a full
+  // disk, instead of SIGXFSZ killing the process mid-write with its temporaries left behind.
+  std::signal(SIGXFSZ, SIG_IGN);
   app.require_subcommand(1);
   bool verbose = false, quiet = false;
   app.add_flag("-v,--verbose", verbose, "More log output (stderr)");
   app.add_flag("-q,--quiet", quiet, "Only warnings and errors on stderr");
   app.set_version_flag("--version", "omma " + omma::version());
   for (const auto& c : omma::app::kCommands) c.add(app);
+  omma::app::check_numeric_options(app);
   omma::init_logging(false, false);
   app.parse_complete_callback([&] {
     spdlog::set_level(verbose ? spdlog::level::debug : quiet ? spdlog::level::warn : spdlog::level::info);

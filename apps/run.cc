@@ -12,6 +12,7 @@
 #include "omma/core/grid.h"
 #include "omma/core/progress.h"
 #include "omma/core/rig.h"
+#include "omma/core/valid.h"
 #include "omma/design/prototype.h"
 #include "omma/live/engine.h"
 
@@ -52,7 +53,8 @@ void add_run_command(CLI::App& root) {
       "http:PORT (live view on 127.0.0.1: / 360-degree viewer, /stream.mjpg MJPEG, /frame.jpg, "
       "/stats.json).\n"
       "Latency = mean age of a panorama's camera frames when it is rendered (docs/guide/live.md).\n"
-      "A camera that ends or fails is dropped and the map recompiled without it. Ctrl-C or SIGTERM stops "
+      "A camera that ends or fails is dropped and the map recompiled without it. Ctrl-C, SIGTERM or SIGHUP "
+      "stops "
       "cleanly and leaves playable videos.");
   struct Opts {
     std::string rig, method = "linear", projection = "vr180", size = "1080x1080", cache, sim_fps = "44-56";
@@ -85,11 +87,11 @@ void add_run_command(CLI::App& root) {
       ->check(CLI::Range(0, INT32_MAX));
   cmd->add_option("--fps", o.fps,
                   "Panorama rate, frames/s (0: whenever a camera has a new frame; default 30)")
-      ->check(CLI::Range(0.0, 1e6));
+      ->check(CLI::Range(0.0, live::kMaxRate));
   cmd->add_option(
          "--source-fps", o.source_fps,
          "Rate of image sequences, stills and pano: sources, frames/s (0: as fast as possible; default 30)")
-      ->check(CLI::Range(0.0, 1e6));
+      ->check(CLI::Range(0.0, live::kMaxRate));
   cmd->add_option("--first-frame-timeout", o.first_timeout,
                   "A camera without a first frame after this many seconds is dropped (default 10)")
       ->check(CLI::Range(1e-3, 1e6));
@@ -150,13 +152,16 @@ void add_run_command(CLI::App& root) {
     so.sim.loop_s = o.sim_loop;
     so.sim.progress = !o.json && progress_enabled();
     parse_fps_range(o.sim_fps, &so.sim.fps_min, &so.sim.fps_max);
-    auto sources = live::open_sources(rig, o.sources, so);
-    std::vector<std::unique_ptr<live::Sink>> sinks;
     live::SinkOptions sk;
     sk.fps = o.fps > 0 ? o.fps : 30;
     sk.max_streams = o.max_streams;
     sk.projection = eo.map.grid.projection;
     sk.spherical_metadata = true;  // 360-degree metadata in mp4 and png outputs
+    // Every option checked before the sources start (the simulator pre-renders its loop first).
+    for (const std::string why : {valid_or_why(eo), valid_or_why(so), valid_or_why(sk)})
+      if (!why.empty()) throw std::invalid_argument(why);
+    auto sources = live::open_sources(rig, o.sources, so);
+    std::vector<std::unique_ptr<live::Sink>> sinks;
     try {
       for (const auto& s : o.sinks)
         sinks.push_back(live::open_sink(s, rig, cv::Size(size.width, size.height), sk));
@@ -179,14 +184,11 @@ void add_run_command(CLI::App& root) {
     // Sources and sinks run in their own threads; OpenCV's own parallelism inside them would only
     // compete with the renderer's threads.
     cv::setNumThreads(1);
-    std::signal(SIGINT, on_signal);
-    std::signal(SIGTERM, on_signal);
-    // A file-size limit (ulimit -f) then fails a write like a full disk does, instead of killing
-    // the process before it can clean up.
-    std::signal(SIGXFSZ, SIG_IGN);
+    // Ctrl-C, SIGTERM and SIGHUP (the terminal or ssh session gone) stop the run cleanly: the video
+    // is finished and playable. (SIGXFSZ is ignored for every command: apps/main.cc.)
+    for (const int sig : {SIGINT, SIGTERM, SIGHUP}) std::signal(sig, on_signal);
     const live::EngineSummary st = live::run_engine(rig, std::move(sources), sinks, eo);
-    std::signal(SIGINT, SIG_DFL);
-    std::signal(SIGTERM, SIG_DFL);
+    for (const int sig : {SIGINT, SIGTERM, SIGHUP}) std::signal(sig, SIG_DFL);
     if (show && tty) std::fprintf(stderr, "\n");
     nlohmann::json j = st.to_json();
     j["method"] = o.method;

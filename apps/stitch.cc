@@ -78,8 +78,9 @@ pano::PlaneSweepOptions parse_sweep(const std::string& text) {
   if (v.size() > 0) so.near_mm = v[0];
   if (v.size() > 1) so.far_mm = v[1];
   if (v.size() > 2) {
-    if (v[2] != std::floor(v[2]))
-      throw std::invalid_argument("--depth estimate: STEPS must be a whole number");
+    if (v[2] != std::floor(v[2]) || !(v[2] >= 2 && v[2] <= pano::kMaxSteps))
+      throw std::invalid_argument(
+          fmt::format("--depth estimate: STEPS must be a whole number 2..{}, got {}", pano::kMaxSteps, v[2]));
     so.steps = static_cast<int>(v[2]);
   }
   std::string why;
@@ -106,6 +107,7 @@ DepthChoice choose_depth(const std::string& spec, const Rig& rig, const std::vec
     d.info = {{"mode", "sphere"}, {"radius_mm", r}};
   } else if (spec.rfind("truth:", 0) == 0) {
     d.depth = pano::read_depth(after("truth:"), grid);
+    pano::check_depth_outside_dome(d.depth, rig, grid, Vec3::Zero(), "depth file " + after("truth:"));
     d.info = {{"mode", "truth"}, {"file", after("truth:")}};
   } else if (spec == "estimate" || spec.rfind("estimate:", 0) == 0) {
     const pano::PlaneSweepOptions so = parse_sweep(spec == "estimate" ? "" : after("estimate:"));
@@ -191,7 +193,8 @@ void run_stitch(const StitchArgs& a) {
   // Validate everything before any work or output.
   const pano::Method method = pano::parse_method(a.method);
   const PanoGrid grid = stitch_grid(a);
-  if (a.threshold < 0 || a.threshold > 1) throw std::invalid_argument("--threshold must be in [0, 1]");
+  check_image_format(a.out, grid.width, grid.height);
+  if (!(a.threshold >= 0 && a.threshold <= 1)) throw std::invalid_argument("--threshold must be in [0, 1]");
   const Rig rig = design::load_rig_or_builtin(a.rig);
   if (rig.cameras.empty()) throw std::invalid_argument("rig " + a.rig + " has no cameras");
   const bool photometric = has_photometric(rig) && !a.no_photometric;

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include "omma/core/grid.h"
+#include "omma/core/limits.h"
 
 namespace omma::py {
 
@@ -128,8 +129,11 @@ cv::Size size_from_python(const py::handle& size, const std::string& what) {
   }
   if (py::isinstance<py::sequence>(size) && py::len(size) == 2) {
     try {
-      const auto t = size.cast<std::pair<int, int>>();
-      if (t.first > 0 && t.second > 0) return {t.first, t.second};
+      const auto t = size.cast<std::pair<int64_t, int64_t>>();
+      if (t.first > 0 && t.second > 0) {
+        check_image_size(t.first, t.second, what);  // the limits of core/limits.h, as "WxH" has
+        return {int(t.first), int(t.second)};
+      }
     } catch (const py::cast_error&) {
     }
   }

@@ -37,10 +37,9 @@ class Engine {
     opt_.min_weight = min_weight;
     std::string why;
     if (!opt_.IsValid(&why)) throw std::invalid_argument(why);
-    if (threads < 0)
-      throw std::invalid_argument(fmt::format("threads must be >= 0 (0: all), got {}", threads));
     render_.threads = threads;
     render_.kernel = parse_kernel(kernel);
+    if (!render_.IsValid(&why)) throw std::invalid_argument(why);
     const std::string cache = cache_dir.is_none() ? std::string() : py::str(cache_dir).cast<std::string>();
     py::gil_scoped_release release;
     load_ = render::compile_map_cached(rig_, opt_, cache);

@@ -57,6 +57,17 @@ def bad_calls(rig, eng):
         (lambda: omma.Rig.from_json("{"), ValueError, "parse error"),
         (lambda: omma.Rig.from_dict({"format": "omma-rig"}), omma.RigError, ""),
         (lambda: omma.design("spiral"), ValueError, "spiral"),
+        # More renderer threads than one arena may hold (crashed the interpreter at exit), panorama
+        # sizes past core/limits.h (seam_mask at 65536 x 65536 ran for minutes), a scene of NaN
+        # (crashed the simulator's sRGB encoder).
+        (lambda: omma.Engine(rig, size=(64, 64), threads=100000), ValueError, "threads must be 0 (all) .. 1024"),
+        (lambda: omma.seam_mask(rig, size=(65536, 65536)), ValueError, "out of range"),
+        (lambda: omma.coverage_map(rig, size=(100000, 10)), ValueError, "out of range"),
+        (lambda: omma.stitch(rig, good, size=(20000, 20000)), ValueError, "out of range"),
+        (lambda: omma.simulate(rig, scene="checker", size=(1 << 31, 2)), ValueError, "out of range"),
+        (lambda: omma.simulate(rig, scene=np.full((32, 64, 3), np.nan, np.float32)), omma.SceneError,
+         "NaN or infinite"),
+        (lambda: omma.simulate(rig, scene="flat:1e308"), omma.SceneError, "flat scene"),
     ]
 
 

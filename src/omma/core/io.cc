@@ -1,5 +1,6 @@
 #include "omma/core/io.h"
 
+#include <algorithm>
 #include <fstream>
 #include <random>
 
@@ -60,8 +61,31 @@ void write_image(const fs::path& path, const cv::Mat& image) {
     } catch (const cv::Exception& e) {
       throw IoError("cannot write image '" + path.string() + "': " + e.what());
     }
-    if (!ok) throw IoError("cannot write image '" + path.string() + "' (unknown extension?)");
+    if (!ok)
+      throw IoError("cannot write image '" + path.string() +
+                    "' (disk full, a file-size limit, or no permission?)");
   });
+}
+
+void check_image_format(const fs::path& path, std::int64_t width, std::int64_t height) {
+  std::string ext = path.extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  bool known = false;
+  try {
+    known = !ext.empty() && cv::haveImageWriter(path.string());
+  } catch (const cv::Exception&) {
+  }
+  if (!known)
+    throw IoError("cannot write an image to '" + path.string() +
+                  "': unknown image format (use .png, .jpg, .tif, ... by the extension)");
+  const std::int64_t side = std::max(width, height);
+  const std::int64_t limit = ext == ".jpg" || ext == ".jpeg" || ext == ".jpe" ? 65500
+                             : ext == ".webp"                                 ? 16383
+                                                                              : 0;
+  if (limit && side > limit)
+    throw IoError(
+        fmt::format("'{}': a {} image holds at most {} pixels a side, not {}x{} (write a .tif or .png)",
+                    path.string(), ext.substr(1), limit, width, height));
 }
 
 namespace {

@@ -28,6 +28,10 @@ void write_text_atomically(const std::filesystem::path& path, const std::string&
 cv::Mat read_image(const std::filesystem::path& path, int flags = -1 /*cv::IMREAD_UNCHANGED*/);
 // Writes an image atomically; the format comes from the extension. Throws IoError on failure.
 void write_image(const std::filesystem::path& path, const cv::Mat& image);
+// Can write_image write a width x height image to `path`? Throws IoError naming the path unless
+// OpenCV has a writer for the extension and the format holds the size (JPEG at most 65500 pixels a
+// side, WebP 16383). Call it before the work that makes the image.
+void check_image_format(const std::filesystem::path& path, std::int64_t width, std::int64_t height);
 
 // Upper bounds on the files omma reads whole (a rig of kMaxCameras cameras is about 3 MB; Hugin
 // projects with 10^5 control points about 8 MB; a compiled map of a 16384 x 16384 panorama a few GB).

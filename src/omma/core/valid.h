@@ -11,4 +11,11 @@ inline bool invalid(std::string* why, const std::string& reason) {
   return false;
 }
 
+// "" if options.IsValid(), else its reason: for checking several option structs in one place.
+template <class Options>
+std::string valid_or_why(const Options& options) {
+  std::string why;
+  return options.IsValid(&why) ? std::string() : why;
+}
+
 }  // namespace omma

@@ -9,9 +9,11 @@
 
 namespace omma::design {
 namespace {
+// Every input in [1e-6, 1e6] of its unit: the products and quotients below stay finite.
 void positive(double v, const char* name) {
-  if (!(v > 0) || !std::isfinite(v))
-    throw std::invalid_argument(std::string("optics: ") + name + " must be a positive number");
+  if (!(v >= 1e-6 && v <= 1e6))
+    throw std::invalid_argument(std::string("optics: ") + name +
+                                " must be a number in [1e-6, 1e6] of its unit");
 }
 }  // namespace
 
@@ -29,8 +31,9 @@ OpticsResult compute_optics(const OpticsInputs& in) {
   positive(in.acuity_deg, "acuity");
   positive(in.ideal_wavelength_nm, "ideal wavelength");
   positive(in.implemented_radius_mm, "implemented radius");
-  if (in.channels_small < 0 || in.channels_large < 0 || in.channels_small + in.channels_large == 0)
-    throw std::invalid_argument("optics: the channel counts must be >= 0 and not both 0");
+  if (in.channels_small < 0 || in.channels_large < 0 || in.channels_small > 1000000 ||
+      in.channels_large > 1000000 || in.channels_small + in.channels_large == 0)
+    throw std::invalid_argument("optics: the channel counts must be 0..10^6 and not both 0");
   OpticsResult r;
   // §3.2: x_i = 1.22 lambda f / d (lambda in um), theta_0 = x_i / f.
   r.rayleigh_spot_um = 1.22 * (in.wavelength_nm * 1e-3) * in.focal_length_um / in.aperture_um;

@@ -42,7 +42,8 @@ struct OpticsResult {
   double size_efficiency = 0;  // zeta = R_ideal / R_imp as the thesis evaluates it (18 %)
 };
 
-// Throws std::invalid_argument for non-positive or non-finite inputs.
+// Throws std::invalid_argument unless every input lies in [1e-6, 1e6] of its unit (channel counts
+// 0..10^6, not both 0), so that every result is finite.
 OpticsResult compute_optics(const OpticsInputs& in);
 
 }  // namespace omma::design

@@ -319,7 +319,7 @@ void on_stop_signal(int sig) {  // C++ linkage: file-local (anonymous namespace)
 
 struct SignalGuard {
   struct sigaction old_term {
-  }, old_int{};
+  }, old_int{}, old_hup{};
   bool on = false;
   void install(const fs::path& journal) {
     const std::string m = fmt::format(
@@ -333,12 +333,14 @@ struct SignalGuard {
     sigemptyset(&sa.sa_mask);
     sigaction(SIGTERM, &sa, &old_term);
     sigaction(SIGINT, &sa, &old_int);
+    sigaction(SIGHUP, &sa, &old_hup);
     on = true;
   }
   ~SignalGuard() {
     if (!on) return;
     sigaction(SIGTERM, &old_term, nullptr);
     sigaction(SIGINT, &old_int, nullptr);
+    sigaction(SIGHUP, &old_hup, nullptr);
   }
 };
 

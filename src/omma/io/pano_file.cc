@@ -27,8 +27,7 @@ double render_to_file(render::PanoRenderer& renderer, const std::filesystem::pat
     renderer.render(timed([&](int, const cv::Mat& band) { w.write_rows(band); }));
     w.finish();
   } else {
-    if ((ext == ".jpg" || ext == ".jpeg") && (g.width > 65535 || g.height > 65535))
-      throw IoError(fmt::format("JPEG cannot hold {}x{}; write a .tif (BigTIFF)", g.width, g.height));
+    check_image_format(path, g.width, g.height);
     cv::Mat img(g.height, g.width, CV_8UC3);
     renderer.render(
         timed([&](int row0, const cv::Mat& band) { band.copyTo(img.rowRange(row0, row0 + band.rows)); }));

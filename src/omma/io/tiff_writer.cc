@@ -1,17 +1,47 @@
 #include "omma/io/tiff_writer.h"
 
+#include <signal.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <string>
 #include <vector>
 
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 #include <tiffio.h>
 
 #include "omma/core/io.h"
 
 namespace omma::io {
+
+namespace {
+
+// Temporaries "NAME.tmpPID" of `path` whose process has ended (killed mid-write: SIGKILL, a power
+// cut) are removed; a live process's (another render of the same file) is left alone.
+void remove_dead_temporaries(const std::filesystem::path& path) {
+  const std::filesystem::path dir = path.has_parent_path() ? path.parent_path() : ".";
+  const std::string prefix = path.filename().string() + ".tmp";
+  std::error_code ec;
+  for (auto it = std::filesystem::directory_iterator(dir, ec);
+       !ec && it != std::filesystem::directory_iterator(); it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    if (name.size() <= prefix.size() || name.compare(0, prefix.size(), prefix) != 0) continue;
+    const std::string digits = name.substr(prefix.size());
+    if (digits.size() > 9 ||
+        !std::all_of(digits.begin(), digits.end(), [](char c) { return c >= '0' && c <= '9'; }))
+      continue;
+    const pid_t pid = static_cast<pid_t>(std::stol(digits));
+    if (pid <= 0 || pid == ::getpid() || ::kill(pid, 0) == 0 || errno != ESRCH) continue;
+    std::error_code rm;
+    if (std::filesystem::remove(it->path(), rm))
+      spdlog::info("removed {} (left by an interrupted render, process {} has ended)", it->path().string(),
+                   pid);
+  }
+}
+
+}  // namespace
 
 struct BigTiffWriter::Impl {
   std::filesystem::path final_path, tmp_path;
@@ -24,6 +54,7 @@ BigTiffWriter::BigTiffWriter(const std::filesystem::path& path, int width, int h
     : impl_(std::make_unique<Impl>()), width_(width), height_(height) {
   if (width < 1 || height < 1) throw IoError(fmt::format("TIFF size {}x{} must be positive", width, height));
   impl_->final_path = path;
+  remove_dead_temporaries(path);
   impl_->tmp_path = path;
   impl_->tmp_path += fmt::format(".tmp{}", ::getpid());
   TIFFSetWarningHandler(nullptr);

@@ -14,7 +14,9 @@ namespace omma::io {
 
 class BigTiffWriter {
  public:
-  // Throws IoError if the file cannot be created. width, height >= 1.
+  // Writes to PATH.tmpPID, renamed onto PATH by finish(); first removes the PATH.tmpPID files of
+  // processes that have ended (a render killed mid-write). Throws IoError if the file cannot be
+  // created. width, height >= 1.
   BigTiffWriter(const std::filesystem::path& path, int width, int height, bool deflate = false,
                 int rows_per_strip = 16);
   ~BigTiffWriter();  // without finish(): the temporary file is removed

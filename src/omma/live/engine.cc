@@ -72,8 +72,13 @@ void request_stop() { g_stop = true; }
 
 bool EngineOptions::IsValid(std::string* why) const {
   if (!map.IsValid(why)) return false;
-  if (!(duration_s >= 0) || max_frames < 0 || !(fps >= 0) || !(first_frame_timeout_s > 0) || threads < 0)
-    return invalid(why, "duration, frames, fps and threads must be >= 0, the first-frame timeout > 0");
+  if (!(duration_s >= 0 && duration_s <= 1e7) || max_frames < 0 || threads < 0 ||
+      !(first_frame_timeout_s > 0 && first_frame_timeout_s <= 1e6))
+    return invalid(why,
+                   "duration (at most 10^7 s), frames and threads must be >= 0, the first-frame timeout in "
+                   "(0, 10^6] s");
+  if (!valid_rate(fps, true))
+    return invalid(why, fmt::format("fps must be 0 (every new frame) or {}..{}", kMinRate, kMaxRate));
   if (max_camera_threads < 1) return invalid(why, "max_camera_threads must be >= 1");
   return true;
 }

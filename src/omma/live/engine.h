@@ -55,10 +55,10 @@ struct WindowStats {
 
 struct EngineOptions {
   render::MapOptions map;
-  std::filesystem::path cache_dir;   // empty: no map cache
-  double duration_s = 0;             // stop after this long (0: when every source has ended)
-  long max_frames = 0;               // stop after this many panoramas (0: no limit)
-  double fps = 30;                   // panorama rate (0: render whenever a camera has a new frame)
+  std::filesystem::path cache_dir;  // empty: no map cache
+  double duration_s = 0;            // stop after this long (0: when every source has ended)
+  long max_frames = 0;              // stop after this many panoramas (0: no limit)
+  double fps = 30;  // panorama rate (0: render whenever a camera has a new frame; else kMinRate..kMaxRate)
   double first_frame_timeout_s = 5;  // a camera without a first frame by then is dropped
   int threads = 0;                   // renderer threads (0: all)
   int max_camera_threads = 64;       // camera threads at most; more cameras share them

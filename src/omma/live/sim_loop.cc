@@ -102,8 +102,9 @@ SimLoop::SimLoop(const Rig& rig, std::shared_ptr<const sim::Scene> scene, bool t
   if (!opt.IsValid(&why)) throw SourceError("source 'sim:" + spec_ + "': " + why);
   motion_.translate = translate;
   motion_.speed = speed.value_or(translate ? 5.0 : 10.0);
-  if (!std::isfinite(motion_.speed) || motion_.speed < 0)
-    throw SourceError("source 'sim:" + spec_ + "': the speed must be >= 0");
+  if (!(motion_.speed >= 0 && motion_.speed <= kMaxSimSpeed))
+    throw SourceError(fmt::format("source 'sim:{}': the speed must be in [0, {}], got {}", spec_,
+                                  kMaxSimSpeed, motion_.speed));
   // Memory: one 8-bit BGR frame per camera per frame period; shorten the loop to fit.
   double bytes_per_s = 0;
   for (const auto& c : rig.cameras) bytes_per_s += 3.0 * c.in.width * c.in.height * opt.fps_max;

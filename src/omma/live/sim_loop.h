@@ -41,7 +41,7 @@ namespace omma::live {
 // The dome's periodic motion (see the file comment).
 struct SimMotion {
   bool translate = false;           // along the scene z axis (colon) or turning about the dome axis
-  double speed = 10;                // peak speed, mm/s (translate) or deg/s
+  double speed = 10;                // peak speed, mm/s (translate) or deg/s, at most kMaxSimSpeed
   double period_s = 2;              // T
   double amplitude() const;         // A: mm or deg
   double offset(double t_s) const;  // z (mm) or angle (deg) at scene time t (any t: periodic)

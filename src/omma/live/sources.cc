@@ -9,6 +9,7 @@
 #include <optional>
 #include <thread>
 
+#include <fmt/format.h>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
@@ -287,10 +288,16 @@ std::optional<double> split_rate(std::string& spec, const std::string& source, c
   if (at == std::string::npos) return std::nullopt;
   double rate = 0;
   try {
-    rate = std::stod(spec.substr(at + 1));
+    size_t used = 0;
+    const std::string text = spec.substr(at + 1);
+    rate = std::stod(text, &used);
+    if (used != text.size()) throw std::invalid_argument("trailing characters");
   } catch (const std::exception&) {
     throw SourceError("source '" + source + "': expected " + form);
   }
+  if (!(std::abs(rate) <= kMaxSimSpeed))
+    throw SourceError(fmt::format("source '{}': the rate must be a number in [-{}, {}]", source, kMaxSimSpeed,
+                                  kMaxSimSpeed));
   spec.resize(at);
   return rate;
 }
@@ -302,7 +309,8 @@ std::unique_ptr<CameraSource> still_source(cv::Mat frame, double fps, int limit,
 }
 
 bool SourceOptions::IsValid(std::string* why) const {
-  if (!(fps >= 0) || !std::isfinite(fps)) return invalid(why, "fps must be >= 0 (0 = as fast as possible)");
+  if (!valid_rate(fps, true))
+    return invalid(why, fmt::format("fps must be 0 (as fast as possible) or {}..{}", kMinRate, kMaxRate));
   return sim.IsValid(why);
 }
 

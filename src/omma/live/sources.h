@@ -31,6 +31,18 @@
 
 namespace omma::live {
 
+// The fastest motion a simulated or panorama source takes ("sim:SCENE@SPEED", "pano:IMAGE@DEG_PER_S"):
+// 10^4 mm/s or deg/s (28 turns a second; faster only blurs every frame).
+inline constexpr double kMaxSimSpeed = 1e4;
+// Frame rates (frames/s) that sources, the render loop and sinks take: 0 where an option says so
+// (as fast as possible), else kMinRate .. kMaxRate (one frame every 1000 s .. 10^4 a second; their
+// periods in ns stay far inside int64 and double precision).
+inline constexpr double kMinRate = 1e-3;
+inline constexpr double kMaxRate = 1e4;
+inline bool valid_rate(double fps, bool zero_ok) {
+  return (zero_ok && fps == 0) || (fps >= kMinRate && fps <= kMaxRate);
+}
+
 class SourceError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;

@@ -18,10 +18,12 @@
 namespace omma::pano {
 
 bool PlaneSweepOptions::IsValid(std::string* why) const {
-  if (!(near_mm > 0) || !std::isfinite(near_mm))
-    return invalid(why, "near distance must be a positive number of mm");
+  if (!(near_mm > 0 && near_mm <= kMaxSweepMm))
+    return invalid(why, fmt::format("near distance must be in (0, {}] mm", kMaxSweepMm));
   if (!(far_mm > near_mm))
     return invalid(why, fmt::format("far distance {} mm must exceed near {} mm", far_mm, near_mm));
+  if (!(far_mm <= kMaxSweepMm) && !std::isinf(far_mm))
+    return invalid(why, fmt::format("far distance must be at most {} mm, or inf", kMaxSweepMm));
   // far_mm may be +infinity (the last candidate is then the scene at infinity, s = 0)
   if (steps < 2 || steps > kMaxSteps)
     return invalid(why, fmt::format("steps must be 2..{}, got {}", kMaxSteps, steps));

@@ -75,7 +75,9 @@
 
 namespace omma::pano {
 
-inline constexpr int kMaxSteps = 256;  // candidates per sweep at most (PlaneSweepOptions::steps)
+inline constexpr int kMaxSteps = 256;
+inline constexpr double kMaxSweepMm = 1e9;  // finite NEAR and FAR at most 1000 km (beyond: use inf)  //
+                                            // candidates per sweep at most (PlaneSweepOptions::steps)
 
 struct PlaneSweepOptions {
   double near_mm = 8;  // nearest candidate distance from q, mm (must lie outside the dome)

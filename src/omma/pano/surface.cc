@@ -27,6 +27,22 @@ void check_depth(const cv::Mat& depth, const PanoGrid& grid, const std::string& 
   }
 }
 
+void check_depth_outside_dome(const cv::Mat& depth, const Rig& rig, const PanoGrid& grid, const Vec3& q,
+                              const std::string& what) {
+  check_depth(depth, grid, what);
+  double inner = 0;
+  for (const auto& cam : rig.cameras) inner = std::max(inner, cam.position_mm.norm());
+  for (int r = 0; r < depth.rows; ++r) {
+    const float* p = depth.ptr<float>(r);
+    for (int c = 0; c < depth.cols; ++c)
+      if (std::isfinite(p[c]) && (q + double(p[c]) * grid.pixel_direction(c, r)).norm() <= inner)
+        throw std::invalid_argument(fmt::format(
+            "{}: depth {} mm at pixel ({}, {}) puts the surface inside the dome (it must lie farther than "
+            "{:.2f} mm from the dome centre, the farthest camera centre)",
+            what, p[c], c, r, inner));
+  }
+}
+
 cv::Mat sphere_depth(const Rig& rig, const PanoGrid& grid, double radius_mm, const Vec3& q) {
   if (!(radius_mm > 0) || !std::isfinite(radius_mm))
     throw std::invalid_argument(

@@ -38,6 +38,12 @@ void check_depth(const cv::Mat& depth, const PanoGrid& grid, const std::string& 
 // sphere does not enclose every camera centre and q (a "stitching distance" inside the dome).
 cv::Mat sphere_depth(const Rig& rig, const PanoGrid& grid, double radius_mm, const Vec3& q = Vec3::Zero());
 
+// Throws std::invalid_argument (naming `what` and the first such pixel) if a finite depth puts the
+// surface inside the dome: the point q + D w no farther from the dome centre than the farthest
+// camera centre (the same bound as sphere_depth's). Cameras cannot see a surface behind them.
+void check_depth_outside_dome(const cv::Mat& depth, const Rig& rig, const PanoGrid& grid,
+                              const Vec3& q = Vec3::Zero(), const std::string& what = "depth map");
+
 // Depth files (see the file comment). read_depth throws IoError if unreadable and
 // std::invalid_argument if the size differs from the grid or a value is not > 0.
 cv::Mat read_depth(const std::filesystem::path& path, const PanoGrid& grid);

@@ -8,6 +8,7 @@
 #include <memory>
 #include <stdexcept>
 
+#include <fmt/format.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
@@ -313,7 +314,8 @@ Kernel best_kernel() {
 }
 
 bool RenderOptions::IsValid(std::string* why) const {
-  if (threads < 0) return invalid(why, "threads must be >= 0 (0 = all)");
+  if (threads < 0 || threads > kMaxRenderThreads)
+    return invalid(why, fmt::format("threads must be 0 (all) .. {}, got {}", kMaxRenderThreads, threads));
   if (kernel != Kernel::kAuto && kernel != Kernel::kScalar && kernel != Kernel::kAvx2 &&
       kernel != Kernel::kAvx512Vnni)
     return invalid(why, "unknown render kernel");

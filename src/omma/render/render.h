@@ -23,8 +23,12 @@ std::string to_string(Kernel k);
 bool kernel_available(Kernel k);
 Kernel best_kernel();  // what kAuto runs here
 
+// The most renderer threads one may ask for (RenderOptions::threads): one oneTBB arena of that many.
+inline constexpr int kMaxRenderThreads = 1024;
+
 struct RenderOptions {
-  int threads = 0;                // 0 = all hardware threads (oneTBB default), 1 = the calling thread only
+  int threads =
+      0;  // 0 = all hardware threads (oneTBB default), 1 = the calling thread only; <= kMaxRenderThreads
   Kernel kernel = Kernel::kAuto;  // one that the CPU lacks falls back to the best available
   bool prefetch = true;           // false: no prefetch of the next tile's camera pixels (diagnostic)
   bool IsValid(std::string* why = nullptr) const;  // threads >= 0, a known kernel
