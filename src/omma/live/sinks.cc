@@ -1,12 +1,22 @@
 #include "omma/live/sinks.h"
 
+#include <netdb.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <condition_variable>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
+#include <list>
+#include <memory>
 #include <mutex>
 #include <optional>
+#include <string_view>
 #include <thread>
 
 #include <fmt/format.h>
@@ -18,6 +28,7 @@
 #include "omma/core/io.h"
 #include "omma/core/valid.h"
 #include "omma/io/metadata.h"
+#include "omma/live/sources.h"
 #include "omma/live/web_assets.h"
 
 namespace omma::live {
@@ -181,6 +192,208 @@ class PassthroughSink : public Sink {
   std::unique_ptr<Sink> inner_;
 };
 
+// The live view's HTTP server: cpp-httplib parses the requests and writes the answers; the
+// connections are this code's, so that no client can starve another (any web page the user visits
+// can reach 127.0.0.1). Limits:
+//   - every connection runs on a thread of its own (ConnectionThreads), up to a cap of
+//     max_streams + kOtherConnections open at once; past the cap a new connection is answered 503
+//     (Retry-After: 1) by the accepting thread at once and closed;
+//   - a connection must deliver its request (request line and headers, at most kMaxRequestBytes,
+//     no body) within kRequestDeadline of being accepted, however slowly it trickles, or it is
+//     closed: idle and slowloris connections hold their thread for at most that long. One request
+//     per connection (no keep-alive), so a connection never idles after its answer either;
+//   - only GET and HEAD, without a body: other methods are answered 405, a body 413, from the
+//     headers, before a byte of the body is read;
+//   - Range is ignored (RFC 9110 allows it): every answer is the whole resource, once, so a
+//     multi-range request cannot multiply a response (nor ask for bytes past its end);
+//   - a write that cannot progress for kWriteTimeout ends its connection (a viewer that stopped
+//     reading); at most max_streams streams (the next gets 503 + Retry-After).
+// Guarantee: while fewer connections than the cap are open, a request that arrives is answered at
+// once (the page, /stats.json, a frame), whatever the other connections do: idle, trickling,
+// streaming or downloading, none of them shares its thread. The streams take at most max_streams
+// places, so kOtherConnections (256) stay for everything else. Limits: past the cap new
+// connections, the page's too, get 503 until some end; as every connection that is not a stream
+// ends within kRequestDeadline plus its answer, holding the server at its cap takes a client that
+// reopens hundreds of connections every 2 s (a browser gives a page a few connections per host); a
+// refused client may see a reset instead of the 503. A connection's thread costs about 8 MB of
+// address space (its stack, reserved) and some tens of kB of memory; a request at most
+// kMaxRequestBytes (and 8 kB a header line, httplib's limit). stop() cuts every connection's wait
+// within kPollSlice and joins their threads: no client can hold it.
+constexpr size_t kOtherConnections = 256;
+constexpr size_t kMaxRequestBytes = 16 * 1024;
+constexpr auto kRequestDeadline = std::chrono::seconds(2);
+constexpr auto kWriteTimeout = std::chrono::seconds(5);
+constexpr auto kPollSlice = std::chrono::milliseconds(100);  // how often a waiting thread sees stop()
+using Clock = std::chrono::steady_clock;
+
+// Set while the accepting thread itself runs a connection it has no thread for (past the cap).
+thread_local bool t_over_capacity = false;
+
+// The server's task queue: each connection on a thread of its own, up to `cap` at once. A
+// connection past the cap runs on the accepting thread, which answers it 503 at once
+// (LiveServer::process_and_close_socket). httplib calls enqueue() and shutdown() from its accepting
+// thread only; shutdown() joins every connection's thread.
+class ConnectionThreads : public httplib::TaskQueue {
+ public:
+  explicit ConnectionThreads(size_t cap) : cap_(cap) {}
+  ~ConnectionThreads() override { shutdown(); }
+  void enqueue(std::function<void()> fn) override {
+    auto task = std::make_shared<std::function<void()>>(std::move(fn));
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      reap();
+      if (threads_.size() < cap_) {
+        const auto it = threads_.emplace(threads_.end());
+        try {
+          *it = std::thread([this, it, task] {
+            (*task)();
+            std::lock_guard<std::mutex> done(mutex_);
+            finished_.push_back(it);
+          });
+          return;
+        } catch (const std::system_error&) {  // no thread to be had: refused like past the cap
+          threads_.erase(it);
+        }
+      }
+    }
+    t_over_capacity = true;
+    (*task)();
+    t_over_capacity = false;
+  }
+  void shutdown() override {
+    std::list<std::thread> all;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      all.swap(threads_);
+    }
+    for (auto& t : all)
+      if (t.joinable()) t.join();
+    std::lock_guard<std::mutex> lock(mutex_);
+    finished_.clear();
+  }
+
+ private:
+  // Joins the threads whose connection has ended (under mutex_; they are past their last use of it).
+  void reap() {
+    for (const auto& it : finished_) {
+      it->join();
+      threads_.erase(it);
+    }
+    finished_.clear();
+  }
+  const size_t cap_;
+  std::mutex mutex_;
+  std::list<std::thread> threads_;
+  std::vector<std::list<std::thread>::iterator> finished_;
+};
+
+class LiveServer : public httplib::Server {
+ public:
+  // httplib listens with a backlog of 5; a burst of connections waits in a longer queue instead of
+  // being dropped (and retried by the client a second later).
+  void widen_backlog() { ::listen(svr_sock_, SOMAXCONN); }
+  bool stopping() const { return svr_sock_ == INVALID_SOCKET; }
+
+ private:
+  bool process_and_close_socket(socket_t sock) override;
+};
+
+// One connection as httplib's Stream: reads until the request's deadline and at most
+// kMaxRequestBytes, writes that give up after kWriteTimeout without progress, and every wait cut
+// short by stop().
+class ConnectionStream : public httplib::Stream {
+ public:
+  ConnectionStream(socket_t sock, const LiveServer& server)
+      : sock_(sock), server_(server), read_deadline_(Clock::now() + kRequestDeadline) {}
+  bool is_readable() const override { return off_ < len_ || wait(POLLIN, read_deadline_); }
+  // Writable within kWriteTimeout, and the viewer has not gone (it never half-closes).
+  bool is_writable() const override {
+    pollfd p{sock_, POLLRDHUP, 0};
+    if (::poll(&p, 1, 0) == 1 && (p.revents & (POLLRDHUP | POLLHUP | POLLERR))) return false;
+    return wait(POLLOUT, Clock::now() + kWriteTimeout);
+  }
+  ssize_t read(char* ptr, size_t size) override {
+    if (off_ == len_) {
+      if (received_ >= kMaxRequestBytes || !wait(POLLIN, read_deadline_)) return -1;
+      const ssize_t n = ::recv(sock_, buf_, std::min(sizeof buf_, kMaxRequestBytes - received_), 0);
+      if (n <= 0) return n < 0 ? -1 : 0;
+      received_ += size_t(n);
+      off_ = 0;
+      len_ = size_t(n);
+    }
+    const size_t n = std::min(size, len_ - off_);
+    std::memcpy(ptr, buf_ + off_, n);
+    off_ += n;
+    return ssize_t(n);
+  }
+  ssize_t write(const char* ptr, size_t size) override {
+    const auto deadline = Clock::now() + kWriteTimeout;
+    for (;;) {
+      const ssize_t n = ::send(sock_, ptr, size, MSG_NOSIGNAL | MSG_DONTWAIT);
+      if (n >= 0) return n;
+      if (errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR) return -1;
+      if (!wait(POLLOUT, deadline)) return -1;
+    }
+  }
+  void get_remote_ip_and_port(std::string& ip, int& port) const override { address(true, ip, port); }
+  void get_local_ip_and_port(std::string& ip, int& port) const override { address(false, ip, port); }
+  socket_t socket() const override { return sock_; }
+
+ private:
+  // Waits until the socket is ready for `events` (or failed: the next call reports it); false at
+  // the deadline or when the server stops.
+  bool wait(short events, Clock::time_point deadline) const {
+    for (;;) {
+      const auto left = std::chrono::ceil<std::chrono::milliseconds>(deadline - Clock::now());
+      if (server_.stopping() || left.count() <= 0) return false;
+      pollfd p{sock_, events, 0};
+      const int r = ::poll(&p, 1, int(std::min(left, kPollSlice).count()));
+      if (r > 0) return true;
+      if (r < 0 && errno != EINTR) return false;
+    }
+  }
+  void address(bool remote, std::string& ip, int& port) const {
+    sockaddr_storage a{};
+    socklen_t len = sizeof a;
+    auto* sa = reinterpret_cast<sockaddr*>(&a);
+    if ((remote ? ::getpeername(sock_, sa, &len) : ::getsockname(sock_, sa, &len)) != 0) return;
+    char host[NI_MAXHOST], serv[NI_MAXSERV];
+    if (::getnameinfo(sa, len, host, sizeof host, serv, sizeof serv, NI_NUMERICHOST | NI_NUMERICSERV) != 0)
+      return;
+    ip = host;
+    port = std::atoi(serv);
+  }
+  socket_t sock_;
+  const LiveServer& server_;
+  Clock::time_point read_deadline_;
+  char buf_[4096];
+  size_t off_ = 0, len_ = 0, received_ = 0;
+};
+
+bool LiveServer::process_and_close_socket(socket_t sock) {
+  bool ok = false;
+  if (t_over_capacity) {
+    static constexpr std::string_view kBusy =
+        "HTTP/1.1 503 Service Unavailable\r\nRetry-After: 1\r\nContent-Length: 0\r\nConnection: "
+        "close\r\n\r\n";
+    ::send(sock, kBusy.data(), kBusy.size(), MSG_NOSIGNAL | MSG_DONTWAIT);
+  } else {
+    try {
+      ConnectionStream strm(sock, *this);
+      bool closed = false;
+      ok = process_request(strm, /*close_connection=*/true, closed,
+                           [](httplib::Request& req) { req.ranges.clear(); });
+    } catch (const std::exception& e) {  // no exception may end the connection's thread
+      spdlog::debug("live view: a request failed: {}", e.what());
+    } catch (...) {
+      spdlog::debug("live view: a request failed");
+    }
+  }
+  ::shutdown(sock, SHUT_RDWR);
+  ::close(sock);
+  return ok;
+}
+
 // The live view (sinks.h). The page and its viewer are files of web/, embedded at build time
 // (web_assets.h).
 class HttpSink : public Sink {
@@ -196,10 +409,33 @@ class HttpSink : public Sink {
                              {"max_streams", max_streams_},
                              {"viewer", viewer_embedded()}}
                   .dump();
-    // Streams hold a worker each for as long as they play; the pool has `max_streams` workers for
-    // them and kSpareWorkers more, so the page, the stats and single frames always find one.
-    const size_t workers = size_t(max_streams_) + kSpareWorkers;
-    server_.new_task_queue = [workers] { return new httplib::ThreadPool(workers); };
+    // A thread per connection up to the cap, streams at most max_streams of them (LiveServer).
+    const size_t cap = size_t(max_streams_) + kOtherConnections;
+    server_.new_task_queue = [cap] { return new ConnectionThreads(cap); };
+    // No bodies: methods other than GET and HEAD, and requests with a body, are refused from their
+    // headers.
+    server_.set_pre_routing_handler([](const httplib::Request& req, httplib::Response& res) {
+      if (req.method != "GET" && req.method != "HEAD") {
+        res.status = 405;
+        res.set_header("Allow", "GET, HEAD");
+        res.set_content("omma live view: GET only", "text/plain");
+        return httplib::Server::HandlerResponse::Handled;
+      }
+      if (req.has_header("Transfer-Encoding") ||
+          (req.has_header("Content-Length") && req.get_header_value("Content-Length") != "0")) {
+        res.status = 413;
+        res.set_content("omma live view: requests take no body", "text/plain");
+        return httplib::Server::HandlerResponse::Handled;
+      }
+      return httplib::Server::HandlerResponse::Unhandled;
+    });
+    server_.set_expect_100_continue_handler([](const httplib::Request& req, httplib::Response& res) {
+      if (req.method == "GET" || req.method == "HEAD") return 100;
+      res.status = 405;
+      res.set_header("Allow", "GET, HEAD");
+      return 405;
+    });
+    server_.set_payload_max_length(kMaxRequestBytes);
     server_.Get("/", [](const httplib::Request&, httplib::Response& res) { serve_asset("/live.html", res); });
     server_.Get(R"(/viewer/([A-Za-z0-9_.-]+))", [](const httplib::Request& req, httplib::Response& res) {
       serve_asset(fmt::format("/{}", std::string(req.matches[1])), res);  // (fmt: GCC 12 -Wrestrict)
@@ -270,12 +506,14 @@ class HttpSink : public Sink {
     if (!server_.bind_to_port("127.0.0.1", port))
       throw SinkError("cannot serve the live view on 127.0.0.1:" + std::to_string(port) +
                       " (port in use or not permitted)");
+    server_.widen_backlog();
     thread_ = std::thread([this] {
       try {
         server_.listen_after_bind();
-      } catch (const std::exception& e) {  // e.g. the worker threads could not be started
+      } catch (const std::exception& e) {
         spdlog::error("live view on 127.0.0.1:{} stopped: {}", port_, e.what());
       }
+      listen_ended_ = true;
     });
     try {
       encoder_ = std::thread([this] { encode(); });
@@ -306,7 +544,6 @@ class HttpSink : public Sink {
   std::string describe() const override { return "http://127.0.0.1:" + std::to_string(port_) + "/"; }
 
  private:
-  static constexpr int kSpareWorkers = 4;
   static constexpr int kMaxStreams = 256;  // each stream is a thread
   static void serve_asset(const std::string& path, httplib::Response& res) {
     const WebAsset* a = find_web_asset(path);
@@ -343,14 +580,18 @@ class HttpSink : public Sink {
       stopping_ = true;
     }
     cv_.notify_all();
-    server_.stop();
+    // Server::stop() does nothing before the server runs: wait for that (or for its thread's end).
+    while (thread_.joinable() && !listen_ended_ && !server_.is_running())
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    server_.stop();  // ends the accepting loop, which joins every connection's thread
     if (thread_.joinable()) thread_.join();
     if (encoder_.joinable()) encoder_.join();
   }
   int port_, quality_, max_streams_;
   std::string config_;
-  httplib::Server server_;
+  LiveServer server_;
   std::thread thread_, encoder_;
+  std::atomic<bool> listen_ended_{false};
   std::mutex mutex_;
   std::condition_variable cv_;
   cv::Mat pending_;  // the newest panorama, not encoded yet
@@ -375,7 +616,7 @@ int parse_port(const std::string& spec, const std::string& text) {
 }  // namespace
 
 bool SinkOptions::IsValid(std::string* why) const {
-  if (!(fps > 0) || !std::isfinite(fps)) return invalid(why, "fps must be a positive number");
+  if (!valid_rate(fps, false)) return invalid(why, fmt::format("fps must be {}..{}", kMinRate, kMaxRate));
   if (jpeg_quality < 1 || jpeg_quality > 100) return invalid(why, "jpeg quality must be 1..100");
   if (max_streams < 1) return invalid(why, "max streams must be >= 1");
   return true;
