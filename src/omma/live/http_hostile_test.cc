@@ -62,6 +62,18 @@ int free_port() {
   return port;
 }
 
+// The live view on a free loopback port (*port), or null after five ports that were taken meanwhile.
+std::unique_ptr<Sink> open_http_sink(const Rig& rig, cv::Size size, const SinkOptions& opt, int* port) {
+  for (int attempt = 0; attempt < 5; ++attempt) {
+    *port = free_port();
+    try {
+      return open_sink("http:" + std::to_string(*port), rig, size, opt);
+    } catch (const SinkError&) {
+    }
+  }
+  return nullptr;
+}
+
 // A non-blocking connection to 127.0.0.1:port (connect itself waits at most 2 s); -1 if refused.
 int connect_to(int port) {
   const int s = ::socket(AF_INET, SOCK_STREAM, 0);
@@ -234,15 +246,8 @@ TEST(HttpHostile, StatsAnswerWithinASecondAndMemoryStaysBoundedUnderHostileClien
   cv::Mat pano = cv::imread(std::string(OMMA_DATA_DIR) + "/lake.jpg", cv::IMREAD_COLOR);
   ASSERT_FALSE(pano.empty());
   cv::resize(pano, pano, size, 0, 0, cv::INTER_AREA);
-  std::unique_ptr<Sink> sink;
   int port = 0;
-  for (int attempt = 0; attempt < 5 && !sink; ++attempt) {
-    port = free_port();
-    try {
-      sink = open_sink("http:" + std::to_string(port), rig, size, opt);
-    } catch (const SinkError&) {
-    }
-  }
+  std::unique_ptr<Sink> sink = open_http_sink(rig, size, opt, &port);
   ASSERT_TRUE(sink) << "no free port";
   // The render loop: the same panorama (so every frame has the same size) at 30 fps, and stats.
   std::atomic<bool> feeding{true};
@@ -381,15 +386,8 @@ TEST(HttpHostile, PastTheConnectionCapNewConnectionsGet503UntilTheIdleOnesAreDro
   opt.max_streams = 1;
   const int cap = opt.max_streams + 256;
   const cv::Size size(256, 128);
-  std::unique_ptr<Sink> sink;
   int port = 0;
-  for (int attempt = 0; attempt < 5 && !sink; ++attempt) {
-    port = free_port();
-    try {
-      sink = open_sink("http:" + std::to_string(port), rig, size, opt);
-    } catch (const SinkError&) {
-    }
-  }
+  std::unique_ptr<Sink> sink = open_http_sink(rig, size, opt, &port);
   ASSERT_TRUE(sink) << "no free port";
   cv::Mat pano(size, CV_8UC3, cv::Scalar(40, 90, 160));
   sink->write(pano, render::FrameStore());
