@@ -52,11 +52,9 @@ void run_record(const RecordArgs& a) {
   auto sources = live::open_sources(rig, a.sources, so);
   io::RecordingManifest m;
   m.rig = rig;
-  std::signal(SIGINT, on_stop_signal);
-  std::signal(SIGTERM, on_stop_signal);
-#ifdef SIGXFSZ
-  std::signal(SIGXFSZ, SIG_IGN);  // a file-size limit shows as a write error (like a full disk)
-#endif
+  // Ctrl-C, SIGTERM and SIGHUP (the terminal or ssh session gone) close the recording normally.
+  // (SIGXFSZ is ignored for every command: apps/main.cc.)
+  for (const int sig : {SIGINT, SIGTERM, SIGHUP}) std::signal(sig, on_stop_signal);
   const live::RecordSummary s = live::record(std::move(sources), a.out, m, o);
   int64_t frames = 0, dropped = 0;
   for (size_t c = 0; c < s.frames.size(); ++c) frames += s.frames[c], dropped += s.dropped[c];

@@ -1,11 +1,17 @@
 #include "omma/io/recording.h"
 
 #include <sys/resource.h>
+#include <sys/stat.h>
 #include <sys/statvfs.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
+#include <cmath>
+#include <cstring>
+#include <limits>
 #include <mutex>
+#include <optional>
 
 #include <fmt/format.h>
 #include <hdf5.h>
@@ -13,6 +19,8 @@
 
 #include "omma/core/frames.h"
 #include "omma/core/io.h"
+#include "omma/core/limits.h"
+#include "omma/core/valid.h"
 
 namespace omma::io {
 namespace fs = std::filesystem;
@@ -62,6 +70,9 @@ struct Hid {
         case H5I_ATTR:
           H5Aclose(id);
           break;
+        case H5I_DATATYPE:
+          H5Tclose(id);
+          break;
         default:
           break;
       }
@@ -98,6 +109,76 @@ uint64_t writable_bytes(const fs::path& dir, uint64_t file_size) {
 
 // ---- manifest ------------------------------------------------------------------------------
 
+bool valid_recording_fps(double fps, std::string* why) {
+  if (!(fps >= kMinRecordingFps && fps <= kMaxRecordingFps))
+    return invalid(
+        why, fmt::format("fps must be in [{:g}, {:g}], got {}", kMinRecordingFps, kMaxRecordingFps, fps));
+  return true;
+}
+
+bool valid_recording_clock_mhz(double mhz, std::string* why) {
+  if (!(mhz >= 0 && mhz <= kMaxRecordingClockMhz))
+    return invalid(why, fmt::format("clock must be in [0, {:g}] MHz (0 = not given), got {}",
+                                    kMaxRecordingClockMhz, mhz));
+  return true;
+}
+
+bool valid_recording_bits(int64_t bits, std::string* why) {
+  if (bits < kMinRecordingBits || bits > kMaxRecordingBits)
+    return invalid(why,
+                   fmt::format("bits must be {}..{}, got {}", kMinRecordingBits, kMaxRecordingBits, bits));
+  return true;
+}
+
+bool valid_sensor_mode(const std::string& mode, std::string* why) {
+  if (mode.size() > kMaxSensorModeBytes)
+    return invalid(why, fmt::format("sensor mode must be at most {} bytes", kMaxSensorModeBytes));
+  for (const char ch : mode)
+    if (static_cast<unsigned char>(ch) < 0x20 || ch == 0x7f)
+      return invalid(why, "sensor mode must not hold control characters");
+  return true;
+}
+
+bool valid_start_unix_ns(int64_t ns, std::string* why) {
+  if (ns < 0) return invalid(why, fmt::format("start_unix_ns must be >= 0, got {}", ns));
+  return true;
+}
+
+bool valid_stream_file_name(const std::string& name, std::string* why) {
+  if (name.empty() || name.size() > kMaxStreamNameBytes)
+    return invalid(why, fmt::format("stream file names must have 1..{} bytes", kMaxStreamNameBytes));
+  if (name.find('/') != std::string::npos || name.find("..") != std::string::npos || name == ".")
+    return invalid(why, fmt::format("stream file name '{}' is not a plain name in the folder", name));
+  for (const char ch : name)
+    if (static_cast<unsigned char>(ch) < 0x20 || ch == 0x7f)
+      return invalid(why, "stream file names must not hold control characters (NUL included)");
+  return true;
+}
+
+bool RecordingManifest::IsValid(std::string* why) const {
+  try {
+    rig.validate();
+  } catch (const RigError& e) {
+    return invalid(why, std::string("rig: ") + e.what());
+  } catch (const std::invalid_argument& e) {
+    return invalid(why, std::string("rig: ") + e.what());
+  }
+  if (!valid_sensor_mode(sensor_mode, why) || !valid_recording_clock_mhz(clock_mhz, why) ||
+      !valid_recording_fps(fps, why) || !valid_recording_bits(bits, why) ||
+      !valid_start_unix_ns(start_unix_ns, why))
+    return false;
+  if (files.size() != rig.cameras.size())
+    return invalid(why,
+                   fmt::format("{} stream files for a rig of {} cameras", files.size(), rig.cameras.size()));
+  std::vector<std::string> sorted = files;
+  for (const std::string& f : files)
+    if (!valid_stream_file_name(f, why)) return false;
+  std::sort(sorted.begin(), sorted.end());
+  if (const auto d = std::adjacent_find(sorted.begin(), sorted.end()); d != sorted.end())
+    return invalid(why, fmt::format("stream file '{}' is named twice", *d));
+  return true;
+}
+
 json RecordingManifest::to_json() const {
   json streams = json::array();
   for (size_t c = 0; c < files.size(); ++c)
@@ -119,38 +200,112 @@ json RecordingManifest::to_json() const {
           {"streams", streams}};
 }
 
+namespace {
+
+// Strict readers of manifest fields: the JSON type first, then the range, before any narrowing.
+// `where` is "" for the top level or "stream I ". Values are shown cut to 40 characters.
+std::string shown(const json& v) {
+  std::string s = v.dump();
+  if (s.size() > 40) s = s.substr(0, 37) + "...";
+  return s;
+}
+
+const json& manifest_field(const json& obj, const std::string& key, const std::string& where = "") {
+  const auto it = obj.find(key);
+  if (it == obj.end()) throw RecordingError(fmt::format("manifest: {}lacks '{}'", where, key));
+  return *it;
+}
+
+// A JSON integer (not a float, not a boolean; beyond 64 bits nlohmann holds a float) in [lo, hi].
+int64_t manifest_int(const json& v, const std::string& key, int64_t lo, int64_t hi,
+                     const std::string& where = "") {
+  if (!v.is_number_integer())
+    throw RecordingError(fmt::format("manifest: {}'{}' must be an integer, got {}", where, key, shown(v)));
+  const bool in_range = v.is_number_unsigned() ? v.get<uint64_t>() <= uint64_t(std::max<int64_t>(hi, 0)) &&
+                                                     int64_t(v.get<uint64_t>()) >= lo
+                                               : v.get<int64_t>() >= lo && v.get<int64_t>() <= hi;
+  if (!in_range)
+    throw RecordingError(
+        fmt::format("manifest: {}'{}' = {} is out of range ({}..{})", where, key, shown(v), lo, hi));
+  return v.is_number_unsigned() ? int64_t(v.get<uint64_t>()) : v.get<int64_t>();
+}
+
+double manifest_number(const json& v, const std::string& key) {
+  if (!v.is_number())
+    throw RecordingError(fmt::format("manifest: '{}' must be a number, got {}", key, shown(v)));
+  const double d = v.get<double>();
+  if (!std::isfinite(d)) throw RecordingError(fmt::format("manifest: '{}' is not finite", key));
+  return d;
+}
+
+std::string manifest_string(const json& v, const std::string& key, const std::string& where = "") {
+  if (!v.is_string())
+    throw RecordingError(fmt::format("manifest: {}'{}' must be a string, got {}", where, key, shown(v)));
+  return v.get<std::string>();
+}
+
+// A field checked by one of the validators: its reason as a RecordingError.
+void check_field(bool ok, const std::string& why) {
+  if (!ok) throw RecordingError("manifest: " + why);
+}
+
+}  // namespace
+
 RecordingManifest RecordingManifest::from_json(const json& j) {
   try {
-    if (!j.is_object() || j.value("format", "") != "omma-recording")
+    if (!j.is_object() || !j.contains("format") || j["format"] != "omma-recording")
       throw RecordingError("not an omma recording manifest (format is not 'omma-recording')");
-    if (j.value("version", 0) != 1) throw RecordingError("unsupported recording version");
+    const int64_t version = manifest_int(manifest_field(j, "version"), "version", INT64_MIN, INT64_MAX);
+    if (version != 1) throw RecordingError(fmt::format("unsupported recording version {}", version));
+    if (j.contains("container") && j["container"] != "hdf5")
+      throw RecordingError("manifest: 'container' must be \"hdf5\", got " + shown(j["container"]));
+    if (j.contains("bayer") && j["bayer"] != "RGGB")
+      throw RecordingError("manifest: 'bayer' must be \"RGGB\", got " + shown(j["bayer"]));
     RecordingManifest m;
-    m.rig = rig_from_json(j.at("rig"));
-    m.sensor_mode = j.value("sensor_mode", "full");
-    m.clock_mhz = j.value("clock_mhz", 0.0);
-    m.fps = j.at("fps").get<double>();
-    m.bits = j.at("bits").get<int>();
-    m.start_unix_ns = j.value("start_unix_ns", int64_t(0));
-    m.complete = j.value("complete", false);
-    if (!(m.fps > 0 && m.fps < 1e5)) throw RecordingError("manifest: fps must be positive");
-    if (m.bits < 8 || m.bits > 16) throw RecordingError("manifest: bits must be 8..16");
-    const json& streams = j.at("streams");
+    std::string why;
+    m.rig = rig_from_json(manifest_field(j, "rig"));
+    if (j.contains("sensor_mode")) {
+      m.sensor_mode = manifest_string(j["sensor_mode"], "sensor_mode");
+      check_field(valid_sensor_mode(m.sensor_mode, &why), why);
+    }
+    if (j.contains("clock_mhz")) {
+      m.clock_mhz = manifest_number(j["clock_mhz"], "clock_mhz");
+      check_field(valid_recording_clock_mhz(m.clock_mhz, &why), why);
+    }
+    m.fps = manifest_number(manifest_field(j, "fps"), "fps");
+    check_field(valid_recording_fps(m.fps, &why), why);
+    m.bits = int(manifest_int(manifest_field(j, "bits"), "bits", kMinRecordingBits, kMaxRecordingBits));
+    if (j.contains("start_unix_ns"))
+      m.start_unix_ns = manifest_int(j["start_unix_ns"], "start_unix_ns", 0, INT64_MAX);
+    if (j.contains("complete")) {
+      if (!j["complete"].is_boolean())
+        throw RecordingError("manifest: 'complete' must be true or false, got " + shown(j["complete"]));
+      m.complete = j["complete"].get<bool>();
+    }
+    const json& streams = manifest_field(j, "streams");
     if (!streams.is_array() || streams.size() != m.rig.cameras.size())
       throw RecordingError(fmt::format("manifest: {} streams for a rig of {} cameras",
                                        streams.is_array() ? streams.size() : 0, m.rig.cameras.size()));
     for (size_t c = 0; c < streams.size(); ++c) {
       const json& s = streams[c];
-      const std::string f = s.at("file").get<std::string>();
-      if (f.empty() || f.find('/') != std::string::npos || f == "." || f == "..")
-        throw RecordingError("manifest: stream file names must be plain names");
-      if (s.at("width").get<int>() != m.rig.cameras[c].in.width ||
-          s.at("height").get<int>() != m.rig.cameras[c].in.height)
+      const RigCamera& cam = m.rig.cameras[c];
+      const std::string where = fmt::format("stream {} ", c);
+      if (!s.is_object()) throw RecordingError(fmt::format("manifest: {}must be an object", where));
+      const int64_t id = manifest_int(manifest_field(s, "camera", where), "camera", 0, INT32_MAX, where);
+      if (id != cam.id)
         throw RecordingError(
-            fmt::format("manifest: stream {} is {}x{} but camera {} is {}x{} (mismatched sensor mode)", f,
-                        s.at("width").get<int>(), s.at("height").get<int>(), m.rig.cameras[c].id,
-                        m.rig.cameras[c].in.width, m.rig.cameras[c].in.height));
+            fmt::format("manifest: {}is of camera {}, but camera {} of the rig is {}", where, id, c, cam.id));
+      const std::string f = manifest_string(manifest_field(s, "file", where), "file", where);
+      check_field(valid_stream_file_name(f, &why), why);
+      const int64_t w = manifest_int(manifest_field(s, "width", where), "width", 1, kMaxImageSide, where);
+      const int64_t h = manifest_int(manifest_field(s, "height", where), "height", 1, kMaxImageSide, where);
+      if (w != cam.in.width || h != cam.in.height)
+        throw RecordingError(
+            fmt::format("manifest: stream {} is {}x{} but camera {} is {}x{} (mismatched sensor mode)", f, w,
+                        h, cam.id, cam.in.width, cam.in.height));
       m.files.push_back(f);
     }
+    if (!m.IsValid(&why)) throw RecordingError("manifest: " + why);
     return m;
   } catch (const json::exception& e) {
     throw RecordingError(std::string("manifest: ") + e.what());
@@ -253,15 +408,7 @@ RecordingWriter::RecordingWriter(const fs::path& dir, RecordingManifest manifest
     : impl_(std::make_unique<Impl>()) {
   quiet_hdf5();
   std::lock_guard lock(h5_mutex());
-  manifest.rig.validate();
   if (!(options.flush_interval_s > 0)) throw std::invalid_argument("flush interval must be positive");
-  std::error_code ec;
-  if (fs::exists(dir) && !(fs::is_directory(dir) && fs::is_empty(dir)))
-    throw RecordingError("'" + dir.string() + "' exists and is not an empty folder");
-  fs::create_directories(dir, ec);
-  if (ec) throw RecordingError("cannot create '" + dir.string() + "': " + ec.message());
-  impl_->dir = dir;
-  impl_->opt = options;
   manifest.files.clear();
   for (const RigCamera& c : manifest.rig.cameras) manifest.files.push_back(stream_name(c.id));
   if (manifest.start_unix_ns == 0)
@@ -269,6 +416,15 @@ RecordingWriter::RecordingWriter(const fs::path& dir, RecordingManifest manifest
                                  std::chrono::system_clock::now().time_since_epoch())
                                  .count();
   manifest.complete = false;
+  // The reader's bounds: never a recording that the reader refuses.
+  if (std::string why; !manifest.IsValid(&why)) throw std::invalid_argument("recording manifest: " + why);
+  std::error_code ec;
+  if (fs::exists(dir) && !(fs::is_directory(dir) && fs::is_empty(dir)))
+    throw RecordingError("'" + dir.string() + "' exists and is not an empty folder");
+  fs::create_directories(dir, ec);
+  if (ec) throw RecordingError("cannot create '" + dir.string() + "': " + ec.message());
+  impl_->dir = dir;
+  impl_->opt = options;
   impl_->manifest = manifest;
   write_text_atomically(dir / "manifest.json", manifest.to_json().dump(2) + "\n");
   for (size_t c = 0; c < manifest.rig.cameras.size(); ++c) {
@@ -387,8 +543,9 @@ MatchResult match_frame_sets(const std::vector<std::vector<FrameMeta>>& metas, i
               "stream {}: timestamps go backwards at frame {} ({} ns after {} ns)", c, i, b.t_ns, a.t_ns));
         if (b.seq == a.seq)
           ++st.duplicates;
-        else if (b.seq > a.seq)
-          st.dropped += int64_t(b.seq - a.seq - 1);
+        else if (b.seq > a.seq)  // saturating: sequence numbers are the file's, any uint64
+          st.dropped = int64_t(std::min<uint64_t>(
+              uint64_t(st.dropped) + std::min<uint64_t>(b.seq - a.seq - 1, INT64_MAX), INT64_MAX));
         else
           throw RecordingError(fmt::format("stream {}: sequence numbers go backwards at frame {}", c, i));
       }
@@ -408,6 +565,9 @@ MatchResult match_frame_sets(const std::vector<std::vector<FrameMeta>>& metas, i
         complete = false;
       }
     r.complete_sets += complete;
+    if (int64_t(r.sets.size() + 1) > kMaxFrameSetEntries / std::max(n, 1))
+      throw RecordingError(fmt::format("more than {} frame sets of {} cameras (at most {} frame indices)",
+                                       r.sets.size(), n, kMaxFrameSetEntries));
     r.sets.push_back(cur);
     open = false;
   };
@@ -436,68 +596,186 @@ struct RecordingReader::Impl {
   struct Stream {
     Hid file, frames;
     int w = 0, h = 0;
+    std::string where;  // "camera ID: stream 'PATH'", the start of every error about it
   };
   std::vector<Stream> streams;
   fs::path dir;
 };
 
+namespace {
+
+const char* file_kind(mode_t mode) {
+  if (S_ISDIR(mode)) return "a folder";
+  if (S_ISFIFO(mode)) return "a FIFO";
+  if (S_ISCHR(mode) || S_ISBLK(mode)) return "a device";
+  if (S_ISSOCK(mode)) return "a socket";
+  return "not a regular file";
+}
+
+// Refuses, before anything opens it, all but a regular file `name` in `dir` (a symbolic link must
+// resolve to a file directly in the folder); returns its size. `what` starts every error.
+uint64_t regular_file_in(const fs::path& dir, const std::string& name, const std::string& what) {
+  const fs::path p = dir / name;
+  struct stat st {};
+  if (::lstat(p.c_str(), &st) != 0) {
+    if (errno == ENOENT) throw RecordingError(what + " is missing");
+    throw RecordingError(what + " cannot be read: " + std::strerror(errno));
+  }
+  if (S_ISLNK(st.st_mode)) {
+    std::error_code e1, e2;
+    const fs::path target = fs::canonical(p, e1), home = fs::canonical(dir, e2);
+    if (e1) throw RecordingError(what + " is a broken symbolic link");
+    if (e2 || target.parent_path() != home)
+      throw RecordingError(what + " is a symbolic link out of the recording's folder (to '" +
+                           target.string() + "')");
+    if (::stat(p.c_str(), &st) != 0) throw RecordingError(what + " cannot be read: " + std::strerror(errno));
+  }
+  if (!S_ISREG(st.st_mode))
+    throw RecordingError(what + " is " + file_kind(st.st_mode) + ", not a regular file");
+  return uint64_t(st.st_size);
+}
+
+// Integer attribute `name` of `obj` (one element of any integer type), or nullopt if it is missing
+// or is not one integer.
+std::optional<int64_t> int_attr(hid_t obj, const char* name) {
+  if (H5Aexists(obj, name) <= 0) return std::nullopt;
+  Hid a(H5Aopen(obj, name, H5P_DEFAULT));
+  if (!a.ok()) return std::nullopt;
+  Hid space(H5Aget_space(a)), type(H5Aget_type(a));
+  if (!space.ok() || !type.ok() || H5Sget_simple_extent_npoints(space) != 1 ||
+      H5Tget_class(type) != H5T_INTEGER)
+    return std::nullopt;
+  int64_t v = 0;
+  if (H5Aread(a, H5T_NATIVE_INT64, &v) < 0) return std::nullopt;
+  return v;
+}
+
+// Opens dataset `name` of a stream: a hard link in the root group to a chunked dataset stored in
+// the file (no external storage, no virtual layout, no filters) of `rank` dimensions and integers of
+// `bytes` bytes and `sign`. Its extent and chunk shape into dims and chunk. Throws RecordingError
+// starting with `where`.
+Hid open_dataset(hid_t file, const char* name, int rank, size_t bytes, H5T_sign_t sign, hsize_t* dims,
+                 hsize_t* chunk, const std::string& where) {
+  if (H5Lexists(file, name, H5P_DEFAULT) <= 0)
+    throw RecordingError(fmt::format("{} lacks '{}'", where, name));
+  H5L_info_t li{};
+  if (H5Lget_info(file, name, &li, H5P_DEFAULT) < 0 || li.type != H5L_TYPE_HARD)
+    throw RecordingError(fmt::format("{}: '{}' is a link, not a dataset stored in the file", where, name));
+  Hid ds(H5Dopen2(file, name, H5P_DEFAULT));
+  if (!ds.ok()) throw RecordingError(fmt::format("{}: '{}' cannot be opened (damaged stream)", where, name));
+  Hid dcpl(H5Dget_create_plist(ds)), type(H5Dget_type(ds)), space(H5Dget_space(ds));
+  if (!dcpl.ok() || !type.ok() || !space.ok())
+    throw RecordingError(fmt::format("{}: '{}' cannot be read (damaged stream)", where, name));
+  if (H5Pget_layout(dcpl) != H5D_CHUNKED || H5Pget_external_count(dcpl) != 0)
+    throw RecordingError(fmt::format(
+        "{}: '{}' is not chunked in the file (external, virtual or contiguous storage)", where, name));
+  if (H5Pget_nfilters(dcpl) != 0)
+    throw RecordingError(fmt::format("{}: '{}' is filtered (compressed)", where, name));
+  if (H5Tget_class(type) != H5T_INTEGER || H5Tget_size(type) != bytes || H5Tget_sign(type) != sign)
+    throw RecordingError(fmt::format("{}: '{}' must hold {}signed {}-bit integers", where, name,
+                                     sign == H5T_SGN_NONE ? "un" : "", 8 * bytes));
+  if (H5Sget_simple_extent_type(space) != H5S_SIMPLE || H5Sget_simple_extent_ndims(space) != rank ||
+      H5Sget_simple_extent_dims(space, dims, nullptr) != rank || H5Pget_chunk(dcpl, rank, chunk) != rank)
+    throw RecordingError(
+        fmt::format("{}: '{}' must have {} dimension{}", where, name, rank, rank > 1 ? "s" : ""));
+  return ds;
+}
+
+}  // namespace
+
 RecordingReader::RecordingReader(const fs::path& dir) : impl_(std::make_unique<Impl>()) {
   quiet_hdf5();
   impl_->dir = dir;
-  if (!fs::is_directory(dir)) throw RecordingError("recording '" + dir.string() + "' is not a folder");
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) throw RecordingError("recording '" + dir.string() + "' is not a folder");
   const fs::path mpath = dir / "manifest.json";
-  if (!fs::exists(mpath)) throw RecordingError("recording '" + dir.string() + "' has no manifest.json");
+  if (!fs::exists(fs::symlink_status(mpath, ec)))
+    throw RecordingError("recording '" + dir.string() + "' has no manifest.json");
+  regular_file_in(dir, "manifest.json", "'" + mpath.string() + "'");
   json j;
   try {
-    j = json::parse(read_text_file(mpath));
+    j = json::parse(read_text_file(mpath, kMaxTextFileBytes, "recording manifest"));
   } catch (const json::exception& e) {
     throw RecordingError("'" + mpath.string() + "' is not valid JSON: " + e.what());
+  } catch (const IoError& e) {
+    throw RecordingError(e.what());
   }
   manifest_ = RecordingManifest::from_json(j);
   std::lock_guard lock(h5_mutex());
   for (size_t c = 0; c < manifest_.files.size(); ++c) {
     const fs::path path = dir / manifest_.files[c];
-    const int id = manifest_.rig.cameras[c].id;
-    if (!fs::exists(path))
-      throw RecordingError(fmt::format("camera {}: stream '{}' is missing", id, path.string()));
+    const RigCamera& cam = manifest_.rig.cameras[c];
+    const std::string where = fmt::format("camera {}: stream '{}'", cam.id, path.string());
+    regular_file_in(dir, manifest_.files[c], where);
     Impl::Stream s;
-    s.file = Hid(H5Fopen(path.c_str(), H5F_ACC_RDONLY | H5F_ACC_SWMR_READ, H5P_DEFAULT));
-    if (!s.file.ok())
+    s.where = where;
+    Hid fapl(H5Pcreate(H5P_FILE_ACCESS));
+    if (!fapl.ok() || H5Pset_metadata_read_attempts(fapl, kRecordingReadAttempts) < 0 ||
+        H5Pset_fclose_degree(fapl, H5F_CLOSE_STRONG) < 0)
+      throw RecordingError(where + ": cannot set up HDF5");
+    s.file = Hid(H5Fopen(path.c_str(), H5F_ACC_RDONLY | H5F_ACC_SWMR_READ, fapl));
+    if (!s.file.ok()) throw RecordingError(where + " is truncated, damaged or not an HDF5 file");
+    // Exactly the three datasets, hard-linked.
+    H5G_info_t gi{};
+    if (H5Gget_info(s.file, &gi) < 0)
+      throw RecordingError(where + ": its root group cannot be read (damaged stream)");
+    if (gi.nlinks != 3)
       throw RecordingError(
-          fmt::format("camera {}: stream '{}' is truncated or not an HDF5 file", id, path.string()));
-    s.frames = Hid(H5Dopen2(s.file, "frames", H5P_DEFAULT));
-    Hid seq(H5Dopen2(s.file, "seq", H5P_DEFAULT)), t(H5Dopen2(s.file, "t_ns", H5P_DEFAULT));
-    if (!s.frames.ok() || !seq.ok() || !t.ok())
+          fmt::format("{} holds {} objects, not the 3 datasets frames, seq and t_ns", where, gi.nlinks));
+    hsize_t fd[3] = {0, 0, 0}, fc[3] = {0, 0, 0}, ds[1] = {0}, dc[1] = {0}, dt[1] = {0}, tc[1] = {0};
+    s.frames = open_dataset(s.file, "frames", 3, 2, H5T_SGN_NONE, fd, fc, where);
+    Hid seq = open_dataset(s.file, "seq", 1, 8, H5T_SGN_NONE, ds, dc, where);
+    Hid t = open_dataset(s.file, "t_ns", 1, 8, H5T_SGN_2, dt, tc, where);
+    // The sizes, 64-bit, against the manifest's camera before anything is narrowed.
+    const auto& in = cam.in;
+    if (fd[1] != hsize_t(in.height) || fd[2] != hsize_t(in.width))
       throw RecordingError(
-          fmt::format("camera {}: stream '{}' lacks frames, seq or t_ns", id, path.string()));
-    hsize_t fd[3] = {0, 0, 0}, ds[1] = {0}, dt[1] = {0};
-    Hid fs_(H5Dget_space(s.frames)), ss(H5Dget_space(seq)), ts(H5Dget_space(t));
-    if (H5Sget_simple_extent_ndims(fs_) != 3)
-      throw RecordingError(fmt::format("camera {}: frames must be 3-D", id));
-    H5Sget_simple_extent_dims(fs_, fd, nullptr);
-    H5Sget_simple_extent_dims(ss, ds, nullptr);
-    H5Sget_simple_extent_dims(ts, dt, nullptr);
-    s.h = int(fd[1]);
-    s.w = int(fd[2]);
-    const auto& in = manifest_.rig.cameras[c].in;
-    if (s.w != in.width || s.h != in.height)
+          fmt::format("{}: frames are {}x{} but the rig's camera is {}x{} (mismatched sensor mode)", where,
+                      fd[2], fd[1], in.width, in.height));
+    s.h = in.height;
+    s.w = in.width;
+    if (fc[0] != 1 || fc[1] != fd[1] || fc[2] != fd[2])
+      throw RecordingError(fmt::format("{}: frames must be stored one frame per chunk", where));
+    if (dc[0] < 1 || dc[0] > (1u << 20) || tc[0] < 1 || tc[0] > (1u << 20))
+      throw RecordingError(fmt::format("{}: seq and t_ns must have chunks of 1..2^20 elements", where));
+    // The stream's own attributes: its camera, size and bit depth are the manifest's.
+    const auto a_cam = int_attr(s.file, "camera"), a_w = int_attr(s.file, "width"),
+               a_h = int_attr(s.file, "height"), a_bits = int_attr(s.file, "bits");
+    if (!a_cam || !a_w || !a_h || !a_bits)
+      throw RecordingError(where + " lacks one of its integer attributes camera, width, height, bits");
+    if (*a_cam != cam.id)
       throw RecordingError(
-          fmt::format("camera {}: stream frames are {}x{} but the rig's camera is {}x{} (mismatched "
-                      "sensor mode)",
-                      id, s.w, s.h, in.width, in.height));
-    // Complete frames: those whose t_ns was written (>= 0), within every dataset's extent.
+          fmt::format("{} holds the frames of camera {}, not of camera {} (manifest and stream "
+                      "disagree)",
+                      where, *a_cam, cam.id));
+    if (*a_w != in.width || *a_h != in.height)
+      throw RecordingError(fmt::format("{}: its attributes say {}x{}, the rig's camera is {}x{}", where, *a_w,
+                                       *a_h, in.width, in.height));
+    if (*a_bits != manifest_.bits)
+      throw RecordingError(
+          fmt::format("{}: its attributes say {} bits, the manifest {}", where, *a_bits, manifest_.bits));
+    // The extents against the file's size (taken after them: a file being written only grows). One
+    // frame more than fits is a recorder stopped between growing the datasets and writing the frame.
     const hsize_t n = std::min({fd[0], ds[0], dt[0]});
+    const uint64_t per_frame = 2 * uint64_t(in.width) * uint64_t(in.height) + 16;
+    const uint64_t file_size = regular_file_in(dir, manifest_.files[c], where);
+    if (n > file_size / per_frame + 1)
+      throw RecordingError(
+          fmt::format("{} declares {} frames of {}x{}, more than its {} bytes hold (damaged or "
+                      "forged stream)",
+                      where, n, in.width, in.height, file_size));
+    // Complete frames: those whose t_ns was written (>= 0), within every dataset's extent.
     std::vector<int64_t> tv(n);
     std::vector<uint64_t> sv(n);
     if (n > 0) {  // the first n elements (the extents differ after a crash)
       Hid mt(H5Screate_simple(1, &n, nullptr));
       Hid f1(H5Dget_space(t)), f2(H5Dget_space(seq));
       const hsize_t start[1] = {0};
-      H5Sselect_hyperslab(f1, H5S_SELECT_SET, start, nullptr, &n, nullptr);
-      H5Sselect_hyperslab(f2, H5S_SELECT_SET, start, nullptr, &n, nullptr);
-      if (H5Dread(t, H5T_NATIVE_INT64, mt, f1, H5P_DEFAULT, tv.data()) < 0 ||
+      if (H5Sselect_hyperslab(f1, H5S_SELECT_SET, start, nullptr, &n, nullptr) < 0 ||
+          H5Sselect_hyperslab(f2, H5S_SELECT_SET, start, nullptr, &n, nullptr) < 0 ||
+          H5Dread(t, H5T_NATIVE_INT64, mt, f1, H5P_DEFAULT, tv.data()) < 0 ||
           H5Dread(seq, H5T_NATIVE_UINT64, mt, f2, H5P_DEFAULT, sv.data()) < 0)
-        throw RecordingError(fmt::format("camera {}: cannot read the timestamps of '{}'", id, path.string()));
+        throw RecordingError(where + ": its timestamps cannot be read (damaged stream)");
     }
     std::vector<FrameMeta> meta;
     for (hsize_t i = 0; i < n && tv[i] >= 0; ++i) meta.push_back({sv[i], tv[i]});
@@ -519,16 +797,30 @@ RecordingReader::~RecordingReader() {
 cv::Mat RecordingReader::read(int cam, int64_t i) const {
   if (cam < 0 || cam >= cameras() || i < 0 || i >= frames(cam))
     throw RecordingError(fmt::format("frame {} of stream {} does not exist", i, cam));
-  std::lock_guard lock(h5_mutex());
   const Impl::Stream& s = impl_->streams[cam];
   cv::Mat out(s.h, s.w, CV_16UC1);
-  const hsize_t start[3] = {hsize_t(i), 0, 0}, count[3] = {1, hsize_t(s.h), hsize_t(s.w)};
-  Hid fspace(H5Dget_space(s.frames));
-  Hid mspace(H5Screate_simple(3, count, nullptr));
-  if (H5Sselect_hyperslab(fspace, H5S_SELECT_SET, start, nullptr, count, nullptr) < 0 ||
-      H5Dread(s.frames, H5T_NATIVE_UINT16, mspace, fspace, H5P_DEFAULT, out.data) < 0)
+  {
+    std::lock_guard lock(h5_mutex());
+    const hsize_t start[3] = {hsize_t(i), 0, 0}, count[3] = {1, hsize_t(s.h), hsize_t(s.w)};
+    // Stored in the file, uncompressed: an unwritten chunk would read as zeros.
+    hsize_t stored = 0;
+    if (H5Dget_chunk_storage_size(s.frames, start, &stored) < 0 || stored != out.total() * 2)
+      throw RecordingError(
+          fmt::format("{}: frame {} is not stored in the file (damaged stream)", s.where, i));
+    Hid fspace(H5Dget_space(s.frames));
+    Hid mspace(H5Screate_simple(3, count, nullptr));
+    if (H5Sselect_hyperslab(fspace, H5S_SELECT_SET, start, nullptr, count, nullptr) < 0 ||
+        H5Dread(s.frames, H5T_NATIVE_UINT16, mspace, fspace, H5P_DEFAULT, out.data) < 0)
+      throw RecordingError(fmt::format("{}: cannot read frame {} (damaged stream)", s.where, i));
+  }
+  // The bit depth the renderer develops with (the same test as its ISP's).
+  double mx = 0;
+  cv::minMaxLoc(out, nullptr, &mx);
+  if (mx > double((1 << manifest_.bits) - 1))
     throw RecordingError(
-        fmt::format("camera {}: cannot read frame {} (damaged stream)", manifest_.rig.cameras[cam].id, i));
+        fmt::format("{}: frame {} has values up to {}, more than the recording's {} bits allow "
+                    "(damaged stream or wrong bit depth)",
+                    s.where, i, mx, manifest_.bits));
   return out;
 }
 

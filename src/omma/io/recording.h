@@ -23,11 +23,32 @@
 // Files are written in SWMR mode (HDF5 single-writer / multiple-reader) and flushed every
 // flush_interval (0.5 s): a recorder killed at any moment leaves every stream readable up to its
 // last flush (readers open with SWMR-read; plain h5dump needs `h5clear -s FILE` first).
+//
+// Recordings are untrusted input: the reader believes nothing the folder says that it can check, and
+// every refusal is a RecordingError naming the camera and the file, within seconds:
+//   - the manifest is parsed strictly: integers must be JSON integers in range (no floats, no
+//     booleans, nothing wrapped), numbers finite, each field within the bounds below; the writer
+//     and `omma record` check the same fields with the same functions (valid_recording_fps ...), so
+//     they never write a recording the reader refuses;
+//   - manifest.json and the streams must be regular files in the folder (a symbolic link must point
+//     to one in the folder; FIFOs, devices and folders are refused before anything opens them), the
+//     stream names plain (no '/', no "..", no control character or NUL) and distinct;
+//   - a stream holds exactly the hard-linked datasets frames, seq and t_ns of the types, ranks and
+//     chunking above (no external or soft links, no external storage, no virtual datasets, no
+//     filters), and its attributes camera, width, height and bits equal its camera's in the
+//     manifest (its position in the manifest cannot hand one camera's frames to another);
+//   - extents are read as 64-bit and checked against the manifest and the file's size (N frames of
+//     H x W take N * (2 H W + 16) bytes of an uncompressed stream) before anything is allocated;
+//   - HDF5's metadata reads are retried at most kRecordingReadAttempts times;
+//   - every frame read (RecordingReader::read, thus `omma recording check` and `omma render`) must
+//     be stored in the file and fit the manifest's bit depth.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <filesystem>
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -44,6 +65,31 @@ class RecordingError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// Bounds of the manifest's fields, the same for the writer, the reader and `omma record`.
+inline constexpr double kMinRecordingFps = 1e-3;  // one frame in 1000 s
+inline constexpr double kMaxRecordingFps = 1e4;
+inline constexpr double kMaxRecordingClockMhz = 1e5;  // 0 = not given
+inline constexpr int kMinRecordingBits = 8;
+inline constexpr int kMaxRecordingBits = 16;
+inline constexpr size_t kMaxSensorModeBytes = 1024;
+inline constexpr size_t kMaxStreamNameBytes = 255;
+// At most this many HDF5 reads of one piece of metadata (H5Pset_metadata_read_attempts): HDF5's
+// SWMR default, 100 with a doubling back-off, retried one damaged checksum for more than 10 minutes;
+// 16 end within milliseconds and still ride out a read that races the writer's flush.
+inline constexpr unsigned kRecordingReadAttempts = 16;
+// Frame sets x cameras the matcher may hold (8 bytes each): 2^28 = 2 GiB, e.g. 56 hours of 44
+// cameras at 30 fps.
+inline constexpr int64_t kMaxFrameSetEntries = int64_t(1) << 28;
+
+// One validator per manifest field: true, or false with the reason in *why.
+bool valid_recording_fps(double fps, std::string* why = nullptr);             // [kMin, kMaxRecordingFps]
+bool valid_recording_clock_mhz(double mhz, std::string* why = nullptr);       // [0, kMaxRecordingClockMhz]
+bool valid_recording_bits(int64_t bits, std::string* why = nullptr);          // [kMin, kMaxRecordingBits]
+bool valid_sensor_mode(const std::string& mode, std::string* why = nullptr);  // printable, <= 1024 bytes
+bool valid_start_unix_ns(int64_t ns, std::string* why = nullptr);             // >= 0
+// A stream file name: 1..255 bytes, no '/', no "..", no control character (NUL included).
+bool valid_stream_file_name(const std::string& name, std::string* why = nullptr);
+
 struct RecordingManifest {
   Rig rig;
   std::string sensor_mode = "full";
@@ -53,8 +99,12 @@ struct RecordingManifest {
   int64_t start_unix_ns = 0;
   bool complete = false;
   std::vector<std::string> files;  // per camera (rig order)
+  // Every field within its bounds (the validators above), a valid rig, one distinct valid file name
+  // per camera.
+  bool IsValid(std::string* why = nullptr) const;
   nlohmann::json to_json() const;
-  static RecordingManifest from_json(const nlohmann::json& j);  // throws RecordingError
+  // Strict (header comment); the result IsValid. Throws RecordingError.
+  static RecordingManifest from_json(const nlohmann::json& j);
 };
 
 struct FrameMeta {
@@ -72,7 +122,9 @@ class RecordingWriter {
   struct Options {
     double flush_interval_s = 0.5;
   };
-  // Creates DIR (must not exist or be an empty folder) with the manifest and one stream per camera.
+  // Creates DIR (must not exist or be an empty folder) with the manifest and one stream per camera
+  // (cam_XX.h5, replacing manifest.files). Throws std::invalid_argument before it creates anything
+  // unless the manifest IsValid.
   RecordingWriter(const std::filesystem::path& dir, RecordingManifest manifest, Options options);
   RecordingWriter(const std::filesystem::path& dir, RecordingManifest manifest)
       : RecordingWriter(dir, std::move(manifest), Options{}) {}
@@ -114,21 +166,24 @@ struct MatchResult {
 
 // Matches frames of free-running cameras into sets by timestamp: frames are taken in time order,
 // and a set gathers, at most one per camera, the frames within half a period (period_ns / 2) of its
-// first frame. Throws RecordingError naming the camera if its timestamps go backwards.
+// first frame. Throws RecordingError naming the camera if its timestamps go backwards, or if the
+// sets would hold more than kMaxFrameSetEntries frame indices. Dropped counts saturate at INT64_MAX.
 MatchResult match_frame_sets(const std::vector<std::vector<FrameMeta>>& metas, int64_t period_ns);
 
 // Random access to a recording (SWMR-read: also while it is being written, or after a crash).
 class RecordingReader : public render::FrameSetReader {
  public:
-  // Throws RecordingError with a clear message: missing manifest or stream, truncated or damaged
-  // stream, mismatched sensor mode (a stream's size is not its camera's), backwards timestamps.
+  // Throws RecordingError with a clear message naming the camera and the file: missing, invalid or
+  // lying manifest, missing, truncated, damaged or forged stream (header comment), mismatched sensor
+  // mode (a stream's size is not its camera's), backwards timestamps.
   explicit RecordingReader(const std::filesystem::path& dir);
   ~RecordingReader() override;
   const RecordingManifest& manifest() const { return manifest_; }
   int cameras() const { return static_cast<int>(metas_.size()); }
   int64_t frames(int cam) const { return static_cast<int64_t>(metas_[cam].size()); }
   const std::vector<FrameMeta>& meta(int cam) const { return metas_[cam]; }
-  // Frame i of camera index cam (CV_16UC1 mosaic). Throws RecordingError if it cannot be read.
+  // Frame i of camera index cam (CV_16UC1 mosaic). Throws RecordingError naming the camera and the
+  // file if it cannot be read, is not stored in the file, or holds a value above 2^bits - 1.
   cv::Mat read(int cam, int64_t i) const;
   const MatchResult& match() const { return match_; }
   // render::FrameSetReader: the manifest's rig and bits, the matched frame sets.

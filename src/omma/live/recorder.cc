@@ -20,7 +20,10 @@ bool RecordOptions::IsValid(std::string* why) const {
   if (queue_frames < 1 || queue_frames > 1000) return invalid(why, "queue must hold 1..1000 frames");
   if (!(flush_interval_s > 0 && flush_interval_s <= 1))
     return invalid(why, "flush interval must be in (0, 1] s");
-  if (!(fps > 0)) return invalid(why, "fps must be positive");
+  // The manifest's own validators: `omma record` never writes a recording its reader refuses.
+  if (!io::valid_recording_fps(fps, why) || !io::valid_recording_clock_mhz(clock_mhz, why) ||
+      !io::valid_sensor_mode(sensor_mode, why))
+    return false;
   return true;
 }
 

@@ -23,9 +23,9 @@ struct RecordOptions {
   int64_t frames = 0;     // frames per camera; 0 = no limit
   int queue_frames = 4;   // per camera
   double flush_interval_s = 0.5;
-  std::string sensor_mode = "full";
-  double clock_mhz = 0;
-  double fps = 30;  // nominal rate (matching period) written to the manifest
+  std::string sensor_mode = "full";  // io::valid_sensor_mode
+  double clock_mhz = 0;              // io::valid_recording_clock_mhz
+  double fps = 30;  // nominal rate (matching period) written to the manifest: io::valid_recording_fps
   bool progress = true;
   const std::atomic<bool>* stop = nullptr;
   bool IsValid(std::string* why = nullptr) const;
