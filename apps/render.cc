@@ -1,6 +1,7 @@
 // omma render: large panoramas (Giga-Eye, 21.6 / 82.3 MP) from a frames folder or a recording, as one
 // process or distributed under mpirun (omma/dist: frame sets as items of a job, or one panorama split by
 // bands).
+#include <charconv>
 #include <chrono>
 #include <filesystem>
 #include <iostream>
@@ -89,12 +90,16 @@ class RenderJob : public dist::Job {
     last_ = recording_ ? rec_->frame_sets() - 1 : 0;
     if (!a_.sets.empty()) {
       const auto colon = a_.sets.find(':');
-      try {
-        first_ = std::stoll(a_.sets.substr(0, colon));
-        last_ = colon == std::string::npos ? first_ : std::stoll(a_.sets.substr(colon + 1)) - 1;
-      } catch (const std::exception&) {
-        throw std::invalid_argument("--sets must be I or A:B (frame sets A..B-1)");
-      }
+      // Whole decimal numbers only: "1:3abc" or "1e3" is refused, not read as a prefix.
+      auto number = [&](const std::string& t) {
+        int64_t v = 0;
+        const auto [end, ec] = std::from_chars(t.data(), t.data() + t.size(), v);
+        if (t.empty() || ec != std::errc() || end != t.data() + t.size())
+          throw std::invalid_argument("--sets must be I or A:B (frame sets A..B-1), got '" + a_.sets + "'");
+        return v;
+      };
+      first_ = number(a_.sets.substr(0, colon));
+      last_ = colon == std::string::npos ? first_ : number(a_.sets.substr(colon + 1)) - 1;
     }
     if (!recording_ && (first_ != 0 || last_ != 0)) throw std::invalid_argument("--sets needs a recording");
     if (recording_ && (first_ < 0 || last_ < first_ || last_ >= rec_->frame_sets()))
@@ -203,6 +208,8 @@ RenderSetup parse_render_args(const dist::Comm& comm, const RenderArgs& a) {
   if (a.threads < 0) throw std::invalid_argument("--threads must be >= 0");
   rank0 = dist::parse_rank0(a.rank0);
   o.grid = PanoGrid{parse_projection(a.projection), size.width, size.height};
+  if (const std::string ext = fs::path(a.out).extension().string(); ext != ".tif" && ext != ".tiff")
+    check_image_format(a.out, size.width, size.height);  // before any work: e.g. a JPEG too wide
   if (a.method == "hq") {
     o.offline = true;
     o.method = pano::Method::kLinear;

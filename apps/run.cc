@@ -158,7 +158,7 @@ void add_run_command(CLI::App& root) {
     sk.projection = eo.map.grid.projection;
     sk.spherical_metadata = true;  // 360-degree metadata in mp4 and png outputs
     // Every option checked before the sources start (the simulator pre-renders its loop first).
-    for (const std::string why : {valid_or_why(eo), valid_or_why(so), valid_or_why(sk)})
+    for (const std::string& why : {valid_or_why(eo), valid_or_why(so), valid_or_why(sk)})
       if (!why.empty()) throw std::invalid_argument(why);
     auto sources = live::open_sources(rig, o.sources, so);
     std::vector<std::unique_ptr<live::Sink>> sinks;

@@ -86,8 +86,8 @@ class CheckerScene final : public Scene {
  public:
   explicit CheckerScene(double radius) : radius_(radius) {
     if (!(radius > 0 && radius <= kMaxSceneMm))
-      throw SceneError(
-          fmt::format("checker scene: radius must be in (0, {}] mm, got {}", kMaxSceneMm, radius));
+      throw SceneError(fmt::format("checker scene: radius must be a positive number of mm up to {}, got {}",
+                                   kMaxSceneMm, radius));
   }
   cv::Vec3f radiance(const Vec3& o, const Vec3& d, const Vec3&) const override {
     // |o + s d| = R, s > 0 (origin inside the sphere).
@@ -123,8 +123,8 @@ class UsafScene final : public Scene {
  public:
   explicit UsafScene(double distance) : distance_(distance) {
     if (!(distance > 0 && distance <= kMaxSceneMm))
-      throw SceneError(
-          fmt::format("usaf scene: distance must be in (0, {}] mm, got {}", kMaxSceneMm, distance));
+      throw SceneError(fmt::format("usaf scene: distance must be a positive number of mm up to {}, got {}",
+                                   kMaxSceneMm, distance));
   }
   cv::Vec3f radiance(const Vec3& o, const Vec3& d, const Vec3&) const override {
     if (d.z() <= 1e-9 || o.z() >= distance_) return {0.01f, 0.01f, 0.01f};

@@ -272,6 +272,11 @@ TEST(SimScene, SpecsAndClearErrors) {
   EXPECT_NE(message("photo:").find("needs a path"), std::string::npos);
   EXPECT_NE(message("checker:abc").find("not a number"), std::string::npos);
   EXPECT_NE(message("checker:-3").find("positive"), std::string::npos);
+  // Numbers that overflowed to inf and NaN in the simulator: refused with the bound.
+  EXPECT_NE(message("checker:1e300").find("up to 1000000"), std::string::npos) << message("checker:1e300");
+  EXPECT_NE(message("usaf:1e308").find("up to 1000000"), std::string::npos);
+  EXPECT_NE(message("flat:1e308").find("(0, 1000]"), std::string::npos) << message("flat:1e308");
+  EXPECT_NE(message("flat:nan").find("(0, 1000]"), std::string::npos);
   const auto dir = std::filesystem::temp_directory_path() / "omma_sim_badphoto";
   std::filesystem::create_directories(dir);
   { std::ofstream(dir / "x.jpg") << "not an image"; }
