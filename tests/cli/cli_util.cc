@@ -69,4 +69,12 @@ int count(const std::string& s, const std::string& what) {
   return n;
 }
 
+bool has(const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; }
+
+void expect_error(const RunResult& r, const std::string& part, const std::string& what) {
+  EXPECT_EQ(r.exit_code, 1) << what << "\n" << r.err;
+  EXPECT_TRUE(has(r.err, "omma: error:")) << what << "\n" << r.err;
+  EXPECT_TRUE(has(r.err, part)) << what << ": no '" << part << "' in\n" << r.err;
+}
+
 }  // namespace omma::test

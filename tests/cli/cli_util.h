@@ -39,4 +39,11 @@ std::string slurp(const std::filesystem::path& path);
 // How often `what` occurs in `s` (overlapping occurrences count).
 int count(const std::string& s, const std::string& what);
 
+// Does `s` contain `part`?
+bool has(const std::string& s, const std::string& part);
+
+// A clear error (gtest expectations): exit status 1, "omma: error:" on stderr, mentioning `part`;
+// `what` names the case in a failure.
+void expect_error(const RunResult& r, const std::string& part, const std::string& what);
+
 }  // namespace omma::test

@@ -18,15 +18,6 @@ namespace omma::test {
 namespace {
 namespace fs = std::filesystem;
 
-bool has(const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; }
-
-// A clear error: "omma: error:" on stderr (mentioning `part`), exit status 1, nothing on stdout.
-void expect_error(const RunResult& r, const std::string& part, const std::string& what) {
-  EXPECT_EQ(r.exit_code, 1) << what << "\n" << r.err;
-  EXPECT_TRUE(has(r.err, "omma: error:")) << what << "\n" << r.err;
-  EXPECT_TRUE(has(r.err, part)) << what << ": no '" << part << "' in\n" << r.err;
-}
-
 nlohmann::json prototype_json() { return rig_to_json(design::thesis_prototype_rig()); }
 
 fs::path write_json(const fs::path& dir, const std::string& name, const nlohmann::json& j) {
