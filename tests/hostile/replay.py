@@ -53,6 +53,7 @@ class Harness:
     # ------------------------------------------------------------------ running and judging
     def run(self, args, timeout=60, shell_prefix="", cwd=None):
         cmd = shell_prefix + " ".join([self.omma] + args) if shell_prefix else None
+        cwd = cwd or self.tmp  # a command that does write (default outputs) writes here
         t0 = time.monotonic()
         try:
             if cmd:
