@@ -13,6 +13,7 @@
 #include "omma/core/io.h"
 #include "omma/core/limits.h"
 #include "omma/core/log.h"
+#include "omma/core/parse.h"
 #include "omma/core/rig.h"
 #include "omma/design/dome.h"
 #include "omma/design/prototype.h"
@@ -23,14 +24,8 @@ namespace {
 // "inf" / "infinity" or a positive number of mm.
 double parse_distance(const std::string& text) {
   if (text == "inf" || text == "infinity") return design::kInfinity;
-  size_t used = 0;
-  double d = 0;
-  try {
-    d = std::stod(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used != text.size() || !(d > 0 && d <= kMaxPositionMm))
+  const double d = parse_double(text).value_or(0);  // core/parse.h
+  if (!(d > 0 && d <= kMaxPositionMm))
     throw std::invalid_argument(fmt::format(
         "--distance must be a number of mm in (0, {}] or 'inf' (beyond 1 km every direction is at infinity), "
         "got '{}'",

@@ -10,6 +10,7 @@
 
 #include "apps/command.h"
 #include "omma/core/grid.h"
+#include "omma/core/parse.h"
 #include "omma/core/progress.h"
 #include "omma/core/rig.h"
 #include "omma/core/valid.h"
@@ -23,17 +24,11 @@ extern "C" void on_signal(int) { live::request_stop(); }
 // "MIN-MAX" or "F" (frames/s).
 void parse_fps_range(const std::string& text, double* lo, double* hi) {
   const size_t dash = text.find('-', 1);
-  try {
-    size_t a = 0, b = 0;
-    if (dash == std::string::npos) {
-      *lo = *hi = std::stod(text, &a);
-      if (a == text.size()) return;
-    } else {
-      *lo = std::stod(text.substr(0, dash), &a);
-      *hi = std::stod(text.substr(dash + 1), &b);
-      if (a == dash && b == text.size() - dash - 1) return;
-    }
-  } catch (const std::exception&) {
+  const std::optional<double> a = parse_double(text.substr(0, dash));  // core/parse.h
+  const std::optional<double> b = dash == std::string::npos ? a : parse_double(text.substr(dash + 1));
+  if (a && b) {
+    *lo = *a, *hi = *b;
+    return;
   }
   throw std::invalid_argument("--sim-fps '" + text +
                               "': expected MIN-MAX or one rate, frames/s (e.g. 44-56)");

@@ -17,6 +17,7 @@
 #include "omma/core/grid.h"
 #include "omma/core/io.h"
 #include "omma/core/log.h"
+#include "omma/core/parse.h"
 #include "omma/core/rig.h"
 #include "omma/design/prototype.h"
 #include "omma/io/metadata.h"
@@ -63,13 +64,9 @@ pano::PlaneSweepOptions parse_sweep(const std::string& text) {
     const size_t comma = text.find(',', start);
     const std::string part =
         text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
-    try {
-      size_t used = 0;
-      v.push_back(std::stod(part, &used));
-      if (used != part.size()) throw std::invalid_argument(part);
-    } catch (const std::exception&) {
-      throw std::invalid_argument("--depth estimate:NEAR,FAR,STEPS: '" + part + "' is not a number");
-    }
+    const std::optional<double> x = parse_double(part);  // core/parse.h
+    if (!x) throw std::invalid_argument("--depth estimate:NEAR,FAR,STEPS: '" + part + "' is not a number");
+    v.push_back(*x);
     if (comma == std::string::npos) break;
     start = comma + 1;
   }
@@ -95,14 +92,9 @@ DepthChoice choose_depth(const std::string& spec, const Rig& rig, const std::vec
   if (spec == "inf") {
     d.info = {{"mode", "inf"}};
   } else if (spec.rfind("sphere:", 0) == 0) {
-    double r = 0;
-    try {
-      size_t used = 0;
-      r = std::stod(after("sphere:"), &used);
-      if (used != after("sphere:").size()) throw std::invalid_argument("");
-    } catch (const std::exception&) {
-      throw std::invalid_argument("--depth sphere:R needs a radius in mm, got '" + spec + "'");
-    }
+    const std::optional<double> parsed = parse_double(after("sphere:"));  // core/parse.h
+    if (!parsed) throw std::invalid_argument("--depth sphere:R needs a radius in mm, got '" + spec + "'");
+    const double r = *parsed;
     d.depth = pano::sphere_depth(rig, grid, r);
     d.info = {{"mode", "sphere"}, {"radius_mm", r}};
   } else if (spec.rfind("truth:", 0) == 0) {

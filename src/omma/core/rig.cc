@@ -10,6 +10,7 @@
 
 #include "omma/core/io.h"
 #include "omma/core/limits.h"
+#include "omma/core/parse.h"
 
 namespace omma {
 namespace {
@@ -44,12 +45,10 @@ double number(const json& obj, const std::string& key, const std::string& where)
 int64_t integer(const json& obj, const std::string& key, const std::string& where, int64_t lo, int64_t hi) {
   const json& v = field(obj, key, where);
   if (!v.is_number_integer()) throw RigError(where + ": field '" + key + "' must be an integer");
-  const bool in_range = v.is_number_unsigned() ? v.get<uint64_t>() <= uint64_t(std::max<int64_t>(hi, 0)) &&
-                                                     int64_t(v.get<uint64_t>()) >= lo
-                                               : v.get<int64_t>() >= lo && v.get<int64_t>() <= hi;
-  if (!in_range)
+  const std::optional<int64_t> i = json_integer(v, lo, hi);  // core/parse.h
+  if (!i)
     throw RigError(fmt::format("{}: field '{}' = {} is out of range ({}..{})", where, key, v.dump(), lo, hi));
-  return v.is_number_unsigned() ? int64_t(v.get<uint64_t>()) : v.get<int64_t>();
+  return *i;
 }
 
 // An optional string field: absent gives `def`, any other type is an error.

@@ -10,6 +10,7 @@
 
 #include "omma/core/io.h"
 #include "omma/core/limits.h"
+#include "omma/core/parse.h"
 #include "omma/core/photometric.h"
 #include "omma/core/valid.h"
 #include "omma/hw/tables.h"
@@ -27,15 +28,10 @@ namespace {
 
 // A JSON integer within [lo, hi]: not a float, a bool or a value that would wrap in an int.
 int json_int(const nlohmann::json& j, const std::string& what, int64_t lo, int64_t hi) {
-  bool ok = j.is_number_integer();
-  int64_t v = 0;
-  if (ok && j.is_number_unsigned())
-    ok = j.get<uint64_t>() <= uint64_t(hi), v = ok ? int64_t(j.get<uint64_t>()) : 0;
-  else if (ok)
-    v = j.get<int64_t>();
-  if (!ok || v < lo || v > hi)
+  const std::optional<int64_t> v = json_integer(j, lo, hi);  // core/parse.h
+  if (!v)
     throw std::invalid_argument(fmt::format("{} must be an integer {}..{}, got {}", what, lo, hi, j.dump()));
-  return static_cast<int>(v);
+  return static_cast<int>(*v);
 }
 
 struct IntField {

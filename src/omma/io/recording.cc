@@ -20,6 +20,7 @@
 #include "omma/core/frames.h"
 #include "omma/core/io.h"
 #include "omma/core/limits.h"
+#include "omma/core/parse.h"
 #include "omma/core/valid.h"
 
 namespace omma::io {
@@ -221,13 +222,11 @@ int64_t manifest_int(const json& v, const std::string& key, int64_t lo, int64_t 
                      const std::string& where = "") {
   if (!v.is_number_integer())
     throw RecordingError(fmt::format("manifest: {}'{}' must be an integer, got {}", where, key, shown(v)));
-  const bool in_range = v.is_number_unsigned() ? v.get<uint64_t>() <= uint64_t(std::max<int64_t>(hi, 0)) &&
-                                                     int64_t(v.get<uint64_t>()) >= lo
-                                               : v.get<int64_t>() >= lo && v.get<int64_t>() <= hi;
-  if (!in_range)
+  const std::optional<int64_t> i = json_integer(v, lo, hi);  // core/parse.h
+  if (!i)
     throw RecordingError(
         fmt::format("manifest: {}'{}' = {} is out of range ({}..{})", where, key, shown(v), lo, hi));
-  return v.is_number_unsigned() ? int64_t(v.get<uint64_t>()) : v.get<int64_t>();
+  return *i;
 }
 
 double manifest_number(const json& v, const std::string& key) {

@@ -16,6 +16,7 @@
 
 #include "omma/core/frames.h"
 #include "omma/core/io.h"
+#include "omma/core/parse.h"
 #include "omma/core/valid.h"
 #include "omma/isp/isp.h"
 #include "omma/isp/link.h"
@@ -27,12 +28,8 @@ namespace omma::live {
 namespace fs = std::filesystem;
 namespace {
 
-std::string lower(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::tolower(c); });
-  return s;
-}
 bool has_ext(const fs::path& p, std::initializer_list<const char*> exts) {
-  const std::string e = lower(p.extension().string());
+  const std::string e = lower_extension(p);
   for (const char* x : exts)
     if (e == x) return true;
   return false;
@@ -286,15 +283,9 @@ std::unique_ptr<CameraSource> open_one(const std::string& spec, const RigCamera&
 std::optional<double> split_rate(std::string& spec, const std::string& source, const char* form) {
   const size_t at = spec.rfind('@');
   if (at == std::string::npos) return std::nullopt;
-  double rate = 0;
-  try {
-    size_t used = 0;
-    const std::string text = spec.substr(at + 1);
-    rate = std::stod(text, &used);
-    if (used != text.size()) throw std::invalid_argument("trailing characters");
-  } catch (const std::exception&) {
-    throw SourceError("source '" + source + "': expected " + form);
-  }
+  const std::optional<double> parsed = parse_double(spec.substr(at + 1));  // core/parse.h
+  if (!parsed) throw SourceError("source '" + source + "': expected " + form);
+  const double rate = *parsed;
   if (!(std::abs(rate) <= kMaxSimSpeed))
     throw SourceError(fmt::format("source '{}': the rate must be a number in [-{}, {}]", source, kMaxSimSpeed,
                                   kMaxSimSpeed));

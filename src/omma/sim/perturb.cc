@@ -7,6 +7,8 @@
 
 #include <fmt/format.h>
 
+#include "omma/core/parse.h"
+
 namespace omma::sim {
 
 PerturbSpec parse_perturb(const std::string& text) {
@@ -22,14 +24,10 @@ PerturbSpec parse_perturb(const std::string& text) {
       throw std::invalid_argument(
           fmt::format("perturb item '{}' must be KEY=VALUE (keys: orient, focal, center, k1, pos)", item));
     const std::string key = item.substr(0, eq), val = item.substr(eq + 1);
-    double v = 0;
-    try {
-      size_t used = 0;
-      v = std::stod(val, &used);
-      if (used != val.size()) throw std::invalid_argument("trailing");
-    } catch (const std::exception&) {
+    const std::optional<double> parsed = parse_double(val);  // core/parse.h
+    if (!parsed)
       throw std::invalid_argument(fmt::format("perturb item '{}': '{}' is not a number", item, val));
-    }
+    const double v = *parsed;
     if (!std::isfinite(v)) throw std::invalid_argument(fmt::format("perturb item '{}' is not finite", item));
     auto magnitude = [&](double max) {
       if (v < 0 || v > max)

@@ -10,6 +10,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "omma/core/grid.h"
+#include "omma/core/parse.h"
 #include "omma/sim/usaf.h"
 
 namespace omma::sim {
@@ -151,14 +152,8 @@ class UsafScene final : public Scene {
 };
 
 double parse_number(const std::string& text, const std::string& spec) {
-  try {
-    size_t used = 0;
-    const double v = std::stod(text, &used);
-    if (used != text.size()) throw std::invalid_argument("trailing");
-    return v;
-  } catch (const std::exception&) {
-    throw SceneError(fmt::format("scene '{}': '{}' is not a number", spec, text));
-  }
+  if (const std::optional<double> v = parse_double(text)) return *v;  // core/parse.h
+  throw SceneError(fmt::format("scene '{}': '{}' is not a number", spec, text));
 }
 
 }  // namespace
