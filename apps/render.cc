@@ -208,7 +208,7 @@ RenderSetup parse_render_args(const dist::Comm& comm, const RenderArgs& a) {
   if (a.threads < 0) throw std::invalid_argument("--threads must be >= 0");
   rank0 = dist::parse_rank0(a.rank0);
   o.grid = PanoGrid{parse_projection(a.projection), size.width, size.height};
-  if (const std::string ext = fs::path(a.out).extension().string(); ext != ".tif" && ext != ".tiff")
+  if (const std::string ext = lower_extension(a.out); ext != ".tif" && ext != ".tiff")
     check_image_format(a.out, size.width, size.height);  // before any work: e.g. a JPEG too wide
   if (a.method == "hq") {
     o.offline = true;

@@ -11,6 +11,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "omma/core/io.h"
 #include "omma/core/valid.h"
 #include "omma/dist/worker_thread.h"
 #include "omma/io/tiff_writer.h"
@@ -83,8 +84,7 @@ std::string open_output(const Comm& comm, const render::PanoRenderer& renderer, 
                         const SplitOptions& options, Rank0 mode, std::optional<io::BigTiffWriter>& writer) {
   try {
     if (std::string why; !options.IsValid(&why)) throw std::invalid_argument(why);
-    std::string ext = path.extension().string();
-    for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    const std::string ext = lower_extension(path);
     if (ext != ".tif" && ext != ".tiff")
       throw std::invalid_argument(
           "--split tiles writes one BigTIFF: the output must end in .tif or .tiff, not '" +

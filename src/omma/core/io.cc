@@ -1,6 +1,7 @@
 #include "omma/core/io.h"
 
 #include <algorithm>
+#include <cctype>
 #include <fstream>
 #include <random>
 
@@ -67,9 +68,14 @@ void write_image(const fs::path& path, const cv::Mat& image) {
   });
 }
 
-void check_image_format(const fs::path& path, std::int64_t width, std::int64_t height) {
+std::string lower_extension(const fs::path& path) {
   std::string ext = path.extension().string();
   for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return ext;
+}
+
+void check_image_format(const fs::path& path, std::int64_t width, std::int64_t height) {
+  const std::string ext = lower_extension(path);
   bool known = false;
   try {
     known = !ext.empty() && cv::haveImageWriter(path.string());

@@ -26,6 +26,10 @@ void write_text_atomically(const std::filesystem::path& path, const std::string&
 // Reads an image (any OpenCV format) with its stored depth and channels (IMREAD_UNCHANGED unless
 // flags given); throws IoError naming the path if it is missing or unreadable.
 cv::Mat read_image(const std::filesystem::path& path, int flags = -1 /*cv::IMREAD_UNCHANGED*/);
+// The extension of `path` in lower case, with its dot (".jpg" for "a/B.JPG"; "" without one): how
+// every format-by-extension choice reads a file name.
+std::string lower_extension(const std::filesystem::path& path);
+
 // Writes an image atomically; the format comes from the extension. Throws IoError on failure.
 void write_image(const std::filesystem::path& path, const cv::Mat& image);
 // Can write_image write a width x height image to `path`? Throws IoError naming the path unless

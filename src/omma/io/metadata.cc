@@ -18,12 +18,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-std::string lower_ext(const fs::path& p) {
-  std::string e = p.extension().string();
-  for (auto& c : e) c = char(std::tolower((unsigned char)c));
-  return e;
-}
-
 void put_u32(std::string& s, uint32_t v) {
   for (int shift = 24; shift >= 0; shift -= 8) s.push_back(char((v >> shift) & 0xFF));
 }
@@ -314,12 +308,12 @@ std::string gpano_xmp(const PanoGrid& grid) {
 }
 
 bool carries_xmp(const fs::path& path) {
-  const std::string e = lower_ext(path);
+  const std::string e = lower_extension(path);
   return e == ".jpg" || e == ".jpeg" || e == ".png";
 }
 
 std::string embed_xmp(std::string_view encoded, const std::string& ext, const std::string& xmp) {
-  const std::string e = lower_ext(fs::path("x" + ext));
+  const std::string e = lower_extension(fs::path("x" + ext));
   if (e == ".jpg" || e == ".jpeg") return embed_xmp_jpeg(encoded, xmp);
   if (e == ".png") return embed_xmp_png(encoded, xmp);
   throw IoError("cannot add XMP to a '" + ext + "' file (JPEG and PNG only)");
@@ -333,7 +327,7 @@ void write_panorama(const fs::path& path, const cv::Mat& image, const PanoGrid& 
                               image.rows, grid.width, grid.height));
   std::vector<uchar> buf;
   try {
-    if (!cv::imencode(lower_ext(path), image, buf))
+    if (!cv::imencode(lower_extension(path), image, buf))
       throw IoError("cannot encode image '" + path.string() + "'");
   } catch (const cv::Exception& e) {
     throw IoError("cannot write image '" + path.string() + "': " + e.what());

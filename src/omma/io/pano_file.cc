@@ -1,6 +1,5 @@
 #include "omma/io/pano_file.h"
 
-#include <cctype>
 #include <chrono>
 
 #include <fmt/format.h>
@@ -12,8 +11,7 @@ namespace omma::io {
 
 double render_to_file(render::PanoRenderer& renderer, const std::filesystem::path& path) {
   const PanoGrid& g = renderer.options().grid;
-  std::string ext = path.extension().string();
-  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  const std::string ext = lower_extension(path);
   double seconds = 0;
   auto timed = [&](const render::BandSink& sink) {
     return [&seconds, sink, t = std::chrono::steady_clock::now()](int row0, const cv::Mat& band) mutable {

@@ -35,11 +35,6 @@ namespace omma::live {
 namespace fs = std::filesystem;
 namespace {
 
-std::string lower(std::string s) {
-  for (auto& c : s) c = char(std::tolower((unsigned char)c));
-  return s;
-}
-
 // Removes a temporary file that an earlier run writing `target` left behind (it was killed before
 // it could finish), naming it in a warning.
 void remove_leftover(const fs::path& tmp, const fs::path& target) {
@@ -54,7 +49,7 @@ class VideoSink : public Sink {
  public:
   VideoSink(const fs::path& path, cv::Size size, double fps, std::optional<Projection> projection)
       : path_(path), size_(size), projection_(projection) {
-    const std::string ext = lower(path.extension().string());
+    const std::string ext = lower_extension(path);
     const int fourcc = ext == ".mp4" ? cv::VideoWriter::fourcc('m', 'p', '4', 'v')
                                      : cv::VideoWriter::fourcc('M', 'J', 'P', 'G');
     const fs::path dir = path.has_parent_path() ? path.parent_path() : fs::path(".");
@@ -93,7 +88,7 @@ class VideoSink : public Sink {
     }
     // 360-degree metadata (metadata.h) in the checked file, rewritten atomically with its frames
     // unchanged. The rewrite needs room for a second copy: if it fails, the video is kept untagged.
-    if (projection_ && lower(path_.extension().string()) == ".mp4") {
+    if (projection_ && lower_extension(path_) == ".mp4") {
       try {
         io::add_spherical_video_metadata(tmp_, PanoGrid{*projection_, size_.width, size_.height});
       } catch (const IoError& e) {
@@ -663,7 +658,7 @@ std::unique_ptr<Sink> open_sink(const std::string& spec, const Rig& rig, cv::Siz
   const auto metadata = opt.spherical_metadata ? std::optional(opt.projection) : std::nullopt;
   if (spec.rfind("png:", 0) == 0) return std::make_unique<PngSink>(spec.substr(4), pano_size, metadata);
   if (!spec.empty() && spec.back() == '/') return std::make_unique<PngSink>(spec, pano_size, metadata);
-  const std::string ext = lower(fs::path(spec).extension().string());
+  const std::string ext = lower_extension(spec);
   if (ext == ".mp4" || ext == ".mkv" || ext == ".avi")
     return std::make_unique<VideoSink>(spec, pano_size, opt.fps, metadata);
   throw SinkError("sink '" + spec + "': use FILE.mp4|.mkv|.avi, png:DIR, DIR/, cam:ID:SINK or http:PORT");
