@@ -59,6 +59,11 @@ Vec2 distort(const std::array<double, 5>& k, const Vec2& xy) {
 
 namespace {
 
+// The radial scale of eq. 5.24 as a function of s = r^2: 1 + k1 s + k2 s^2 + k5 s^3.
+double radial_scale(const std::array<double, 5>& k, double s) {
+  return 1 + s * (k[0] + s * (k[1] + s * k[4]));
+}
+
 // d r_d / d r of the radial mapping, as a function of s = r^2: 1 + 3 k1 s + 5 k2 s^2 + 7 k5 s^3.
 double radial_slope(const std::array<double, 5>& k, double s) {
   return 1 + s * (3 * k[0] + s * (5 * k[1] + s * 7 * k[4]));
@@ -67,7 +72,7 @@ double radial_slope(const std::array<double, 5>& k, double s) {
 // Jacobian of distort (eq. 5.24-5.26) at xy: [dxd/dx dxd/dy; dyd/dx dyd/dy].
 Eigen::Matrix2d distort_jacobian(const std::array<double, 5>& k, const Vec2& xy) {
   const double x = xy.x(), y = xy.y(), r2 = x * x + y * y;
-  const double p = 1 + r2 * (k[0] + r2 * (k[1] + r2 * k[4]));
+  const double p = radial_scale(k, r2);
   const double q = 2 * k[0] + r2 * (4 * k[1] + r2 * 6 * k[4]);  // dp/dx = q x, dp/dy = q y
   Eigen::Matrix2d j;
   j << p + q * x * x + 2 * k[3] * y + 6 * k[2] * x, q * x * y + 2 * k[3] * x + 2 * k[2] * y,
@@ -76,6 +81,17 @@ Eigen::Matrix2d distort_jacobian(const std::array<double, 5>& k, const Vec2& xy)
 }
 
 bool converged(const Vec2& err) { return err.squaredNorm() < 1e-20; }
+
+// The undistorted radius r in [0, lim] with radial_distort(k, r) = rd, by bisection, for a radial
+// mapping that increases on [0, lim] and exceeds rd at lim.
+double radial_inverse(const std::array<double, 5>& k, double rd, double lim) {
+  double lo = 0, hi = lim;
+  for (int i = 0; i < 100 && hi - lo > 1e-15 * hi; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (radial_distort(k, mid) < rd ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
 
 // Newton's method on distort from `xy`, within radius `lim`, accepted only while it improves.
 Vec2 newton(const std::array<double, 5>& k, const Vec2& xd, Vec2 xy, double lim) {
@@ -106,27 +122,15 @@ Vec2 undistort_robust(const std::array<double, 5>& k, const Vec2& xd, const Vec2
     const Vec2 xy = newton(k, xd, guess, lim);
     if (converged(distort(k, xy) - xd)) return xy;
   }
-  double r;
-  if (!(radial_distort(k, lim) > rd)) {
-    r = lim;  // beyond the model's reach: the fold, in the point's own direction
-  } else {
-    double lo = 0, hi = lim;
-    for (int i = 0; i < 100 && hi - lo > 1e-15 * hi; ++i) {
-      const double mid = 0.5 * (lo + hi);
-      (radial_distort(k, mid) < rd ? lo : hi) = mid;
-    }
-    r = 0.5 * (lo + hi);
-  }
+  // Beyond the model's reach: the fold, in the point's own direction.
+  const double r = radial_distort(k, lim) > rd ? radial_inverse(k, rd, lim) : lim;
   const Vec2 xy = xd * (r / rd);
   return k[2] == 0 && k[3] == 0 ? xy : newton(k, xd, xy, lim);
 }
 
 }  // namespace
 
-double radial_distort(const std::array<double, 5>& k, double r) {
-  const double s = r * r;
-  return r * (1 + s * (k[0] + s * (k[1] + s * k[4])));
-}
+double radial_distort(const std::array<double, 5>& k, double r) { return r * radial_scale(k, r * r); }
 
 double radial_fold(const std::array<double, 5>& k) {
   if (k[0] >= 0 && k[1] >= 0 && k[4] >= 0) return std::numeric_limits<double>::infinity();
@@ -181,12 +185,7 @@ std::string Intrinsics::lens_problem() const {
           "the distortion k = [{}] folds back at {:.1f} deg from the axis, before reaching the image "
           "corner (the radial mapping r (1 + k1 r^2 + k2 r^4 + k5 r^6) must increase over the field)",
           fmt::join(k, ", "), rad2deg(std::atan(lim)));
-    double lo = 0, hi = lim;
-    for (int i = 0; i < 100; ++i) {
-      const double mid = 0.5 * (lo + hi);
-      (radial_distort(k, mid) < corner ? lo : hi) = mid;
-    }
-    reach = hi;
+    reach = radial_inverse(k, corner, lim);
   }
   if (fold <= reach)
     return fmt::format(
@@ -211,8 +210,7 @@ std::string Intrinsics::lens_problem() const {
   if (field == Field::kImage)
     for (double r = reach; r < kMaxLensRadius; r *= 1.01) {
       const double s = r * r;
-      if (radial_slope(k, s) > 0 && 1 + s * (k[0] + s * (k[1] + s * k[4])) > 0 &&
-          radial_distort(k, r) < corner * (1 - 1e-9))
+      if (radial_slope(k, s) > 0 && radial_scale(k, s) > 0 && radial_distort(k, r) < corner * (1 - 1e-9))
         return fmt::format(
             "the distortion k = [{}] maps directions at {:.1f} deg from the axis back into the image "
             "(the radial mapping falls and rises again past the image corner)",
@@ -235,8 +233,7 @@ std::optional<Vec2> CameraModel::project(const Vec3& w) const {
     // Past the fold of the radial mapping (falling slope) or where it turns negative, the model
     // maps directions back into the image: not a lens, nothing seen there.
     const double s = xy.squaredNorm();
-    if (!(radial_slope(in.k, s) > 0) || !(1 + s * (in.k[0] + s * (in.k[1] + s * in.k[4])) > 0))
-      return std::nullopt;
+    if (!(radial_slope(in.k, s) > 0) || !(radial_scale(in.k, s) > 0)) return std::nullopt;
     xy = distort(in.k, xy);
   }
   return Vec2(in.cu + in.fu * xy.x(), in.cv + in.fv * xy.y());

@@ -27,11 +27,21 @@ void check_depth(const cv::Mat& depth, const PanoGrid& grid, const std::string& 
   }
 }
 
+namespace {
+
+// The distance of the farthest camera centre from the dome centre: a surface must lie beyond it.
+double farthest_camera_mm(const Rig& rig) {
+  double d = 0;
+  for (const auto& cam : rig.cameras) d = std::max(d, cam.position_mm.norm());
+  return d;
+}
+
+}  // namespace
+
 void check_depth_outside_dome(const cv::Mat& depth, const Rig& rig, const PanoGrid& grid, const Vec3& q,
                               const std::string& what) {
   check_depth(depth, grid, what);
-  double inner = 0;
-  for (const auto& cam : rig.cameras) inner = std::max(inner, cam.position_mm.norm());
+  const double inner = farthest_camera_mm(rig);
   for (int r = 0; r < depth.rows; ++r) {
     const float* p = depth.ptr<float>(r);
     for (int c = 0; c < depth.cols; ++c)
@@ -47,8 +57,7 @@ cv::Mat sphere_depth(const Rig& rig, const PanoGrid& grid, double radius_mm, con
   if (!(radius_mm > 0) || !std::isfinite(radius_mm))
     throw std::invalid_argument(
         fmt::format("sphere radius must be a positive number of mm, got {}", radius_mm));
-  double inner = q.norm();
-  for (const auto& cam : rig.cameras) inner = std::max(inner, cam.position_mm.norm());
+  const double inner = std::max(q.norm(), farthest_camera_mm(rig));
   if (radius_mm <= inner)
     throw std::invalid_argument(fmt::format(
         "sphere radius {} mm is inside the dome: it must exceed {:.2f} mm (the farthest camera centre)",
