@@ -54,5 +54,6 @@ void add_render_command(CLI::App& root);
 void add_record_command(CLI::App& root);
 void add_recording_command(CLI::App& root);
 void add_hw_command(CLI::App& root);
+void add_meta_command(CLI::App& root);
 
 }  // namespace omma::app

@@ -153,7 +153,7 @@ PhotometricDemo photometric_demo(const fs::path& dir, const Rig& rig, const std:
     const cv::Mat p = pano::stitch(rig, corrected, opt);
     MethodRow row{pano::to_string(m), {}, ms_since(t1)};
     row.eval = pano::evaluate(p, simr.truth, seam);
-    if (m == pano::Method::kMrf) write_image(dir / "pano_mrf_photometric.png", to_u8(p));
+    if (m == pano::Method::kMrf) io::write_panorama(dir / "pano_mrf_photometric.png", to_u8(p), grid);
     d.after.push_back(row);
   }
   return d;

@@ -10,6 +10,7 @@
 #include "omma/core/frames.h"
 #include "omma/core/io.h"
 #include "omma/core/log.h"
+#include "omma/io/metadata.h"
 #include "omma/pano/depth_eval.h"
 #include "omma/pano/maps.h"
 #include "omma/pano/plane_sweep.h"
@@ -67,7 +68,7 @@ EngineDepth engine_depth(const Rig& rig, const PanoGrid& grid, const std::vector
   const bench::Workload w{"omma-mrf-depth", 0, [&] { dr->render(*store, frames, *out); }, {}};
   EngineDepth e;
   e.fps = bench::measure_fps(w, 2.0, 10);  // 2 s: single seconds vary by +-15 % on the 2-core machine
-  write_image(dir / "pano_mrf_engine_depth.png", *out);
+  io::write_panorama(dir / "pano_mrf_engine_depth.png", *out, grid);  // with the 360-degree XMP
   e.psnr_db = pano::psnr_db(*out, truth);
   e.vs_reference_db = render::psnr_u8(*out, with_depth);
   return e;
@@ -96,7 +97,7 @@ DepthDemo run_depth_demo(const Rig& rig, const PanoGrid& grid, const std::vector
   const pano::EvalSummary sphere = pano::evaluate(to_u8(pano::stitch(rig, frames, opt)), truth, seam);
   opt.depth = est.depth;
   const cv::Mat with_depth = to_u8(pano::stitch(rig, frames, opt));
-  write_image(dir / "pano_mrf_depth.png", with_depth);
+  io::write_panorama(dir / "pano_mrf_depth.png", with_depth, grid);
   const pano::EvalSummary estimate = pano::evaluate(with_depth, truth, seam);
   opt.depth = truth_depth;
   const pano::EvalSummary with_truth = pano::evaluate(to_u8(pano::stitch(rig, frames, opt)), truth, seam);

@@ -13,37 +13,6 @@
 namespace omma::app {
 namespace {
 
-nlohmann::json plan_json(const design::RecordingPlan& p) {
-  nlohmann::json checks = nlohmann::json::array();
-  for (const auto& c : p.checks) checks.push_back({{"name", c.name}, {"ok", c.ok}, {"detail", c.detail}});
-  const auto& in = p.in;
-  return {
-      {"input",
-       {{"width", in.width},
-        {"height", in.height},
-        {"bits", in.bits},
-        {"fps", in.fps},
-        {"clock_mhz", in.clock_mhz},
-        {"max_clock_mhz", in.max_clock_mhz},
-        {"cameras", in.cameras},
-        {"cameras_per_device", in.cameras_per_device},
-        {"device_bytes", in.device_bytes},
-        {"device_rate_bytes_per_s", in.device_rate},
-        {"minutes", in.minutes}}},
-      {"camera",
-       {{"bytes_per_s", p.camera_bytes_per_s}, {"mib_per_s", p.camera_mib_per_s}, {"gib", p.camera_gib}}},
-      {"device",
-       {{"bytes_per_s", p.device_bytes_per_s}, {"bytes", p.device_bytes}, {"max_minutes", p.max_minutes}}},
-      {"rig",
-       {{"devices", p.devices},
-        {"bytes_per_s", p.rig_bytes_per_s},
-        {"bytes", p.rig_bytes},
-        {"tib", p.rig_bytes / std::pow(2.0, 40)},
-        {"tb", p.rig_bytes / 1e12}}},
-      {"checks", checks},
-      {"feasible", p.feasible()}};
-}
-
 void print_plan(const design::RecordingPlan& p) {
   const auto& in = p.in;
   std::cout << fmt::format(
@@ -142,7 +111,7 @@ void add_plan_command(CLI::App& root) {
                         {"memory_rounded", r.memory},
                         {"matches", r.matches},
                         {"fits_bits", r.fits_bits ? nlohmann::json(*r.fits_bits) : nlohmann::json(nullptr)},
-                        {"plan", plan_json(r.plan)}});
+                        {"plan", r.plan.to_json()}});
         print_json({{"rows", jr},
                     {"five_tb",
                      {{"cameras", in.cameras},
@@ -174,7 +143,7 @@ void add_plan_command(CLI::App& root) {
     in.device_rate = design::parse_bytes(o->device_rate);
     const design::RecordingPlan p = design::make_plan(in);
     if (o->json)
-      print_json(plan_json(p));
+      print_json(p.to_json());
     else
       print_plan(p);
     if (!p.feasible()) throw std::runtime_error("the plan does not hold: " + p.failed());

@@ -1,4 +1,5 @@
 // omma record / omma recording check: raw multi-camera recordings (Giga-Eye, thesis §7.1-7.2).
+#include <algorithm>
 #include <atomic>
 #include <csignal>
 #include <filesystem>
@@ -23,8 +24,8 @@ extern "C" void on_stop_signal(int) { g_stop = true; }
 struct RecordArgs {
   std::string rig, out, sensor_mode;
   std::vector<std::string> sources;
-  double duration = 0, fps = 30, clock = 0, flush = 0.5;
-  std::optional<double> source_fps;
+  double duration = 0, clock = 0, flush = 0.5, exposure_ms = 0;
+  std::optional<double> fps, source_fps;
   int64_t frames = 0;
   int queue = 4;
   bool json = false;
@@ -40,14 +41,21 @@ void run_record(const RecordArgs& a) {
   o.frames = a.frames;
   o.queue_frames = a.queue;
   o.flush_interval_s = a.flush;
-  o.fps = a.fps;
+  o.fps = a.fps.value_or(0);  // 0: derived from the sources' own rates
+  if (a.fps && !io::valid_recording_fps(*a.fps)) {
+    std::string why;
+    io::valid_recording_fps(*a.fps, &why);
+    throw std::invalid_argument(why);
+  }
+  if (!(a.exposure_ms >= 0)) throw std::invalid_argument("--exposure-ms must be >= 0");
+  o.exposure_s = a.exposure_ms / 1e3;
   o.clock_mhz = a.clock;
   o.sensor_mode = a.sensor_mode.empty() ? rig.name : a.sensor_mode;
   o.progress = !a.json;
   o.stop = &g_stop;
   if (std::string why; !o.IsValid(&why)) throw std::invalid_argument(why);
   live::SourceOptions so;
-  so.fps = a.source_fps.value_or(a.fps);
+  so.fps = a.source_fps.value_or(a.fps.value_or(live::kFallbackFps));
   if (so.fps < 0) throw std::invalid_argument("--source-fps must be >= 0");
   auto sources = live::open_sources(rig, a.sources, so);
   io::RecordingManifest m;
@@ -61,6 +69,8 @@ void run_record(const RecordArgs& a) {
   if (a.json) {
     print_json({{"out", a.out},
                 {"cameras", rig.cameras.size()},
+                {"fps", s.fps},
+                {"camera_fps", s.camera_fps},
                 {"frames", s.frames},
                 {"dropped", s.dropped},
                 {"bytes", s.bytes},
@@ -69,8 +79,13 @@ void run_record(const RecordArgs& a) {
                 {"error", s.error.empty() ? nlohmann::json(nullptr) : nlohmann::json(s.error)}});
   } else {
     std::cout << fmt::format(
-        "{}: {} cameras, {} frames ({} dropped by the recorder), {:.1f} MB in {:.2f} s = {:.1f} MB/s\n",
-        a.out, rig.cameras.size(), frames, dropped, s.bytes / 1e6, s.seconds, s.mb_per_s());
+        "{}: {} cameras, {} frames ({} dropped by the recorder), {:.1f} MB in {:.2f} s = {:.1f} MB/s; "
+        "frame sets at {:.4g} fps{}\n",
+        a.out, rig.cameras.size(), frames, dropped, s.bytes / 1e6, s.seconds, s.mb_per_s(), s.fps,
+        a.fps ? ""
+        : std::any_of(s.camera_fps.begin(), s.camera_fps.end(), [](double f) { return f > 0; })
+            ? " (0.9 x the slowest camera's rate)"
+            : " (no camera knows its rate)");
   }
   if (!s.error.empty())
     throw std::runtime_error("recording stopped: " + s.error +
@@ -112,6 +127,7 @@ void run_check(const std::string& dir, bool json) {
                 {"cameras", r.cameras()},
                 {"sensor_mode", r.manifest().sensor_mode},
                 {"fps", r.manifest().fps},
+                {"camera_fps", r.manifest().camera_fps},
                 {"frames", frames},
                 {"frame_sets", r.frame_sets()},
                 {"complete_sets", m.complete_sets},
@@ -123,8 +139,8 @@ void run_check(const std::string& dir, bool json) {
                 {"per_camera", cams}});
   } else {
     std::cout << fmt::format(
-        "{}: {} ({}), {} cameras, {} frames readable, {} frame sets ({} complete, matched within half of "
-        "1/{:g} s); "
+        "{}: {} ({}), {} cameras, {} frames readable, {} frame sets ({} complete; each camera's frame "
+        "nearest each tick of a {:g} fps clock, within half a period); "
         "dropped {}, duplicated {}, missing from sets {}, left out {}; last frame at {:.2f} s\n",
         dir, r.manifest().complete ? "complete" : "not closed (the recorder was stopped or killed)",
         r.manifest().sensor_mode, r.cameras(), frames, r.frame_sets(), m.complete_sets, r.manifest().fps,
@@ -149,11 +165,18 @@ void add_record_command(CLI::App& root) {
   cmd->add_option("--out", a.out, "Recording folder (must not exist)")->required();
   cmd->add_option("--duration", a.duration, "Seconds to record");
   cmd->add_option("--frames", a.frames, "Frames per camera to record");
-  cmd->add_option("--fps", a.fps, "Source rate and nominal frame rate (matching period 1/fps)")
-      ->capture_default_str();
+  cmd->add_option(
+      "--fps", a.fps,
+      "Nominal frame-set rate written to the recording (frame sets are matched on a clock of period\n"
+      "1/fps, each camera's frame nearest each tick within half a period). Default: 0.9 x the slowest\n"
+      "camera's own rate (the simulator's 44-56 fps sensors: 39.6), so that every free-running camera\n"
+      "has a frame in every set; 30 if no source knows its rate");
   cmd->add_option(
       "--source-fps", a.source_fps,
-      "Rate of image-sequence, still and simulator sources (default: --fps; 0 = as fast as they go)");
+      "Rate of image-sequence, still and panorama sources (default: --fps, else 30; 0 = as fast as "
+      "they go); the simulator's sensors keep their own rates");
+  cmd->add_option("--exposure-ms", a.exposure_ms,
+                  "Exposure time of the cameras in ms, written to the recording (default: not known)");
   cmd->add_option("--sensor-mode", a.sensor_mode,
                   "Sensor mode written to the manifest (default: the rig's name)");
   cmd->add_option("--clock", a.clock, "Pixel clock in MHz written to the manifest");
@@ -172,8 +195,9 @@ void add_recording_command(CLI::App& root) {
   cmd->require_subcommand(1);
   auto* check = cmd->add_subcommand(
       "check",
-      "Read every frame of a recording (also one whose recorder was killed), match frame sets by timestamp\n"
-      "within half a frame period, and count dropped, duplicated and missing frames.");
+      "Read every frame of a recording (also one whose recorder was killed), match frame sets by nearest\n"
+      "timestamp on the recording's frame-set clock (within half a period), and count dropped, duplicated,\n"
+      "missing and left-out frames.");
   check->add_option("RECORDING", dir, "Recording folder")->required();
   check->add_flag("--json", json, "Print one JSON summary on stdout");
   check->callback([] { run_check(dir, json); });

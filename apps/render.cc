@@ -3,6 +3,7 @@
 // bands).
 #include <charconv>
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -36,29 +37,37 @@ struct RenderArgs {
   std::string input, rig, size = "9000x2400", projection = "equirect-100", method = "mrf", out, sets, truth;
   std::string demosaic = "hybrid", awb = "grayworld";
   std::string split = "sets", manifest, rank0 = "works";
+  std::string incomplete = "hold";  // io::IncompletePolicy
+  double hold_max_age_ms = 0;       // 0: two frame-set periods
   int band_rows = 256, repeat = 1, bits = 12, threads = 0, window = 0;
   bool no_cache = false, stream_maps = false, json = false, raw = false, no_resume = false,
        no_photometric = false;
 };
 
-// "pano_{set}.tif" -> "pano_00012.tif"; a name without {set} gets "_00012" before the extension
-// when several sets are rendered.
-fs::path set_path(const std::string& pattern, int64_t set, bool many) {
-  const std::string key = "{set}";
-  const auto at = pattern.find(key);
-  if (at != std::string::npos)
-    return pattern.substr(0, at) + fmt::format("{:05d}", set) + pattern.substr(at + key.size());
-  if (!many) return pattern;
-  fs::path p = pattern;
-  return p.replace_filename(p.stem().string() + fmt::format("_{:05d}", set) + p.extension().string());
-}
+// A recording's frame sets as planned (io::plan_frame_sets): item i is planned set i, every camera
+// filled (held frames in place of missing ones).
+class PlannedFrameSets : public render::FrameSetReader {
+ public:
+  PlannedFrameSets(const io::RecordingReader& rec, const io::FrameSetPlan& plan) : rec_(rec), plan_(plan) {}
+  const Rig& rig() const override { return rec_.rig(); }
+  int bits() const override { return rec_.bits(); }
+  int64_t frame_sets() const override { return int64_t(plan_.sets.size()); }
+  std::vector<cv::Mat> read_frame_set(int64_t i) const override {
+    return rec_.read_frames(plan_.sets.at(size_t(i)).frame);
+  }
+
+ private:
+  const io::RecordingReader& rec_;
+  const io::FrameSetPlan& plan_;
+};
 
 // One input (a recording or a frames folder) rendered frame set by frame set: the work of
 // dist::run_job (one item per frame set), of --split tiles (every rank on one set) and of --repeat.
 class RenderJob : public dist::Job {
  public:
-  RenderJob(const RenderArgs& a, const render::PanoRenderOptions& o, const isp::IspOptions& iso)
-      : a_(a), o_(o), iso_(iso) {}
+  RenderJob(const RenderArgs& a, const render::PanoRenderOptions& o, const isp::IspOptions& iso,
+            const io::FrameSetPlanOptions& incomplete, bool root)
+      : a_(a), o_(o), iso_(iso), incomplete_(incomplete), root_(root) {}
 
   void open() override {
     recording_ = fs::exists(fs::path(a_.input) / "manifest.json");
@@ -68,16 +77,8 @@ class RenderJob : public dist::Job {
       rec_ = std::make_unique<io::RecordingReader>(a_.input);
       const Rig& rr = rec_->manifest().rig;
       rig_ = a_.rig.empty() ? rr : design::load_rig_or_builtin(a_.rig);
-      if (rig_.cameras.size() != rr.cameras.size())
-        throw std::invalid_argument(
-            fmt::format("--rig has {} cameras, the recording {}", rig_.cameras.size(), rr.cameras.size()));
-      for (size_t c = 0; c < rig_.cameras.size(); ++c)
-        if (rig_.cameras[c].in.width != rr.cameras[c].in.width ||
-            rig_.cameras[c].in.height != rr.cameras[c].in.height)
-          throw std::invalid_argument(
-              fmt::format("--rig camera {} is {}x{}, the recording's {}x{} (another sensor mode)",
-                          rig_.cameras[c].id, rig_.cameras[c].in.width, rig_.cameras[c].in.height,
-                          rr.cameras[c].in.width, rr.cameras[c].in.height));
+      if (const std::string why = io::rig_mismatch(rig_, rr); !why.empty())
+        throw std::invalid_argument("--rig " + why);
     } else {
       const fs::path rig_path = a_.rig.empty() ? fs::path(a_.input) / "rig.json" : fs::path(a_.rig);
       rig_ = a_.rig.empty() ? load_rig(rig_path) : design::load_rig_or_builtin(a_.rig);
@@ -105,12 +106,34 @@ class RenderJob : public dist::Job {
     if (recording_ && (first_ < 0 || last_ < first_ || last_ >= rec_->frame_sets()))
       throw std::invalid_argument(
           fmt::format("--sets {} outside the recording's {} frame sets", a_.sets, rec_->frame_sets()));
+    if (recording_) plan_frame_sets();
   }
-  int64_t items() const override { return last_ - first_ + 1; }
-  fs::path output(int64_t i) const override { return set_path(a_.out, first_ + i, last_ > first_); }
+  // Sets lacking cameras: --incomplete (io::plan_frame_sets; deterministic, the same on every rank).
+  void plan_frame_sets() {
+    plan_ = rec_->plan(first_, last_, incomplete_);  // throws under fail
+    planned_ = std::make_unique<PlannedFrameSets>(*rec_, plan_);
+    if (plan_.incomplete > 0 && root_)
+      spdlog::warn(
+          "{} of {} frame sets lack cameras (--incomplete {}): {} completed with held frames ({} frames, "
+          "at most {:.1f} ms old), {} skipped",
+          plan_.incomplete, plan_.considered, io::incomplete_policy_name(plan_.policy), plan_.held_sets,
+          plan_.held_frames, plan_.max_held_age_ns / 1e6, plan_.skipped);
+    if (plan_.sets.empty())
+      throw std::invalid_argument(fmt::format(
+          "no frame set to render: all {} frame sets lack cameras{} (--incomplete {})", plan_.considered,
+          plan_.policy == io::IncompletePolicy::kHold
+              ? fmt::format(", with no frame to hold within {:.1f} ms", plan_.max_hold_age_ns / 1e6)
+              : "",
+          io::incomplete_policy_name(plan_.policy)));
+  }
+  int64_t items() const override { return recording_ ? int64_t(plan_.sets.size()) : 1; }
+  int64_t set_of(int64_t i) const { return recording_ ? plan_.sets.at(size_t(i)).set : 0; }
+  fs::path output(int64_t i) const override { return io::frame_set_path(a_.out, set_of(i), last_ > first_); }
   std::string item_name(int64_t i) const override {
-    return recording_ ? fmt::format("frame set {}", first_ + i) : "the panorama";
+    return recording_ ? fmt::format("frame set {}", set_of(i)) : "the panorama";
   }
+  nlohmann::json input_summary() const override { return recording_ ? plan_.to_json() : nlohmann::json(); }
+  const io::FrameSetPlan* plan() const { return recording_ ? &plan_ : nullptr; }
   nlohmann::json parameters() const override {
     std::error_code ec;
     const fs::path input = fs::weakly_canonical(a_.input, ec);
@@ -125,6 +148,8 @@ class RenderJob : public dist::Job {
             {"bits", a_.bits},
             {"raw", a_.raw},
             {"photometric", !a_.no_photometric},
+            {"incomplete", io::incomplete_policy_name(incomplete_.policy)},
+            {"hold_max_age_ms", a_.hold_max_age_ms},
             {"min_weight", o_.min_weight}};
   }
   void setup() override { renderer_ = std::make_unique<render::PanoRenderer>(rig_, o_); }
@@ -133,7 +158,7 @@ class RenderJob : public dist::Job {
     dist::ItemTimes t;
     if (recording_) {
       render::FrameSetTimes ft;
-      renderer_->set_frames(render::develop_frame_set(*rec_, first_ + i, iso_, &ft, gains_));
+      renderer_->set_frames(render::develop_frame_set(*planned_, i, iso_, &ft, gains_));
       t.read = ft.read;
       t.develop = ft.develop;
     } else {
@@ -168,6 +193,10 @@ class RenderJob : public dist::Job {
   const RenderArgs& a_;
   render::PanoRenderOptions o_;
   isp::IspOptions iso_;
+  io::FrameSetPlanOptions incomplete_;
+  bool root_ = true;
+  io::FrameSetPlan plan_;
+  std::unique_ptr<PlannedFrameSets> planned_;
   bool recording_ = false;
   std::unique_ptr<io::RecordingReader> rec_;
   Rig rig_;
@@ -190,6 +219,7 @@ struct RenderSetup {
   isp::IspOptions iso;
   Size2 size{0, 0};
   dist::Rank0 rank0 = dist::Rank0::kWorks;
+  io::FrameSetPlanOptions incomplete;
 };
 RenderSetup parse_render_args(const dist::Comm& comm, const RenderArgs& a) {
   RenderSetup s;
@@ -207,8 +237,12 @@ RenderSetup parse_render_args(const dist::Comm& comm, const RenderArgs& a) {
   if (a.split != "sets" && a.split != "tiles") throw std::invalid_argument("--split must be sets or tiles");
   if (a.threads < 0) throw std::invalid_argument("--threads must be >= 0");
   rank0 = dist::parse_rank0(a.rank0);
+  s.incomplete.policy = io::parse_incomplete_policy(a.incomplete);
+  if (!(a.hold_max_age_ms >= 0 && a.hold_max_age_ms <= 1e9))
+    throw std::invalid_argument("--hold-max-age-ms must be in [0, 1e9] (0: two frame-set periods)");
+  s.incomplete.max_hold_age_ns = int64_t(std::llround(a.hold_max_age_ms * 1e6));
   o.grid = PanoGrid{parse_projection(a.projection), size.width, size.height};
-  if (const std::string ext = lower_extension(a.out); ext != ".tif" && ext != ".tiff")
+  if (const std::string ext = lower_extension(a.out); ext != ".tif" && ext != ".tiff" && ext != ".btf")
     check_image_format(a.out, size.width, size.height);  // before any work: e.g. a JPEG too wide
   if (a.method == "hq") {
     o.offline = true;
@@ -360,9 +394,10 @@ void report_render(const dist::Comm& comm, RenderJob& job, const RenderArgs& a, 
                    const cv::Mat& truth, const RenderTotals& r, double total) {
   nlohmann::json q = nullptr;
   if (!truth.empty()) {
-    const std::string ext = r.last_out.extension().string();
-    const cv::Mat pano = (ext == ".tif" || ext == ".tiff") ? io::read_tiff_rows(r.last_out)
-                                                           : read_image(r.last_out, cv::IMREAD_COLOR);
+    const std::string ext = lower_extension(r.last_out);
+    const cv::Mat pano = (ext == ".tif" || ext == ".tiff" || ext == ".btf")
+                             ? io::read_tiff_rows(r.last_out)
+                             : read_image(r.last_out, cv::IMREAD_COLOR);
     q = {{"psnr_db", pano::psnr_db(pano, truth)}, {"ssim", pano::ssim(pano, truth)}};
   }
   render::PanoRenderer& renderer = job.renderer();
@@ -392,6 +427,7 @@ void report_render(const dist::Comm& comm, RenderJob& job, const RenderArgs& a, 
                   {"band_bytes", mem.band_bytes},
                   {"total_bytes", mem.total()}}},
                 {"distributed", r.dist_json},
+                {"frame_sets", job.plan() ? job.plan()->to_json() : nlohmann::json(nullptr)},
                 {"quality", q},
                 {"seconds", total}});
   } else {
@@ -408,6 +444,11 @@ void report_render(const dist::Comm& comm, RenderJob& job, const RenderArgs& a, 
       std::cout << fmt::format(
           "  {} ranks, split by {}{}\n", comm.size(), a.split,
           a.split == "sets" ? ", manifest " + r.dist_json["manifest"].get<std::string>() : "");
+    if (const io::FrameSetPlan* p = job.plan())
+      std::cout << fmt::format(
+          "  frame sets: {} of {} complete; --incomplete {}: {} completed with held frames, {} skipped; 0 "
+          "holes\n",
+          p->complete, p->considered, io::incomplete_policy_name(p->policy), p->held_sets, p->skipped);
     if (!q.is_null())
       std::cout << fmt::format("  against {}: PSNR {:.2f} dB, SSIM {:.4f}\n", a.truth,
                                q["psnr_db"].get<double>(), q["ssim"].get<double>());
@@ -433,7 +474,7 @@ void render(dist::Comm& comm, const RenderArgs& a) {
       throw std::invalid_argument(fmt::format("--truth is {}x{}, the panorama {}x{}", truth.cols, truth.rows,
                                               s.size.width, s.size.height));
   }
-  RenderJob job(a, s.o, s.iso);
+  RenderJob job(a, s.o, s.iso, s.incomplete, root);
   RenderTotals r;
   if (a.repeat > 1) {
     render_repeat(job, a, r);
@@ -478,8 +519,10 @@ void add_render_command(CLI::App& root) {
       "Render large panoramas (Giga-Eye: 9000x2400 = 21.6 MP, 17700x4650 = 82.3 MP over 360x100 deg) from a\n"
       "frames folder (cam_XX.png, rig.json) or a recording (omma record: raw frame sets, developed by the "
       "ISP),\n"
-      "band by band from cached maps. .tif/.tiff outputs are BigTIFF (any size, memory = one band); other\n"
-      "formats hold the whole image. Methods: the engine's, or hq (offline: every tap in double precision).\n"
+      "band by band from cached maps. .tif/.tiff outputs are streamed (any size, memory = one band; BigTIFF\n"
+      "beyond 4 GiB, or always as .btf); other formats hold the whole image. JPEG, PNG and TIFF carry the\n"
+      "360-degree GPano XMP when the pixels are square (9000x2500, not 9000x2400: docs/guide/stitching.md).\n"
+      "Methods: the engine's, or hq (offline: every tap in double precision).\n"
       "On a cluster: mpirun -np K omma render REC --out DIR/pano_{set}.tif hands the frame sets out to the "
       "K\n"
       "ranks as they ask; each output is written atomically and listed in a manifest, and a rerun makes "
@@ -497,6 +540,15 @@ void add_render_command(CLI::App& root) {
   cmd->add_option("--method", a.method, "nn | linear | gaussian | mrf | mrf-spherical | sad | hq")
       ->capture_default_str();
   cmd->add_option("--sets", a.sets, "Frame sets of a recording: I or A:B (A..B-1); default: all");
+  cmd->add_option(
+         "--incomplete", a.incomplete,
+         "Frame sets of a recording that lack cameras: hold (each missing camera's last frame at most\n"
+         "--hold-max-age-ms old; sets it cannot fill are skipped), skip (no panorama for them) or fail.\n"
+         "Never a black hole; the counts go to stderr, --json and the manifest")
+      ->capture_default_str();
+  cmd->add_option("--hold-max-age-ms", a.hold_max_age_ms,
+                  "--incomplete hold: oldest frame held, ms (0: two frame-set periods of the recording)")
+      ->capture_default_str();
   cmd->add_option("--band-rows", a.band_rows, "Rows per band map")->capture_default_str();
   cmd->add_flag("--stream-maps", a.stream_maps,
                 "Keep one band map in memory at a time (loaded from the cache)");

@@ -1,12 +1,14 @@
 // omma run: the live panoramic video engine (thesis §5.3-5.4).
 #include <unistd.h>
 
+#include <algorithm>
 #include <csignal>
 #include <cstdio>
 #include <iostream>
 
 #include <fmt/format.h>
 #include <opencv2/core/utility.hpp>
+#include <spdlog/spdlog.h>
 
 #include "apps/command.h"
 #include "omma/core/grid.h"
@@ -15,6 +17,7 @@
 #include "omma/core/rig.h"
 #include "omma/core/valid.h"
 #include "omma/design/prototype.h"
+#include "omma/io/video_writer.h"
 #include "omma/live/engine.h"
 
 namespace omma::app {
@@ -44,8 +47,9 @@ void add_run_command(CLI::App& root) {
       "(views of a turning 360x180 photograph), sim:SCENE[@SPEED] (the simulator: colon, photo:PATH, usaf, "
       "checker; free-running cameras at 44-56 fps, a loop pre-rendered at start-up), link:FILE or FILE.bin "
       "(raw sensor link), a pattern with {id} (two-digit camera id).\n"
-      "Sinks: FILE.mp4|mkv|avi, png:DIR or DIR/, cam:ID:SINK (one camera passed through), "
-      "http:PORT (live view on 127.0.0.1: / 360-degree viewer, /stream.mjpg MJPEG, /frame.jpg, "
+      "Sinks: FILE.mp4|mov|mkv|webm|avi (H.264, VP9 in webm; 360-degree metadata), - (raw bgr24 frames on "
+      "stdout, for ffmpeg), png:DIR or DIR/, cam:ID:SINK (one camera passed through), "
+      "http:PORT (live view on 127.0.0.1, or --bind: / 360-degree viewer, /stream.mjpg MJPEG, /frame.jpg, "
       "/stats.json).\n"
       "Latency = mean age of a panorama's camera frames when it is rendered (docs/guide/live.md).\n"
       "A camera that ends or fails is dropped and the map recompiled without it. Ctrl-C, SIGTERM or SIGHUP "
@@ -63,6 +67,7 @@ void add_run_command(CLI::App& root) {
     bool loop = false, json = false, no_cache = false, depth = false, no_photometric = false;
   };
   static Opts o;
+  static std::string bind = live::SinkOptions{}.bind, token = "auto";  // live view: --bind, --token
   cmd->add_option("--rig", o.rig, "Rig file (JSON)")->required();
   cmd->add_option("--source", o.sources, "Camera sources (see above)")->required();
   cmd->add_option("--sink", o.sinks, "Outputs (see above); none: render and measure only");
@@ -113,6 +118,29 @@ void add_run_command(CLI::App& root) {
                   "Live view: concurrent /stream.mjpg viewers (each open page is one); the next one gets "
                   "503 (default 8)")
       ->check(CLI::Range(1, 256));
+  cmd->add_option("--bind", bind,
+                  "Live view: the address to serve on, numeric IPv4 or IPv6 (0.0.0.0 or :: = every "
+                  "interface; default 127.0.0.1, this machine only). Other than loopback: a warning, and "
+                  "the URLs need a random token (see --token)");
+  cmd->add_option("--token", token,
+                  "Live view: auto (a random 128-bit token required in every URL, ?token=..., when --bind "
+                  "is not loopback), random (always), none (never, even on the network); default auto. The "
+                  "URL with the token is printed on stderr");
+  // Video files (io/video_writer.h).
+  static std::string codec = "auto";
+  static live::SinkOptions video_sk;
+  cmd->add_option("--codec", codec, "Video files: auto (vp9 for .webm, h264 otherwise), h264, vp9");
+  cmd->add_option(
+         "--crf", video_sk.video.crf,
+         "Video files: quality, lower = better and larger (h264 0..51, default 20; vp9 0..63, default 31)")
+      ->check(CLI::Range(0, 63));
+  cmd->add_option("--gop", video_sk.video.gop_s, "Video files: keyframe interval, s (default 2)")
+      ->check(CLI::Range(1e-3, 3600.0));
+  cmd->add_flag("--10bit", video_sk.video.ten_bit,
+                "Video files: 10-bit 4:2:0 (yuv420p10le) instead of 8-bit");
+  static std::string preset = io::to_string(io::VideoPreset::kFaster);
+  cmd->add_option("--preset", preset,
+                  "Video files: encoder speed, x264's ultrafast .. veryslow (default faster)");
   cmd->add_flag("--loop", o.loop, "Restart image sequences and video files at their end");
   cmd->add_option("--threads", o.threads, "Renderer threads (0: all; default 0)")->check(CLI::Range(0, 1024));
   cmd->add_option("--cache", o.cache, "Map cache folder (default $OMMA_CACHE_DIR or ~/.cache/omma)");
@@ -150,8 +178,20 @@ void add_run_command(CLI::App& root) {
     live::SinkOptions sk;
     sk.fps = o.fps > 0 ? o.fps : 30;
     sk.max_streams = o.max_streams;
+    sk.bind = bind;
+    sk.token = live::parse_token_mode(token);
+    if ((bind != live::SinkOptions{}.bind || token != "auto") &&
+        std::none_of(o.sinks.begin(), o.sinks.end(), [](const auto& s) { return s.rfind("http", 0) == 0; }))
+      spdlog::warn("--bind and --token are for the live view (--sink http:PORT), which this run has not");
     sk.projection = eo.map.grid.projection;
     sk.spherical_metadata = true;  // 360-degree metadata in mp4 and png outputs
+    sk.video = video_sk.video;
+    sk.video.codec = io::parse_video_codec(codec);
+    sk.video.preset = io::parse_video_preset(preset);
+    const bool raw_stdout = std::count(o.sinks.begin(), o.sinks.end(), "-") > 0;
+    if (raw_stdout && o.json)
+      throw std::invalid_argument(
+          "--sink - writes the frames on stdout: no --json with it (the summary goes to stderr)");
     // Every option checked before the sources start (the simulator pre-renders its loop first).
     for (const std::string& why : {valid_or_why(eo), valid_or_why(so), valid_or_why(sk)})
       if (!why.empty()) throw std::invalid_argument(why);
@@ -195,7 +235,10 @@ void add_run_command(CLI::App& root) {
     nlohmann::json sk_names = nlohmann::json::array();
     for (const auto& s : sinks) sk_names.push_back(s->describe());
     j["sinks"] = sk_names;
-    print_json(j);
+    if (raw_stdout)
+      std::fprintf(stderr, "%s\n", j.dump().c_str());  // stdout holds the frames
+    else
+      print_json(j);
   });
 }
 

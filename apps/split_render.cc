@@ -14,6 +14,7 @@
 #include "omma/core/io.h"
 #include "omma/core/valid.h"
 #include "omma/dist/worker_thread.h"
+#include "omma/io/metadata.h"
 #include "omma/io/tiff_writer.h"
 
 namespace omma::dist {
@@ -95,7 +96,7 @@ std::string open_output(const Comm& comm, const render::PanoRenderer& renderer, 
       throw std::invalid_argument(fmt::format("{} ranks for {} bands: start at most {}, or use smaller bands",
                                               size, nb, nb + (mode == Rank0::kServes ? 1 : 0)));
     const auto& g = renderer.options().grid;
-    writer.emplace(path, g.width, g.height);
+    writer.emplace(path, g.width, g.height, false, 16, io::panorama_xmp(g));  // with the 360-degree XMP
   } catch (const std::exception& e) {
     return e.what();
   }

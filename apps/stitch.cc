@@ -137,16 +137,18 @@ DepthChoice choose_depth(const std::string& spec, const Rig& rig, const std::vec
   return d;
 }
 
-// The panorama grid of --projection and --size (default: 1080x1080 vr180, 1920x512 equirect,
-// 1920x960 equirect-full and others).
+// The panorama grid of --projection and --size (default: 1080x1080 vr180, 1920x512 equirect (the
+// thesis's grid, non-square pixels: no GPano, io/metadata.h), 1920x960 equirect-full, 1920x533
+// equirect-100 (square pixels)).
 PanoGrid stitch_grid(const StitchArgs& a) {
   PanoGrid grid;
   grid.projection = parse_projection(a.projection);
   if (a.size.empty()) {
     grid.width = grid.projection == Projection::kVr180 ? 1080 : 1920;
-    grid.height = grid.projection == Projection::kVr180      ? 1080
-                  : grid.projection == Projection::kEquirect ? 512
-                                                             : 960;
+    grid.height = grid.projection == Projection::kVr180         ? 1080
+                  : grid.projection == Projection::kEquirect    ? 512
+                  : grid.projection == Projection::kEquirect100 ? 533
+                                                                : 960;
   } else {
     const Size2 s = parse_size(a.size);
     grid.width = s.width;
@@ -280,8 +282,12 @@ void add_stitch_command(CLI::App& root) {
                   "moves right in the image (docs/guide/conventions.md)")
       ->capture_default_str();
   cmd->add_option("--size", a.size,
-                  "Panorama size WxH in pixels [default: 1080x1080 vr180, 1920x512 equirect]");
-  cmd->add_option("--out", a.out, "Output panorama image (8-bit; format from the extension, e.g. .png)")
+                  "Panorama size WxH in pixels [default: 1080x1080 vr180, 1920x512 equirect, 1920x960\n"
+                  "equirect-full, 1920x533 equirect-100]. The 360-degree metadata (GPano) needs square\n"
+                  "pixels (1920x480 equirect, not the thesis's 1920x512: docs/guide/stitching.md)");
+  cmd->add_option("--out", a.out,
+                  "Output panorama image (8-bit; format from the extension, e.g. .png; JPEG, PNG and TIFF\n"
+                  "carry the 360-degree GPano XMP)")
       ->required();
   cmd->add_option("--boundary", a.boundary,
                   "Write the object boundary map L_ob (eq. 4.15, gray, 255 = 1.0) here, and the thresholded\n"

@@ -32,7 +32,7 @@ install(FILES ${PROJECT_BINARY_DIR}/ommaConfig.cmake ${PROJECT_BINARY_DIR}/ommaC
         DESTINATION ${omma_cmake_dir})
 
 # pkg-config: the stage libraries in link order (dependents first) and what they need.
-set(OMMA_PC_REQUIRES "opencv4 eigen3 tbb nlohmann_json spdlog fmt zlib libtiff-4 hdf5 libxxhash cpp-httplib")
+set(OMMA_PC_REQUIRES "opencv4 eigen3 tbb nlohmann_json spdlog fmt zlib libtiff-4 hdf5 libxxhash cpp-httplib libavcodec libavformat libavutil libswscale")
 if(OMMA_MPI_ENABLED)
   string(APPEND OMMA_PC_REQUIRES " ompi-cxx")
 endif()

@@ -12,9 +12,11 @@ set -euo pipefail
 pkgs=(cmake g++ ninja-build ccache pkg-config libopencv-dev libeigen3-dev libceres-dev libtbb-dev
       libcli11-dev nlohmann-json3-dev libspdlog-dev libfmt-dev libgtest-dev libgmock-dev
       libbenchmark-dev hugin-tools libcpp-httplib-dev zlib1g-dev libtiff-dev libhdf5-dev python3-dev pybind11-dev
-      python3-numpy libxxhash-dev libopenmpi-dev openmpi-bin)
+      python3-numpy libxxhash-dev libopenmpi-dev openmpi-bin help2man)
+pkgs+=(libavcodec-dev libavformat-dev libavutil-dev libswscale-dev)  # video files (src/omma/io/video_writer.h)
 [ "${1:-}" = "--test" ] && pkgs+=(chromium verilator yosys iverilog python3-pytest libimage-exiftool-perl ffmpeg xxhash
-                    tesseract-ocr tesseract-ocr-eng clang-format)
+                    tesseract-ocr tesseract-ocr-eng clang-format python3-mypy hdf5-tools)
+[ "${1:-}" = "--test" ] && pkgs+=(python3-h5py)  # reads recordings back (tests/cli/recording_cli_test.cc)
 command -v npm >/dev/null || pkgs+=(nodejs npm)
 missing=()
 for p in "${pkgs[@]}"; do

@@ -3,15 +3,48 @@
 //
 // The MJPEG stream is read with fetch() and split at its parts (each has a Content-Length); every
 // JPEG is drawn into a canvas that Pannellum shows as dynamic content, re-uploaded once per new
-// frame. For the tests, window.omma holds {frames, viewer, config}.
+// frame. For the tests, window.omma holds {frames, viewer, config, shownFps}.
+//
+// Token: where omma requires one (`--bind` other than loopback, or `--token random`), the page is
+// opened as /?token=T and passes T on to every request of its own (the viewer's files need none).
+//
+// Displayed rate (#shown): the frames this page actually decoded and drew (into the viewer's canvas,
+// which Pannellum then uploads, or the flat <img>) per second over the last 2 s, beside the engine's
+// rate: lower when the browser cannot keep up (frames are skipped, the newest one wins), 0 paused.
 'use strict';
-const omma = { frames: 0, viewer: null, config: null, error: null, paused: false };
+const omma = { frames: 0, viewer: null, config: null, error: null, paused: false, shownFps: 0 };
 window.omma = omma;
+
+const token = new URLSearchParams(location.search).get('token');
+// `path` with the page's token, if it has one.
+function withToken(path) {
+  return token ? path + (path.includes('?') ? '&' : '?') + 'token=' + encodeURIComponent(token) : path;
+}
 
 // Pause: the image stays as it is (the view can still be turned); the 'p' key or the stats line.
 omma.setPaused = (on) => { omma.paused = on; };
 document.addEventListener('keydown', (e) => { if (e.key === 'p') omma.setPaused(!omma.paused); });
-document.getElementById('s').addEventListener('click', () => omma.setPaused(!omma.paused));
+document.getElementById('bar').addEventListener('click', () => omma.setPaused(!omma.paused));
+
+// The displayed rate: the instants (ms) of the frames shown in the last kShownWindow ms.
+const kShownWindow = 2000;
+const shownAt = [];
+let firstShown = null;
+function noteShown() {
+  const now = performance.now();
+  if (firstShown === null) firstShown = now;
+  shownAt.push(now);
+  omma.frames++;
+}
+function updateShownRate() {
+  const now = performance.now();
+  while (shownAt.length && shownAt[0] <= now - kShownWindow) shownAt.shift();
+  // Over the window, or since the first frame while the page is younger than that.
+  const span = firstShown === null ? 0 : Math.min(kShownWindow, now - firstShown);
+  omma.shownFps = span >= 250 ? shownAt.length / (span / 1000) : 0;
+  document.getElementById('shown').textContent = `shown ${omma.shownFps.toFixed(1)} fps`;
+}
+setInterval(updateShownRate, 500);
 
 // Pannellum's view of each of omma's projections (core/grid.h): the image spans haov x vaov degrees,
 // its centre at pitch vOffset.
@@ -33,13 +66,13 @@ async function showFrame(canvas, blob) {
   const bitmap = await createImageBitmap(blob);
   canvas.getContext('2d').drawImage(bitmap, 0, 0, canvas.width, canvas.height);
   bitmap.close();
-  omma.frames++;
   if (omma.viewer) omma.viewer.setUpdate(false);  // one render: uploads the canvas again
+  noteShown();
 }
 
 // Reads multipart/x-mixed-replace parts from the stream; calls onJpeg(Uint8Array) for each.
 async function readStream(onJpeg) {
-  const res = await fetch('/stream.mjpg', { cache: 'no-store' });
+  const res = await fetch(withToken('/stream.mjpg'), { cache: 'no-store' });
   if (res.status !== 200) throw new Error((await res.text()) || ('stream: HTTP ' + res.status));
   const reader = res.body.getReader();
   let buf = new Uint8Array(0);
@@ -67,7 +100,12 @@ async function readStream(onJpeg) {
 }
 
 async function main() {
-  const cfg = await (await fetch('/config.json')).json();
+  const cfgRes = await fetch(withToken('/config.json'));
+  if (cfgRes.status === 403) {
+    status('this live view needs its token: open the URL with ?token=... that omma run printed');
+    return;
+  }
+  const cfg = await cfgRes.json();
   omma.config = cfg;
   const canvas = document.createElement('canvas');
   canvas.width = cfg.width;
@@ -100,7 +138,8 @@ async function main() {
           img.src = URL.createObjectURL(new Blob([b], { type: 'image/jpeg' }));
           img.style.display = 'block';
           if (old) URL.revokeObjectURL(old);
-          omma.frames++;
+          await img.decode();
+          noteShown();
         } else {
           await showFrame(canvas, new Blob([b], { type: 'image/jpeg' }));
           if (!omma.viewer) omma.viewer = pannellum.viewer('view', viewerConfig(cfg, canvas));
@@ -117,7 +156,7 @@ async function main() {
       status(String(e.message || e) + ' — showing a still once a second');
       // Too many viewers (503) or the stream broke: one frame a second instead.
       try {
-        const r = await fetch('/frame.jpg', { cache: 'no-store' });
+        const r = await fetch(withToken('/frame.jpg'), { cache: 'no-store' });
         if (r.ok) await onJpeg(new Uint8Array(await r.arrayBuffer()));
       } catch (e2) {}
       await new Promise((ok) => setTimeout(ok, 1000));
@@ -125,14 +164,17 @@ async function main() {
   }
 }
 
-// The stats line: the engine's own figures (/stats.json; latency as defined in docs/guide/live.md).
+// The stats line: the engine's own figures (/stats.json; latency as defined in docs/guide/live.md);
+// the engine's rate is that of its last interval (about 0.5 s), render time its mean so far.
 setInterval(async () => {
   try {
-    const j = await (await fetch('/stats.json', { cache: 'no-store' })).json();
+    const j = await (await fetch(withToken('/stats.json'), { cache: 'no-store' })).json();
     if (j.frames === undefined) return;
-    status((omma.paused ? 'paused (p) — ' : '') + `${j.frames} frames, ${(j.fps || 0).toFixed(1)} fps, latency ${(j.latency_ms || 0).toFixed(1)} ms, ` +
+    const fps = (j.window && j.window.fps) || j.fps || 0;
+    status(`of engine ${fps.toFixed(1)} fps, ${j.frames} frames, ` +
+           `latency ${(j.latency_ms || 0).toFixed(1)} ms, render ${(j.render_ms_mean || 0).toFixed(1)} ms, ` +
            `${j.cameras_live} cameras live at ${(j.window.camera_fps_min || 0).toFixed(1)}+ fps` +
-           (omma.error ? ' — ' + omma.error : ''));
+           (omma.paused ? ' — paused (p)' : '') + (omma.error ? ' — ' + omma.error : ''));
   } catch (e) {}
 }, 1000);
 

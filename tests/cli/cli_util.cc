@@ -1,6 +1,8 @@
 #include "tests/cli/cli_util.h"
 
+#include <spawn.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <fstream>
 #include <random>
@@ -29,6 +31,25 @@ RunResult run_command(const std::string& command, int timeout_s) {
   r.out = slurp(dir / "out");
   r.err = slurp(dir / "err");
   fs::remove_all(dir);
+  return r;
+}
+
+pid_t spawn_omma(const std::string& args, const fs::path& dir, const std::string& prefix) {
+  const std::string cmd = "exec " + prefix + " " OMMA_BINARY " " + args + " >" + (dir / "out").string() +
+                          " 2>" + (dir / "err").string() + " </dev/null";
+  const char* argv[] = {"/bin/sh", "-c", cmd.c_str(), nullptr};
+  pid_t pid = -1;
+  if (posix_spawn(&pid, "/bin/sh", nullptr, nullptr, const_cast<char**>(argv), environ) != 0) return -1;
+  return pid;
+}
+
+RunResult wait_omma(pid_t pid, const fs::path& dir) {
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  RunResult r;
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  r.out = slurp(dir / "out");
+  r.err = slurp(dir / "err");
   return r;
 }
 

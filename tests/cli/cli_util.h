@@ -1,6 +1,8 @@
 // Helpers for command-line tests: run the built omma binary, capture stdout, stderr and exit code.
 #pragma once
 
+#include <sys/types.h>
+
 #include <filesystem>
 #include <string>
 
@@ -20,6 +22,15 @@ RunResult run_command(const std::string& command, int timeout_s = 300);
 
 // Runs `omma ARGS` (ARGS is passed to /bin/sh, quote as needed) with a time limit in seconds.
 RunResult run_omma(const std::string& args, int timeout_s = 300);
+
+// Starts `PREFIX omma ARGS` in the background (ARGS and PREFIX are passed to /bin/sh), stdout and
+// stderr to DIR/out and DIR/err, stdin closed; its pid is omma's (the shell execs it), -1 if it
+// cannot be started.
+pid_t spawn_omma(const std::string& args, const std::filesystem::path& dir, const std::string& prefix = "");
+
+// Waits for a spawn_omma process to end and collects its exit status (128 + signal if killed) and
+// its output from DIR/out and DIR/err.
+RunResult wait_omma(pid_t pid, const std::filesystem::path& dir);
 
 // A fresh empty temporary folder, removed by the caller (or left in /tmp).
 std::filesystem::path temp_dir(const std::string& tag);

@@ -2,7 +2,6 @@
 // back-pressure, interruption, the live viewer and the benchmark's JSON.
 #include <arpa/inet.h>
 #include <netinet/in.h>
-#include <spawn.h>
 #include <sys/socket.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -239,27 +238,6 @@ TEST(EngineCli, BadInputGivesClearErrorsAndLeavesNoOutput) {
   fs::remove_all(dir);
 }
 
-// Starts `PREFIX omma ARGS` in the background (stdout, stderr to DIR/out, DIR/err); its pid is omma's
-// (the shell execs it).
-pid_t spawn_omma(const std::string& args, const fs::path& dir, const std::string& prefix = "") {
-  const std::string cmd = "exec " + prefix + " " OMMA_BINARY " " + args + " >" + (dir / "out").string() +
-                          " 2>" + (dir / "err").string() + " </dev/null";
-  const char* argv[] = {"/bin/sh", "-c", cmd.c_str(), nullptr};
-  pid_t pid = -1;
-  if (posix_spawn(&pid, "/bin/sh", nullptr, nullptr, const_cast<char**>(argv), environ) != 0) return -1;
-  return pid;
-}
-
-RunResult wait_omma(pid_t pid, const fs::path& dir) {
-  int status = 0;
-  ::waitpid(pid, &status, 0);
-  RunResult r;
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-  r.out = slurp(dir / "out");
-  r.err = slurp(dir / "err");
-  return r;
-}
-
 // Frames in a video and whether its last one decodes.
 std::pair<long, bool> video_frames(const fs::path& file) {
   cv::VideoCapture cap(file.string(), cv::CAP_FFMPEG);
@@ -372,11 +350,11 @@ TEST(EngineCli, InterruptedRecordingLeavesAPlayableVideoOrNothing) {
     EXPECT_FALSE(fs::exists(partial));
     fs::remove(video);
   }
-  // A full disk: writes beyond 40 kB fail. Nothing under the video's name, no temporary file.
+  // A full disk: writes beyond 4 kB fail. Nothing under the video's name, no temporary file.
   {
     const pid_t pid = spawn_omma("run --rig " + rig.string() + " --source pano:" + lake() +
                                      " --size 200x200 --frames 40 --no-cache --json --sink " + video.string(),
-                                 dir, "prlimit --fsize=40000");
+                                 dir, "prlimit --fsize=4000");
     const RunResult r = wait_omma(pid, dir);
     EXPECT_EQ(r.exit_code, 1) << r.err;
     EXPECT_NE(r.err.find("omma: error: video " + video.string() + " could not be written"), std::string::npos)
@@ -401,7 +379,9 @@ bool port_open(int port) {
 // The live page is a 360-degree viewer (Pannellum, served by omma itself). Headless
 // Chromium, driven by playwright-core (tests/cli/live_viewer.cjs), loads it: the viewer's canvas
 // shows the panorama (not blank), new frames change the image, and with the image paused a drag
-// changes the view (and nothing else does). Skipped where Chromium, node or web/node_modules are
+// changes the view (and nothing else does). The page's displayed rate (#shown) is positive, at most
+// the engine's, and 0 once paused. The run requires a token (--token random), which the page, opened
+// with it, passes on to its own requests. Skipped where Chromium, node or web/node_modules are
 // missing (scripts/install-deps.sh --test installs them).
 TEST(EngineCli, LiveViewIsA360ViewerInHeadlessChromium) {
   const std::string web = std::string(OMMA_SOURCE_DIR) + "/web";
@@ -412,16 +392,30 @@ TEST(EngineCli, LiveViewIsA360ViewerInHeadlessChromium) {
   const auto rig = write_rig(dir);
   const int port = 19000 + (::getpid() % 900);
   // The scene turns at 20 deg/s: the image changes as frames arrive.
-  const pid_t pid = spawn_omma(
-      "run --rig " + rig.string() + " --source pano:" + lake() +
-          "@20 --size 400x400 --no-cache --duration 90 --sink http:" + std::to_string(port) + " --json",
-      dir);
+  const pid_t pid =
+      spawn_omma("run --rig " + rig.string() + " --source pano:" + lake() +
+                     "@20 --size 400x400 --no-cache --duration 90 --sink http:" + std::to_string(port) +
+                     " --token random --json",
+                 dir);
+  // The page's URL with its token, as omma prints it.
+  const std::string url_head = "http://127.0.0.1:" + std::to_string(port) + "/?token=";
+  std::string url;
+  for (int i = 0; i < 200 && url.empty(); ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    const std::string err = slurp(dir / "err");
+    if (const size_t at = err.find(url_head);
+        at != std::string::npos && err.size() >= at + url_head.size() + 32)
+      url = err.substr(at, url_head.size() + 32);
+  }
+  if (url.empty()) {
+    ::kill(pid, SIGTERM);
+    FAIL() << "no URL with a token: " << wait_omma(pid, dir).err;
+  }
   for (int i = 0; i < 200 && !port_open(port); ++i)
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
-  const std::string cmd = "timeout 80 node " + std::string(OMMA_SOURCE_DIR) +
-                          "/tests/cli/live_viewer.cjs http://127.0.0.1:" + std::to_string(port) + "/ " +
-                          dir.string() + " " + web + " >" + (dir / "viewer.json").string() + " 2>" +
-                          (dir / "viewer.err").string();
+  const std::string cmd = "timeout 80 node " + std::string(OMMA_SOURCE_DIR) + "/tests/cli/live_viewer.cjs '" +
+                          url + "' " + dir.string() + " " + web + " >" + (dir / "viewer.json").string() +
+                          " 2>" + (dir / "viewer.err").string();
   const int rc = std::system(cmd.c_str());
   ::kill(pid, SIGTERM);
   const RunResult run = wait_omma(pid, dir);
@@ -462,6 +456,24 @@ TEST(EngineCli, LiveViewIsA360ViewerInHeadlessChromium) {
   EXPECT_GT(std::abs(v["dragged"]["yaw"].get<double>() - v["paused"]["yaw"].get<double>()), 10.0);
   // The stats line is the engine's.
   EXPECT_NE(v["later"]["stats"].get<std::string>().find("latency"), std::string::npos);
+  // The displayed rate, as the page shows it: frames decoded and drawn per second, positive and not
+  // above the engine's rate (its last interval and its mean; 15 % + 2 fps for the windows' edges).
+  auto shown = [&](const char* when) {
+    const std::string text = v[when]["shown"].get<std::string>();  // "shown 12.3 fps"
+    double fps = -1;
+    EXPECT_EQ(std::sscanf(text.c_str(), "shown %lf fps", &fps), 1) << text;
+    return fps;
+  };
+  const double shown_fps = shown("rate"), engine_fps = v["rate"]["engine_fps"].get<double>();
+  std::printf(
+      "  displayed %.1f fps, engine %.1f fps (mean %.1f), render %.2f ms; paused: displayed %.1f fps\n",
+      shown_fps, engine_fps, v["rate"]["engine_fps_mean"].get<double>(), v["rate"]["render_ms"].get<double>(),
+      shown("rate_paused"));
+  EXPECT_GT(shown_fps, 0.5);
+  EXPECT_LE(shown_fps, std::max(engine_fps, v["rate"]["engine_fps_mean"].get<double>()) * 1.15 + 2);
+  EXPECT_GT(v["rate"]["render_ms"].get<double>(), 0.0);  // live, before the run's end
+  EXPECT_EQ(shown("rate_paused"), 0.0);
+  EXPECT_GT(v["rate_paused"]["engine_fps"].get<double>(), 1.0);
   fs::remove_all(dir);
 }
 

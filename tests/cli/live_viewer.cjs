@@ -1,7 +1,10 @@
 // Drives headless Chromium (playwright-core from web/node_modules, the system's /usr/bin/chromium)
 // through omma's live page; called by tests/cli/engine_cli_test.cc, which checks the screenshots.
 //   node live_viewer.cjs URL OUT_DIR WEB_DIR
-// Writes OUT_DIR/{loaded,later,paused,paused2,dragged}.png and prints one JSON object on stdout.
+// URL is the page's, with its ?token=... where omma requires one. Writes
+// OUT_DIR/{loaded,later,paused,paused2,dragged}.png and prints one JSON object on stdout; `rate`
+// (after 2.5 s of frames) and `rate_paused` (2 s into the pause) hold the page's displayed-rate
+// element (#shown) beside the engine's figures of the same moment (/stats.json, as the page asks).
 'use strict';
 const path = require('path');
 const [url, outDir, webDir] = process.argv.slice(2);
@@ -26,6 +29,13 @@ const { chromium } = require(path.join(webDir, 'node_modules', 'playwright-core'
       pitch: window.omma.viewer ? window.omma.viewer.getPitch() : null,
       canvas: window.omma.canvasHash ? window.omma.canvasHash() : null,
       stats: document.getElementById('s').textContent }));
+    // The displayed rate as the page shows it, and the engine's at the same moment.
+    const rate = () => page.evaluate(async () => {
+      const shown = document.getElementById('shown').textContent;
+      const j = await (await fetch('/stats.json' + location.search, { cache: 'no-store' })).json();
+      return { shown, engine_fps: j.window ? j.window.fps : null, engine_fps_mean: j.fps,
+               render_ms: j.render_ms_mean, frames: window.omma.frames };
+    });
     await page.waitForFunction(() => window.omma && window.omma.viewer && window.omma.viewer.isLoaded() &&
                                window.omma.frames >= 2, null, { timeout: 40000 });
     await page.waitForTimeout(300);
@@ -37,6 +47,9 @@ const { chromium } = require(path.join(webDir, 'node_modules', 'playwright-core'
     await page.waitForTimeout(300);
     result.later = await state();
     await page.screenshot({ path: path.join(outDir, 'later.png') });
+    // A full window (2 s) of the displayed rate.
+    await page.waitForTimeout(2500);
+    result.rate = await rate();
     // Freeze the live image (the page's pause), then drag: only the view changes.
     await page.evaluate(() => window.omma.setPaused(true));
     await page.waitForTimeout(300);
@@ -51,6 +64,9 @@ const { chromium } = require(path.join(webDir, 'node_modules', 'playwright-core'
     await page.waitForTimeout(800);
     result.dragged = await state();
     await page.screenshot({ path: path.join(outDir, 'dragged.png') });
+    // Paused for over 2 s: nothing is shown any more, the engine goes on.
+    await page.waitForTimeout(1500);
+    result.rate_paused = await rate();
   } catch (e) {
     result.failure = String(e);
   } finally {

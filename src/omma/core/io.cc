@@ -53,7 +53,8 @@ cv::Mat read_image(const fs::path& path, int flags) {
   return m;
 }
 
-void write_image(const fs::path& path, const cv::Mat& image) {
+void write_image(const fs::path& path, const cv::Mat& image,
+                 const std::function<void(const fs::path& tmp)>& finish) {
   if (image.empty()) throw IoError("refusing to write empty image '" + path.string() + "'");
   write_atomically(path, [&](const fs::path& tmp) {
     bool ok = false;
@@ -65,6 +66,7 @@ void write_image(const fs::path& path, const cv::Mat& image) {
     if (!ok)
       throw IoError("cannot write image '" + path.string() +
                     "' (disk full, a file-size limit, or no permission?)");
+    if (finish) finish(tmp);
   });
 }
 

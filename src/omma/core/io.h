@@ -30,8 +30,11 @@ cv::Mat read_image(const std::filesystem::path& path, int flags = -1 /*cv::IMREA
 // every format-by-extension choice reads a file name.
 std::string lower_extension(const std::filesystem::path& path);
 
-// Writes an image atomically; the format comes from the extension. Throws IoError on failure.
-void write_image(const std::filesystem::path& path, const cv::Mat& image);
+// Writes an image atomically; the format comes from the extension. `finish`, if given, is called with
+// the encoded temporary file before it is renamed onto `path` (to add metadata OpenCV does not
+// write). Throws IoError on failure.
+void write_image(const std::filesystem::path& path, const cv::Mat& image,
+                 const std::function<void(const std::filesystem::path& tmp)>& finish = {});
 // Can write_image write a width x height image to `path`? Throws IoError naming the path unless
 // OpenCV has a writer for the extension and the format holds the size (JPEG at most 65500 pixels a
 // side, WebP 16383). Call it before the work that makes the image.

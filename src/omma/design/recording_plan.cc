@@ -31,6 +31,35 @@ bool RecordingPlanInput::IsValid(std::string* why) const {
 
 long round_half_up(double x) { return static_cast<long>(std::floor(x + 0.5)); }
 
+nlohmann::json RecordingPlan::to_json() const {
+  nlohmann::json checks_json = nlohmann::json::array();
+  for (const auto& c : checks) checks_json.push_back({{"name", c.name}, {"ok", c.ok}, {"detail", c.detail}});
+  return {
+      {"input",
+       {{"width", in.width},
+        {"height", in.height},
+        {"bits", in.bits},
+        {"fps", in.fps},
+        {"clock_mhz", in.clock_mhz},
+        {"max_clock_mhz", in.max_clock_mhz},
+        {"cameras", in.cameras},
+        {"cameras_per_device", in.cameras_per_device},
+        {"device_bytes", in.device_bytes},
+        {"device_rate_bytes_per_s", in.device_rate},
+        {"minutes", in.minutes}}},
+      {"camera", {{"bytes_per_s", camera_bytes_per_s}, {"mib_per_s", camera_mib_per_s}, {"gib", camera_gib}}},
+      {"device",
+       {{"bytes_per_s", device_bytes_per_s}, {"bytes", device_bytes}, {"max_minutes", max_minutes}}},
+      {"rig",
+       {{"devices", devices},
+        {"bytes_per_s", rig_bytes_per_s},
+        {"bytes", rig_bytes},
+        {"tib", rig_bytes / std::pow(2.0, 40)},
+        {"tb", rig_bytes / 1e12}}},
+      {"checks", checks_json},
+      {"feasible", feasible()}};
+}
+
 bool RecordingPlan::feasible() const {
   for (const PlanCheck& c : checks)
     if (!c.ok) return false;

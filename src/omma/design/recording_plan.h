@@ -15,6 +15,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 namespace omma::design {
 
 struct RecordingPlanInput {
@@ -49,6 +51,9 @@ struct RecordingPlan {
   std::vector<PlanCheck> checks;
   bool feasible() const;
   std::string failed() const;  // the failed checks' names and details, "; "-separated
+  // `omma plan --json` (and omma.plan's dict, which adds "failed"): {"input": {...}, "camera",
+  // "device", "rig", "checks": [{"name", "ok", "detail"}], "feasible"}.
+  nlohmann::json to_json() const;
 };
 
 RecordingPlan make_plan(const RecordingPlanInput& in);  // throws std::invalid_argument if !IsValid

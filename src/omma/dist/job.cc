@@ -93,25 +93,27 @@ bool RunOptions::IsValid(std::string* why) const {
 json RunSummary::to_json() const {
   json outs = json::array();
   for (const auto& r : records) outs.push_back(r.to_json());
-  return {{"format", "omma-job-manifest"},
-          {"version", 1},
-          {"parameters", parameters},
-          {"items", items},
-          {"ranks", ranks},
-          {"mpi", mpi},
-          {"rank0", rank0_name(rank0)},
-          {"made", made},
-          {"reused", reused},
-          {"seconds", seconds},
-          {"setup_seconds", setup_seconds},
-          {"totals",
-           {{"read", totals.read},
-            {"develop", totals.develop},
-            {"render", totals.render},
-            {"write", totals.write},
-            {"checksum", checksum_seconds},
-            {"cpu", cpu_seconds}}},
-          {"outputs", outs}};
+  json j = {{"format", "omma-job-manifest"},
+            {"version", 1},
+            {"parameters", parameters},
+            {"items", items},
+            {"ranks", ranks},
+            {"mpi", mpi},
+            {"rank0", rank0_name(rank0)},
+            {"made", made},
+            {"reused", reused},
+            {"seconds", seconds},
+            {"setup_seconds", setup_seconds},
+            {"totals",
+             {{"read", totals.read},
+              {"develop", totals.develop},
+              {"render", totals.render},
+              {"write", totals.write},
+              {"checksum", checksum_seconds},
+              {"cpu", cpu_seconds}}},
+            {"outputs", outs}};
+  if (!input.is_null()) j["input"] = input;
+  return j;
 }
 
 bool is_temporary_of(const fs::path& file, const fs::path& output) {
@@ -556,6 +558,7 @@ RunSummary run_job(Comm& comm, Job& job, const RunOptions& options) {
   // Rank 0: the items to make, stale temporaries, the journal, then serve (and work).
   sum.items = job.items();
   sum.parameters = params;
+  sum.input = job.input_summary();
   std::vector<std::optional<ItemRecord>> records(sum.items);
   for (const auto& part : all_verified)
     for (const auto& i : json::parse(part)) {

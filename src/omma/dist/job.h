@@ -12,6 +12,7 @@
 // MANIFEST (JSON, atomically) and removes the journal:
 //   {"format": "omma-job-manifest", "version": 1, "parameters": {...job...}, "items": N,
 //    "ranks": K, "mpi": true, "rank0": "works", "made": M, "reused": R, "seconds": wall,
+//    "input": {...Job::input_summary, only when not null...},
 //    "totals": {"read": s, "develop": s, "render": s, "write": s, "checksum": s},
 //    "outputs": [{"item": i, "output": path, "size": bytes, "checksum": "xxh3:...", "rank": r,
 //                 "host": h, "seconds": s, "cpu_seconds": s, "read": s, "develop": s, "render": s,
@@ -81,6 +82,10 @@ class Job {
   // Everything the outputs depend on (input, sizes, method, ...): outputs listed in a manifest with
   // other parameters are not reused.
   virtual nlohmann::json parameters() const { return nlohmann::json::object(); }
+  // What open() found in the input that the outputs' reader should know (e.g. the frame sets a
+  // renderer left out or completed, and by which policy): rank 0 writes it into the manifest as
+  // "input" when it is not null.
+  virtual nlohmann::json input_summary() const { return nullptr; }
   // Opens the input, cheaply (items() may depend on it): every rank, before anything else.
   virtual void open() {}
   // Prepares this rank for run() (compiles or loads maps): after the checks that need only open()
@@ -118,6 +123,7 @@ struct RunSummary {
   double checksum_seconds = 0;
   double cpu_seconds = 0;
   nlohmann::json parameters;
+  nlohmann::json input = nullptr;   // Job::input_summary (rank 0)
   std::vector<ItemRecord> records;  // rank 0: every item, item order; other ranks: empty
   nlohmann::json to_json() const;   // the manifest
 };

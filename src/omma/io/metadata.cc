@@ -4,14 +4,20 @@
 #include <cmath>
 #include <cstdint>
 #include <fstream>
+#include <mutex>
 #include <optional>
+#include <set>
+#include <stdexcept>
+#include <tuple>
 #include <vector>
 
 #include <fmt/format.h>
 #include <opencv2/imgcodecs.hpp>
+#include <spdlog/spdlog.h>
 #include <zlib.h>
 
 #include "omma/core/io.h"
+#include "omma/io/tiff_writer.h"
 
 namespace omma::io {
 namespace fs = std::filesystem;
@@ -24,21 +30,6 @@ void put_u32(std::string& s, uint32_t v) {
 void put_u16(std::string& s, uint16_t v) {
   s.push_back(char(v >> 8));
   s.push_back(char(v & 0xFF));
-}
-uint32_t get_u32(const std::string& s, size_t at) {
-  uint32_t v = 0;
-  for (int i = 0; i < 4; ++i) v = (v << 8) | uint8_t(s[at + i]);
-  return v;
-}
-uint64_t get_u64(const std::string& s, size_t at) {
-  return (uint64_t(get_u32(s, at)) << 32) | get_u32(s, at + 4);
-}
-void set_u32(std::string& s, size_t at, uint32_t v) {
-  for (int i = 0; i < 4; ++i) s[at + i] = char((v >> (24 - 8 * i)) & 0xFF);
-}
-void set_u64(std::string& s, size_t at, uint64_t v) {
-  set_u32(s, at, uint32_t(v >> 32));
-  set_u32(s, at + 4, uint32_t(v));
 }
 
 // ---- JPEG and PNG -----------------------------------------------------------------------------
@@ -83,179 +74,6 @@ std::string embed_xmp_png(std::string_view png, const std::string& xmp) {
   return out;
 }
 
-// ---- MP4 ----------------------------------------------------------------------------------------
-
-struct Box {
-  size_t start = 0;   // offset of the box's header
-  size_t header = 8;  // 8, or 16 with a 64-bit size
-  uint64_t size = 0;  // whole box
-  std::string type;
-  size_t end() const { return start + size_t(size); }
-};
-
-// The box at `at` inside [.., limit) of `s`; nullopt if it does not fit.
-std::optional<Box> box_at(const std::string& s, size_t at, size_t limit) {
-  if (at + 8 > limit) return std::nullopt;
-  Box b;
-  b.start = at;
-  b.size = get_u32(s, at);
-  b.type = s.substr(at + 4, 4);
-  if (b.size == 1) {
-    if (at + 16 > limit) return std::nullopt;
-    b.size = get_u64(s, at + 8);
-    b.header = 16;
-  } else if (b.size == 0) {
-    b.size = limit - at;
-  }
-  if (b.size < b.header || b.size > limit - at) return std::nullopt;
-  return b;
-}
-
-// Children of the box `parent` whose payload starts `skip` bytes after its header.
-std::vector<Box> children(const std::string& s, const Box& parent, size_t skip = 0) {
-  std::vector<Box> out;
-  for (size_t at = parent.start + parent.header + skip; at < parent.end();) {
-    const auto b = box_at(s, at, parent.end());
-    if (!b) break;
-    out.push_back(*b);
-    at = b->end();
-  }
-  return out;
-}
-
-std::optional<Box> child(const std::string& s, const Box& parent, const std::string& type, size_t skip = 0) {
-  for (const auto& b : children(s, parent, skip))
-    if (b.type == type) return b;
-  return std::nullopt;
-}
-
-void grow(std::string& s, const Box& b, size_t delta) {
-  if (b.header == 16)
-    set_u64(s, b.start + 8, b.size + delta);
-  else if (b.size + delta > 0xFFFFFFFFull)
-    throw IoError("cannot add spherical metadata: box too large");
-  else
-    set_u32(s, b.start, uint32_t(b.size + delta));
-}
-
-std::string full_box(const std::string& type, const std::string& payload) {
-  std::string b;
-  put_u32(b, uint32_t(12 + payload.size()));
-  b += type;
-  put_u32(b, 0);  // version 0, flags 0
-  return b + payload;
-}
-
-std::string plain_box(const std::string& type, const std::string& payload) {
-  std::string b;
-  put_u32(b, uint32_t(8 + payload.size()));
-  return b + type + payload;
-}
-
-// st3d (mono) + sv3d for the grid's layout (Spherical Video V2).
-std::string spherical_v2_boxes(const PanoGrid& grid) {
-  const SphericalLayout l = spherical_layout(grid);
-  std::string st3d_payload(1, '\0');  // stereo_mode 0: monoscopic
-  const std::string st3d = full_box("st3d", st3d_payload);
-  const std::string svhd = full_box("svhd", std::string("omma") + '\0');  // metadata source, NUL-terminated
-  std::string prhd_payload;
-  for (int i = 0; i < 3; ++i) put_u32(prhd_payload, 0);  // pose yaw, pitch, roll: 0 (16.16 fixed point)
-  // Bounds: the fractions of the full sphere cut off at the top, bottom, left and right, as 0.32
-  // fixed point (value * 2^32, rounded down).
-  auto frac = [](int part, int whole) { return uint32_t((uint64_t(part) << 32) / uint64_t(whole)); };
-  std::string equi_payload;
-  put_u32(equi_payload, frac(l.top, l.full_height));
-  put_u32(equi_payload, frac(l.full_height - l.top - l.height, l.full_height));
-  put_u32(equi_payload, frac(l.left, l.full_width));
-  put_u32(equi_payload, frac(l.full_width - l.left - l.width, l.full_width));
-  const std::string proj = plain_box("proj", full_box("prhd", prhd_payload) + full_box("equi", equi_payload));
-  return st3d + plain_box("sv3d", svhd + proj);
-}
-
-// The movie box of the MP4 file read by `in` (file_size bytes), found from the top-level box
-// headers; throws (message prefix `what`) if the box structure is damaged or there is not
-// exactly one.
-Box movie_box(std::ifstream& in, uint64_t file_size, const std::string& what) {
-  std::optional<Box> moov;
-  for (uint64_t at = 0; at < file_size;) {
-    std::string head(16, '\0');
-    in.seekg(std::streamoff(at));
-    in.read(head.data(), 16);
-    head.resize(size_t(in.gcount()));
-    in.clear();
-    if (head.size() < 8) throw IoError(what + "not an MP4 file (damaged box structure)");
-    Box b{size_t(at), 8, get_u32(head, 0), head.substr(4, 4)};
-    if (b.size == 1 && head.size() == 16)
-      b.size = get_u64(head, 8), b.header = 16;
-    else if (b.size == 0)
-      b.size = file_size - at;  // "to the end of the file"
-    if (b.size < b.header || b.size > file_size - at)
-      throw IoError(what + "not an MP4 file (damaged box structure)");
-    if (b.type == "moov") {
-      if (moov) throw IoError(what + "two movie boxes");
-      if (b.size > (uint64_t(1) << 30)) throw IoError(what + "movie box too large");
-      moov = b;
-    }
-    at += b.size;
-  }
-  if (!moov) throw IoError(what + "no movie box (not an MP4 file?)");
-  return *moov;
-}
-
-// The boxes from the movie box `root` (in m) down to the first sample entry of the first video
-// track, outermost first: moov/trak (handler 'vide')/mdia/minf/stbl/stsd/entry; empty if none.
-std::vector<Box> video_sample_entry_path(const std::string& m, const Box& root) {
-  for (const Box& trak : children(m, root)) {
-    if (trak.type != "trak") continue;
-    const auto mdia = child(m, trak, "mdia");
-    if (!mdia) continue;
-    const auto hdlr = child(m, *mdia, "hdlr");
-    if (!hdlr || hdlr->size < hdlr->header + 12 || m.substr(hdlr->start + hdlr->header + 8, 4) != "vide")
-      continue;
-    const auto minf = child(m, *mdia, "minf");
-    const auto stbl = minf ? child(m, *minf, "stbl") : std::nullopt;
-    const auto stsd = stbl ? child(m, *stbl, "stsd") : std::nullopt;
-    if (!stsd) continue;
-    const auto entries = children(m, *stsd, 8);  // after version/flags and entry_count
-    if (entries.empty()) continue;
-    const Box entry = entries.front();
-    return {root, trak, *mdia, *minf, *stbl, *stsd, entry};
-  }
-  return {};
-}
-
-// Adds delta (bytes) to every chunk offset (stco / co64) of every track of the movie box `root`
-// (in m) at or behind the file position moved_from; throws (message prefix `what`) if a table is
-// damaged or a 32-bit offset overflows.
-void shift_chunk_offsets(std::string& m, const Box& root, uint64_t moved_from, size_t delta,
-                         const std::string& what) {
-  for (const Box& trak : children(m, root)) {
-    if (trak.type != "trak") continue;
-    const auto mdia = child(m, trak, "mdia");
-    const auto minf = mdia ? child(m, *mdia, "minf") : std::nullopt;
-    const auto stbl = minf ? child(m, *minf, "stbl") : std::nullopt;
-    if (!stbl) continue;
-    for (const Box& t : children(m, *stbl)) {
-      const bool co64 = t.type == "co64";
-      if ((t.type != "stco" && !co64) || t.size < t.header + 8) continue;
-      const size_t first = t.start + t.header + 8, n = get_u32(m, t.start + t.header + 4);
-      const size_t width = co64 ? 8 : 4;
-      if (n > (t.end() - first) / width) throw IoError(what + "damaged chunk offset table");
-      for (size_t i = 0; i < n; ++i) {
-        const size_t at = first + i * width;
-        const uint64_t off = co64 ? get_u64(m, at) : get_u32(m, at);
-        if (off < moved_from) continue;
-        if (co64)
-          set_u64(m, at, off + delta);
-        else if (off + delta > 0xFFFFFFFFull)
-          throw IoError(what + "chunk offset overflow");
-        else
-          set_u32(m, at, uint32_t(off + delta));
-      }
-    }
-  }
-}
-
 }  // namespace
 
 SphericalLayout spherical_layout(const PanoGrid& g) {
@@ -284,8 +102,37 @@ SphericalLayout spherical_layout(const PanoGrid& g) {
   return l;
 }
 
+std::optional<SphericalLayout> photo_sphere_layout(const PanoGrid& g, std::string* why) {
+  const AngularSpan span = angular_span(g.projection);
+  // Square pixels: the height the width implies for the grid's span, within half a pixel.
+  const double square_height = g.width * span.height / span.width;
+  if (g.width < 1 || g.height < 1 || std::abs(g.height - square_height) > 0.5) {
+    if (why) {
+      const double deg = 180.0 / kPi;
+      *why = fmt::format(
+          "{}x{} {} has non-square pixels ({:.2f} x {:.2f} px/deg); no GPano written; use --size {}x{} for "
+          "a viewer-ready panorama",
+          g.width, g.height, to_string(g.projection), g.width / (span.width * deg),
+          g.height / (span.height * deg), g.width, std::max<long>(1, std::lround(square_height)));
+    }
+    return std::nullopt;
+  }
+  SphericalLayout l;
+  l.width = g.width;
+  l.height = g.height;
+  l.full_width = static_cast<int>(std::lround(g.width * 2 * kPi / span.width));
+  // A grid spanning every latitude is the full height itself; a cap from the zenith down is a crop.
+  l.full_height = span.height >= kPi - 1e-9 ? g.height : static_cast<int>(std::lround(l.full_width / 2.0));
+  l.left = (l.full_width - l.width) / 2;  // vr180: the front half; 0 for the 360-degree grids
+  l.top = 0;
+  return l;
+}
+
 std::string gpano_xmp(const PanoGrid& grid) {
-  const SphericalLayout l = spherical_layout(grid);
+  std::string why;
+  const std::optional<SphericalLayout> layout = photo_sphere_layout(grid, &why);
+  if (!layout) throw std::invalid_argument(why);
+  const SphericalLayout& l = *layout;
   return fmt::format(
       "<?xpacket begin=\"\xEF\xBB\xBF\" id=\"W5M0MpCehiHzreSzNTczkc9d\"?>\n"
       "<x:xmpmeta xmlns:x=\"adobe:ns:meta/\" x:xmptk=\"omma\">\n"
@@ -307,9 +154,22 @@ std::string gpano_xmp(const PanoGrid& grid) {
       l.full_width, l.full_height, l.width, l.height, l.left, l.top, to_string(grid.projection));
 }
 
+std::string panorama_xmp(const PanoGrid& grid) {
+  std::string why;
+  if (photo_sphere_layout(grid, &why)) return gpano_xmp(grid);
+  // One warning per projection and size: a run's thousands of frames, or a demo's many methods,
+  // share one grid.
+  static std::mutex mutex;
+  static std::set<std::tuple<int, int, int>> warned;
+  std::lock_guard lock(mutex);
+  if (warned.insert({static_cast<int>(grid.projection), grid.width, grid.height}).second)
+    spdlog::warn("{}", why);
+  return {};
+}
+
 bool carries_xmp(const fs::path& path) {
   const std::string e = lower_extension(path);
-  return e == ".jpg" || e == ".jpeg" || e == ".png";
+  return e == ".jpg" || e == ".jpeg" || e == ".png" || e == ".tif" || e == ".tiff";
 }
 
 std::string embed_xmp(std::string_view encoded, const std::string& ext, const std::string& xmp) {
@@ -325,68 +185,26 @@ void write_panorama(const fs::path& path, const cv::Mat& image, const PanoGrid& 
   if (image.cols != grid.width || image.rows != grid.height)
     throw IoError(fmt::format("panorama '{}' is {}x{} but its grid is {}x{}", path.string(), image.cols,
                               image.rows, grid.width, grid.height));
+  const std::string xmp = panorama_xmp(grid);
+  const std::string ext = lower_extension(path);
+  if (ext == ".tif" || ext == ".tiff") {
+    // OpenCV's encoder (any depth and channels it takes), then the XMP and the resolution tags
+    // added to the temporary file's directory.
+    return write_image(path, image, [&](const fs::path& tmp) { add_tiff_metadata(tmp, xmp); });
+  }
+  if (xmp.empty()) return write_image(path, image);
   std::vector<uchar> buf;
   try {
-    if (!cv::imencode(lower_extension(path), image, buf))
-      throw IoError("cannot encode image '" + path.string() + "'");
+    if (!cv::imencode(ext, image, buf)) throw IoError("cannot encode image '" + path.string() + "'");
   } catch (const cv::Exception& e) {
     throw IoError("cannot write image '" + path.string() + "': " + e.what());
   }
   const std::string bytes = embed_xmp(std::string_view(reinterpret_cast<const char*>(buf.data()), buf.size()),
-                                      path.extension().string(), gpano_xmp(grid));
+                                      path.extension().string(), xmp);
   write_atomically(path, [&](const fs::path& tmp) {
     std::ofstream out(tmp, std::ios::binary);
     out.write(bytes.data(), std::streamsize(bytes.size()));
     if (!out.flush()) throw IoError("cannot write image '" + path.string() + "'");
-  });
-}
-
-void add_spherical_video_metadata(const fs::path& path, const PanoGrid& grid) {
-  const std::string what = "cannot add spherical metadata to '" + path.string() + "': ";
-  std::ifstream in(path, std::ios::binary);
-  std::error_code ec;
-  const uint64_t file_size = fs::file_size(path, ec);
-  if (!in || ec) throw IoError("cannot open video '" + path.string() + "'");
-  // Top-level boxes (headers only): exactly one moov, which is read into memory; the media data
-  // around it is copied in blocks.
-  const Box moov = movie_box(in, file_size, what);
-  std::string m(size_t(moov.size), '\0');
-  in.seekg(std::streamoff(moov.start));
-  if (!in.read(m.data(), std::streamsize(m.size()))) throw IoError(what + "cannot read the movie box");
-  const Box root{0, moov.header, moov.size, "moov"};
-  // moov/trak (handler 'vide')/mdia/minf/stbl/stsd/first sample entry.
-  // path_boxes: the ancestors to grow, outermost first.
-  const std::vector<Box> path_boxes = video_sample_entry_path(m, root);
-  if (path_boxes.empty()) throw IoError(what + "no video track");
-  const Box entry = path_boxes.back();
-  constexpr size_t kVisualSampleEntry = 78;  // fields of a VisualSampleEntry before its child boxes
-  if (entry.size < entry.header + kVisualSampleEntry) throw IoError(what + "damaged video sample entry");
-  if (child(m, entry, "sv3d", kVisualSampleEntry)) return;  // already spherical
-  const std::string boxes = spherical_v2_boxes(grid);
-  const size_t insert_at = entry.end();
-  m.insert(insert_at, boxes);
-  for (const Box& b : path_boxes) grow(m, b, boxes.size());
-  // Chunk offsets (absolute file positions) behind the insertion move with it: the media data
-  // when the movie box comes first ("fast start").
-  const uint64_t moved_from = moov.start + insert_at;
-  const Box root2{0, moov.header, moov.size + boxes.size(), "moov"};
-  shift_chunk_offsets(m, root2, moved_from, boxes.size(), what);
-  write_atomically(path, [&](const fs::path& tmp) {
-    std::ofstream o(tmp, std::ios::binary);
-    std::vector<char> block(1 << 20);
-    auto copy = [&](uint64_t from, uint64_t to) {
-      in.seekg(std::streamoff(from));
-      for (uint64_t left = to - from; left > 0;) {
-        const size_t n = size_t(std::min<uint64_t>(left, block.size()));
-        if (!in.read(block.data(), std::streamsize(n))) throw IoError(what + "read failed");
-        o.write(block.data(), std::streamsize(n));
-        left -= n;
-      }
-    };
-    copy(0, moov.start);
-    o.write(m.data(), std::streamsize(m.size()));
-    copy(moov.end(), file_size);
-    if (!o.flush()) throw IoError("cannot write video '" + path.string() + "'");
   });
 }
 

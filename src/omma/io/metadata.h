@@ -3,7 +3,7 @@
 // sphere they cover. One place for every writer (apps, engine sinks, Python bindings).
 //
 // Where each grid (grid.h) lies on the full 360 x 180 degree equirectangular sphere, in pixels of
-// the image's own resolution (SphericalLayout):
+// the image's own resolution along each axis (SphericalLayout, spherical_layout()):
 //   equirect       360 x 90 deg, the dome axis (+z) along the top row: the TOP HALF of the sphere
 //                  (the dome axis is the zenith). Full W x 2H, the image at left 0, top 0.
 //   vr180          180 x 180 deg with the dome axis at the centre, right = -x, up = +y: the FRONT
@@ -12,23 +12,37 @@
 //   equirect-full  the whole sphere: full W x H.
 //   equirect-100   360 x 100 deg from the zenith down (Giga-Eye): full W x round(1.8 H), top 0.
 // Every grid is the world the right way round (conventions.h (G1), (G2)), as these formats assume,
-// so no pose or flip is written.
+// so no pose or flip is written. This layout is exact as fractions of the sphere whatever the
+// pixels' aspect (what video's bounds are), but its full size is 2:1 only when the pixels are square.
 //
-// Photos (JPEG, PNG): Google's Photo Sphere XMP (namespace GPano, http://ns.google.com/photos/1.0/
-// panorama/): ProjectionType equirectangular, UsePanoramaViewer, FullPanoWidth/HeightPixels,
+// Photos (JPEG, PNG, TIFF): Google's Photo Sphere XMP (namespace GPano, http://ns.google.com/photos/
+// 1.0/panorama/): ProjectionType equirectangular, UsePanoramaViewer, FullPanoWidth/HeightPixels,
 // CroppedAreaImageWidth/HeightPixels, CroppedAreaLeft/TopPixels (what Google Photos, Facebook,
-// Photo Sphere Viewer, Pannellum and exiftool read). JPEG: in an APP1 segment after the JFIF APP0
-// (XMP spec part 3); PNG: in an iTXt chunk with keyword "XML:com.adobe.xmp" after IHDR.
+// Photo Sphere Viewer, Pannellum and exiftool read). Viewers take FullPanoWidthPixels as 360 deg and
+// FullPanoHeightPixels as 180 deg, both at the image's one pixel pitch, so GPano is true only for
+// square pixels. The rule (photo_sphere_layout()):
+//   - the pixels are square when W / span_w == H / span_h within half a pixel, i.e.
+//     |H - W span_h / span_w| <= 0.5 (vr180: H == W; equirect: H = W/4; equirect-100: H = W 100/360;
+//     equirect-full: H = W/2); then the full sphere is W 360/span_w x round(that / 2) (equirect,
+//     equirect-100: W x round(W/2); vr180: 2W x W; equirect-full: W x H), the image at left
+//     (full width - W)/2 for vr180 (else 0), top 0: FullPanoWidth = 2 FullPanoHeight (within a
+//     pixel for odd W), the crop / full ratios = the grid's angular span / 360 x 180 deg;
+//   - otherwise (e.g. the thesis's default 1920x512 equirect: 5.33 x 5.69 px/deg; the Giga-Eye's
+//     9000x2400 equirect-100: 25 x 24 px/deg) NO GPano is written, since no GPano fits such pixels,
+//     and write_panorama() logs one warning per grid size naming the square-pixel size to use
+//     (1920x480, 9000x2500). omma does not resample to make the metadata fit.
+// Where: JPEG in an APP1 segment after the JFIF APP0 (XMP spec part 3); PNG in an iTXt chunk with
+// keyword "XML:com.adobe.xmp" after IHDR; TIFF and BigTIFF in tag 700 (XMLPacket, TIFF/EP, XMP spec
+// part 3), with the tags TIFF 6.0 requires (XResolution, YResolution 72, ResolutionUnit inch) so
+// that `exiftool -validate` finds nothing to warn about. A BigTIFF is only written when the image
+// does not fit a classic TIFF or the name ends in .btf (exiftool warns about a BigTIFF named .tif).
 //
-// Videos (MP4): Spherical Video V2 (Google's RFC "Spherical Video V2"): `st3d` (mono)
-// and `sv3d` (svhd, proj with prhd = zero pose and `equi` with the projection bounds of the crop,
-// 0.32 fixed point fractions of the full sphere) appended to the first video track's sample entry.
-// FFmpeg/ffprobe report it as "Spherical Mapping" side data (equirectangular, or tiled
-// equirectangular with the bounds for a crop); YouTube and ExoPlayer read V2. (V1's XML uuid box
-// is not written: V2 carries the crop as bounds, and readers that know V1 know V2.)
+// Videos (MP4, MOV, Matroska, WebM): Spherical Video V2 and, in MP4/MOV, V1, with the layout above
+// as projection bounds and crop: spherical_video.h, which writes, replaces and reads them.
 #pragma once
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <string_view>
 
@@ -44,26 +58,38 @@ struct SphericalLayout {
   int left = 0, top = 0;                // the image's offset in it
   int width = 0, height = 0;            // the image (= grid size)
 };
+// The table above, at the image's resolution along each axis (exact as fractions of the sphere:
+// video's projection bounds). Not a photo's GPano when the pixels are not square.
 SphericalLayout spherical_layout(const PanoGrid& grid);
 
-// The XMP packet with the GPano fields of `grid` (UTF-8 text).
+// The GPano layout of `grid` when its pixels are square (the rule above): full width 2:1 with the
+// full height, in the image's pixels; nullopt otherwise, with the reason (sizes, px/deg and the
+// square-pixel size to use) in *why.
+std::optional<SphericalLayout> photo_sphere_layout(const PanoGrid& grid, std::string* why = nullptr);
+
+// The XMP packet with the GPano fields of `grid` (UTF-8 text). Throws std::invalid_argument (the
+// reason of photo_sphere_layout) if the grid's pixels are not square.
 std::string gpano_xmp(const PanoGrid& grid);
+
+// What write_panorama() embeds: gpano_xmp(grid), or "" for a grid with non-square pixels, after
+// logging its reason as one warning (once per projection and size in this process).
+std::string panorama_xmp(const PanoGrid& grid);
 
 // `encoded` (a whole JPEG or PNG file) with the XMP packet inserted; `ext` is the file's extension
 // (".jpg", ".jpeg" or ".png", any case). Throws IoError if the bytes are not that format.
 std::string embed_xmp(std::string_view encoded, const std::string& ext, const std::string& xmp);
 
-// True for the extensions write_panorama() adds XMP to (.jpg, .jpeg, .png).
+// True for the extensions write_panorama() adds XMP to (.jpg, .jpeg, .png, .tif, .tiff).
 bool carries_xmp(const std::filesystem::path& path);
 
-// Writes a panorama of `grid` atomically (io.h): JPEG and PNG with the GPano XMP, any other format
-// as write_image() does. Throws IoError.
+// Writes a panorama of `grid` atomically (io.h): JPEG, PNG and TIFF (OpenCV's encoders, any depth
+// they take) with panorama_xmp(grid) (none for non-square pixels), TIFF also with its resolution
+// tags; any other format as write_image() does. The image must be grid-sized. Throws IoError.
 void write_panorama(const std::filesystem::path& path, const cv::Mat& image, const PanoGrid& grid);
 
-// Adds Spherical Video V2 metadata for `grid` to the MP4 file at `path` (rewritten atomically;
-// the media data is copied unchanged, chunk offsets are moved if the movie box precedes it). A
-// file that already has an sv3d box is left as it is. Throws IoError if `path` is not an MP4 file
-// with a video track.
+// Writes the 360-degree video metadata of `grid` into the video at `path` (rewritten atomically,
+// the frames unchanged), replacing any it had: set_spherical_video_metadata() in spherical_video.h.
+// Throws IoError if `path` is not an MP4/MOV/MKV/WebM file with a video track.
 void add_spherical_video_metadata(const std::filesystem::path& path, const PanoGrid& grid);
 
 }  // namespace omma::io

@@ -1,8 +1,9 @@
-// 360-degree metadata (metadata.h): layouts, XMP in JPEG and PNG, Spherical Video V2 in MP4.
+// 360-degree metadata (metadata.h): layouts, XMP in JPEG, PNG and TIFF, Spherical Video V2 in MP4.
 // exiftool and ffprobe read the same files in tests/cli/metadata_cli_test.cc.
 #include "omma/io/metadata.h"
 
 #include <fstream>
+#include <stdexcept>
 
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
@@ -88,19 +89,78 @@ TEST(SphericalLayout, AgreesWithTheGridsDirections) {
   }
 }
 
-TEST(Xmp, GPanoFields) {
-  const std::string x = gpano_xmp({Projection::kEquirect, 1920, 512});
-  EXPECT_NE(x.find("<GPano:ProjectionType>equirectangular</GPano:ProjectionType>"), std::string::npos);
-  EXPECT_NE(x.find("<GPano:FullPanoHeightPixels>1024</GPano:FullPanoHeightPixels>"), std::string::npos);
-  EXPECT_NE(x.find("<GPano:CroppedAreaImageHeightPixels>512</GPano:CroppedAreaImageHeightPixels>"),
-            std::string::npos);
-  EXPECT_NE(x.find("<GPano:CroppedAreaTopPixels>0</GPano:CroppedAreaTopPixels>"), std::string::npos);
+TEST(PhotoSphereLayout, SquarePixelsGetA2To1FullPanorama) {
+  // equirect 360 x 90 at W x W/4: the full sphere W x W/2, the image its top half.
+  auto l = photo_sphere_layout({Projection::kEquirect, 1920, 480});
+  ASSERT_TRUE(l);
+  EXPECT_EQ(l->full_width, 1920);
+  EXPECT_EQ(l->full_height, 960);
+  EXPECT_EQ(l->height, 480);
+  EXPECT_EQ(l->left, 0);
+  EXPECT_EQ(l->top, 0);
+  // vr180 at W x W: the front half of a 2W x W sphere.
+  l = photo_sphere_layout({Projection::kVr180, 1080, 1080});
+  ASSERT_TRUE(l);
+  EXPECT_EQ(l->full_width, 2160);
+  EXPECT_EQ(l->full_height, 1080);
+  EXPECT_EQ(l->left, 540);
+  l = photo_sphere_layout({Projection::kEquirectFull, 2048, 1024});
+  ASSERT_TRUE(l);
+  EXPECT_EQ(l->full_width, 2048);
+  EXPECT_EQ(l->full_height, 1024);
+  // equirect-100 at W x W 100/360 (9000 x 2500): 100 of 180 degrees.
+  l = photo_sphere_layout({Projection::kEquirect100, 9000, 2500});
+  ASSERT_TRUE(l);
+  EXPECT_EQ(l->full_width, 9000);
+  EXPECT_EQ(l->full_height, 4500);
+  // Within half a pixel: 1000 x 100/360 = 277.8 -> 278 is square, 277 is not.
+  EXPECT_TRUE(photo_sphere_layout({Projection::kEquirect100, 1000, 278}));
+  EXPECT_FALSE(photo_sphere_layout({Projection::kEquirect100, 1000, 277}));
+  // The crop over the full panorama is the grid's angular span over 360 x 180 deg, for every grid.
+  for (const PanoGrid g :
+       {PanoGrid{Projection::kEquirect, 1024, 256}, PanoGrid{Projection::kVr180, 300, 300},
+        PanoGrid{Projection::kEquirectFull, 1000, 500}, PanoGrid{Projection::kEquirect100, 3600, 1000}}) {
+    const auto p = photo_sphere_layout(g);
+    ASSERT_TRUE(p) << to_string(g.projection);
+    const AngularSpan span = angular_span(g.projection);
+    EXPECT_EQ(p->full_width, 2 * p->full_height) << to_string(g.projection);
+    EXPECT_NEAR(double(p->width) / p->full_width, span.width / (2 * kPi), 1e-12);
+    EXPECT_NEAR(double(p->height) / p->full_height, span.height / kPi, 1e-12);
+  }
 }
 
-TEST(Xmp, JpegAndPngStillDecodeToTheSamePixels) {
+TEST(PhotoSphereLayout, NonSquarePixelsGetNoneAndSayWhy) {
+  // The thesis's equirect default: 1920 px for 360 deg but 512 px for 90 deg.
+  std::string why;
+  EXPECT_FALSE(photo_sphere_layout({Projection::kEquirect, 1920, 512}, &why));
+  EXPECT_EQ(why,
+            "1920x512 equirect has non-square pixels (5.33 x 5.69 px/deg); no GPano written; use --size "
+            "1920x480 for a viewer-ready panorama");
+  // The Giga-Eye's 21.6 MP default: 25 x 24 px/deg.
+  EXPECT_FALSE(photo_sphere_layout({Projection::kEquirect100, 9000, 2400}, &why));
+  EXPECT_NE(why.find("(25.00 x 24.00 px/deg)"), std::string::npos) << why;
+  EXPECT_NE(why.find("--size 9000x2500"), std::string::npos) << why;
+  EXPECT_FALSE(photo_sphere_layout({Projection::kVr180, 64, 32}, &why));
+  EXPECT_NE(why.find("--size 64x64"), std::string::npos) << why;
+  EXPECT_THROW(gpano_xmp({Projection::kEquirect, 1920, 512}), std::invalid_argument);
+  EXPECT_EQ(panorama_xmp({Projection::kEquirect, 1920, 512}), "");
+}
+
+TEST(Xmp, GPanoFields) {
+  const std::string x = gpano_xmp({Projection::kEquirect, 1920, 480});
+  EXPECT_NE(x.find("<GPano:ProjectionType>equirectangular</GPano:ProjectionType>"), std::string::npos);
+  EXPECT_NE(x.find("<GPano:FullPanoWidthPixels>1920</GPano:FullPanoWidthPixels>"), std::string::npos);
+  EXPECT_NE(x.find("<GPano:FullPanoHeightPixels>960</GPano:FullPanoHeightPixels>"), std::string::npos);
+  EXPECT_NE(x.find("<GPano:CroppedAreaImageHeightPixels>480</GPano:CroppedAreaImageHeightPixels>"),
+            std::string::npos);
+  EXPECT_NE(x.find("<GPano:CroppedAreaTopPixels>0</GPano:CroppedAreaTopPixels>"), std::string::npos);
+  EXPECT_EQ(panorama_xmp({Projection::kEquirect, 1920, 480}), x);
+}
+
+TEST(Xmp, JpegPngAndTiffStillDecodeToTheSamePixels) {
   const fs::path d = temp_dir("xmp");
-  const cv::Mat img = test_image(64, 32);
-  const PanoGrid grid{Projection::kVr180, 64, 32};
+  const cv::Mat img = test_image(64, 64);
+  const PanoGrid grid{Projection::kVr180, 64, 64};
   for (const std::string ext : {".png", ".jpg", ".JPEG"}) {
     const fs::path plain = d / ("plain" + ext), meta = d / ("meta" + ext);
     write_image(plain, img);
@@ -121,12 +181,37 @@ TEST(Xmp, JpegAndPngStillDecodeToTheSamePixels) {
   EXPECT_EQ(jpg.substr(app1, 2), "\xFF\xE1");
   EXPECT_EQ(jpg.substr(app1 + 4, 29), std::string("http://ns.adobe.com/xap/1.0/\0", 29));
   EXPECT_EQ(read_all(d / "meta.png").substr(37, 4), "iTXt");
+  // TIFF (OpenCV's, 8 and 16 bit): the packet in tag 700, the pixels unchanged.
+  cv::Mat img16;
+  img.convertTo(img16, CV_16UC3, 257);
+  for (const cv::Mat& m : {img, img16}) {
+    write_panorama(d / "meta.tif", m, grid);
+    const std::string bytes = read_all(d / "meta.tif");
+    EXPECT_NE(bytes.find(gpano_xmp(grid)), std::string::npos);
+    EXPECT_EQ(cv::norm(cv::imread((d / "meta.tif").string(), cv::IMREAD_UNCHANGED), m, cv::NORM_INF), 0);
+  }
   // Other formats are written without XMP; XMP into bytes of the wrong format is refused.
   write_panorama(d / "p.bmp", img, grid);
   EXPECT_EQ(cv::norm(cv::imread((d / "p.bmp").string()), img, cv::NORM_INF), 0);
   EXPECT_THROW(embed_xmp("not a jpeg", ".jpg", "x"), IoError);
   EXPECT_THROW(embed_xmp(read_all(d / "meta.jpg"), ".png", "x"), IoError);
   EXPECT_THROW(write_panorama(d / "wrong.png", img, {Projection::kVr180, 10, 10}), IoError);
+  fs::remove_all(d);
+}
+
+TEST(Xmp, NonSquarePixelsAreWrittenWithoutGPano) {
+  const fs::path d = temp_dir("nonsquare");
+  const cv::Mat img = test_image(64, 20);  // equirect: 64 px for 360 deg would be 16 rows for 90
+  const PanoGrid grid{Projection::kEquirect, 64, 20};
+  for (const std::string ext : {".png", ".jpg", ".tif"}) {
+    write_panorama(d / ("p" + ext), img, grid);
+    EXPECT_EQ(read_all(d / ("p" + ext)).find("GPano"), std::string::npos) << ext;
+    const cv::Mat back = cv::imread((d / ("p" + ext)).string());
+    ASSERT_EQ(back.size(), img.size()) << ext;
+    if (ext != ".jpg") {
+      EXPECT_EQ(cv::norm(back, img, cv::NORM_INF), 0) << ext;
+    }
+  }
   fs::remove_all(d);
 }
 

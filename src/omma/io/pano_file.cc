@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include "omma/core/io.h"
+#include "omma/io/metadata.h"
 #include "omma/io/tiff_writer.h"
 
 namespace omma::io {
@@ -20,8 +21,8 @@ double render_to_file(render::PanoRenderer& renderer, const std::filesystem::pat
       t = std::chrono::steady_clock::now();
     };
   };
-  if (ext == ".tif" || ext == ".tiff") {
-    BigTiffWriter w(path, g.width, g.height);
+  if (ext == ".tif" || ext == ".tiff" || ext == ".btf") {
+    BigTiffWriter w(path, g.width, g.height, false, 16, panorama_xmp(g));  // with the 360-degree XMP
     renderer.render(timed([&](int, const cv::Mat& band) { w.write_rows(band); }));
     w.finish();
   } else {
@@ -29,7 +30,7 @@ double render_to_file(render::PanoRenderer& renderer, const std::filesystem::pat
     cv::Mat img(g.height, g.width, CV_8UC3);
     renderer.render(
         timed([&](int row0, const cv::Mat& band) { band.copyTo(img.rowRange(row0, row0 + band.rows)); }));
-    write_image(path, img);
+    write_panorama(path, img, g);  // JPEG/PNG with the 360-degree XMP
   }
   return seconds;
 }
@@ -45,6 +46,16 @@ render::FrameSetTimes render_frame_set(const render::FrameSetReader& recording, 
   t.render = render_to_file(renderer, path);
   t.write = std::chrono::duration<double>(clock::now() - t2).count() - t.render;
   return t;
+}
+
+std::filesystem::path frame_set_path(const std::string& pattern, int64_t set, bool many) {
+  const std::string key = "{set}";
+  const auto at = pattern.find(key);
+  if (at != std::string::npos)
+    return pattern.substr(0, at) + fmt::format("{:05d}", set) + pattern.substr(at + key.size());
+  if (!many) return pattern;
+  std::filesystem::path p = pattern;
+  return p.replace_filename(p.stem().string() + fmt::format("_{:05d}", set) + p.extension().string());
 }
 
 }  // namespace omma::io

@@ -9,11 +9,13 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <ctime>
 #include <limits>
 #include <mutex>
 #include <optional>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <hdf5.h>
 #include <opencv2/imgproc.hpp>
 
@@ -22,6 +24,7 @@
 #include "omma/core/limits.h"
 #include "omma/core/parse.h"
 #include "omma/core/valid.h"
+#include "omma/core/version.h"
 
 namespace omma::io {
 namespace fs = std::filesystem;
@@ -89,6 +92,45 @@ void write_int_attr(hid_t obj, const char* name, int64_t v) {
   Hid a(H5Acreate2(obj, name, H5T_NATIVE_INT64, space, H5P_DEFAULT, H5P_DEFAULT));
   H5Awrite(a, H5T_NATIVE_INT64, &v);
 }
+
+void write_double_attr(hid_t obj, const char* name, double v) {
+  Hid space(H5Screate(H5S_SCALAR));
+  Hid a(H5Acreate2(obj, name, H5T_NATIVE_DOUBLE, space, H5P_DEFAULT, H5P_DEFAULT));
+  H5Awrite(a, H5T_NATIVE_DOUBLE, &v);
+}
+
+// A scalar variable-length UTF-8 string attribute (h5py reads it as str, h5dump prints it).
+void write_string_attr(hid_t obj, const char* name, const std::string& v) {
+  Hid type(H5Tcopy(H5T_C_S1));
+  H5Tset_size(type, H5T_VARIABLE);
+  H5Tset_cset(type, H5T_CSET_UTF8);
+  Hid space(H5Screate(H5S_SCALAR));
+  Hid a(H5Acreate2(obj, name, type, space, H5P_DEFAULT, H5P_DEFAULT));
+  const char* p = v.c_str();
+  H5Awrite(a, type, &p);
+}
+
+template <typename T>
+void write_array_attr(hid_t obj, const char* name, hid_t type, const std::vector<T>& v) {
+  const hsize_t n = v.size();
+  Hid space(H5Screate_simple(1, &n, nullptr));
+  Hid a(H5Acreate2(obj, name, type, space, H5P_DEFAULT, H5P_DEFAULT));
+  H5Awrite(a, type, v.data());
+}
+
+// "2026-12-03T18:26:04.123456789Z" for ns since the Unix epoch (ISO 8601, UTC).
+std::string iso8601_utc(int64_t unix_ns) {
+  const time_t secs = time_t(unix_ns / 1'000'000'000);
+  struct tm tm {};
+  gmtime_r(&secs, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%S", &tm);
+  return fmt::format("{}.{:09d}Z", buf, unix_ns % 1'000'000'000);
+}
+
+constexpr const char* kTimeBase =
+    "steady clock (CLOCK_MONOTONIC) of the recording machine, ns since the recording's start; "
+    "start_unix_ns is the system clock (UTC) at that start";
 
 std::string stream_name(int camera_id) { return fmt::format("cam_{:02d}.h5", camera_id); }
 
@@ -177,16 +219,28 @@ bool RecordingManifest::IsValid(std::string* why) const {
   std::sort(sorted.begin(), sorted.end());
   if (const auto d = std::adjacent_find(sorted.begin(), sorted.end()); d != sorted.end())
     return invalid(why, fmt::format("stream file '{}' is named twice", *d));
+  if (!camera_fps.empty() && camera_fps.size() != rig.cameras.size())
+    return invalid(
+        why, fmt::format("{} camera rates for a rig of {} cameras", camera_fps.size(), rig.cameras.size()));
+  for (const double f : camera_fps)
+    if (f != 0 && !valid_recording_fps(f, why)) return false;
+  if (!(exposure_s >= 0 && exposure_s <= kMaxExposureS))
+    return invalid(why, fmt::format("exposure must be in [0, {:g}] s (0 = not known), got {}", kMaxExposureS,
+                                    exposure_s));
   return true;
 }
 
 json RecordingManifest::to_json() const {
   json streams = json::array();
-  for (size_t c = 0; c < files.size(); ++c)
-    streams.push_back({{"camera", rig.cameras[c].id},
-                       {"file", files[c]},
-                       {"width", rig.cameras[c].in.width},
-                       {"height", rig.cameras[c].in.height}});
+  for (size_t c = 0; c < files.size(); ++c) {
+    json st = {{"camera", rig.cameras[c].id},
+               {"file", files[c]},
+               {"width", rig.cameras[c].in.width},
+               {"height", rig.cameras[c].in.height}};
+    if (c < camera_fps.size()) st["fps"] = camera_fps[c];
+    if (exposure_s > 0) st["exposure_s"] = exposure_s;
+    streams.push_back(st);
+  }
   return {{"format", "omma-recording"},
           {"version", 1},
           {"container", "hdf5"},
@@ -303,6 +357,20 @@ RecordingManifest RecordingManifest::from_json(const json& j) {
             fmt::format("manifest: stream {} is {}x{} but camera {} is {}x{} (mismatched sensor mode)", f, w,
                         h, cam.id, cam.in.width, cam.in.height));
       m.files.push_back(f);
+      // Optional (streams written before them lack them): the camera's own rate, the exposure.
+      if (s.contains("fps")) {
+        const double f_c = manifest_number(s["fps"], where + "fps");
+        if (f_c != 0) check_field(valid_recording_fps(f_c, &why), where + why);
+        m.camera_fps.resize(streams.size(), 0);
+        m.camera_fps[c] = f_c;
+      }
+      if (s.contains("exposure_s")) {
+        const double e = manifest_number(s["exposure_s"], where + "exposure_s");
+        if (!(e > 0 && e <= kMaxExposureS))
+          throw RecordingError(fmt::format("manifest: {}'exposure_s' must be in (0, {:g}] s, got {}", where,
+                                           kMaxExposureS, e));
+        m.exposure_s = e;
+      }
     }
     if (!m.IsValid(&why)) throw RecordingError("manifest: " + why);
     return m;
@@ -401,6 +469,46 @@ bool append_row(hid_t ds, hid_t type, int rank, const hsize_t* elem_dims, int64_
   return H5Dwrite(ds, type, mspace, fspace, H5P_DEFAULT, data) >= 0;
 }
 
+// The self-describing attributes of stream `c` (header comment), written before SWMR starts.
+template <typename Stream>
+void write_stream_description(const Stream& s, int c, const RecordingManifest& m,
+                              const std::string& rig_json) {
+  const RigCamera& cam = m.rig.cameras[c];
+  const hid_t f = s.file;
+  write_string_attr(f, "format", "omma-recording");
+  write_int_attr(f, "version", 1);
+  write_string_attr(f, "creator", "omma " + version());
+  write_int_attr(f, "camera_index", c);
+  write_int_attr(f, "bit_depth_readout", m.bits);
+  write_string_attr(f, "bayer_pattern", "RGGB");
+  write_array_attr<uint8_t>(f, "cfa_pattern", H5T_NATIVE_UINT8, {0, 1, 1, 2});
+  write_array_attr<int64_t>(f, "cfa_repeat_pattern_dim", H5T_NATIVE_INT64, {2, 2});
+  const double rate = c < int(m.camera_fps.size()) ? m.camera_fps[c] : 0;
+  write_double_attr(f, "frame_rate_hz", rate);
+  write_double_attr(f, "frame_time", rate > 0 ? 1 / rate : 0);
+  write_double_attr(f, "frame_set_rate_hz", m.fps);
+  if (m.exposure_s > 0) write_double_attr(f, "count_time", m.exposure_s);
+  write_string_attr(f, "sensor_mode", m.sensor_mode);
+  write_int_attr(f, "sensor_width", cam.in.width);
+  write_int_attr(f, "sensor_height", cam.in.height);
+  write_double_attr(f, "clock_mhz", m.clock_mhz);
+  write_string_attr(f, "time_base", kTimeBase);
+  write_int_attr(f, "start_unix_ns", m.start_unix_ns);
+  write_string_attr(f, "start_time", iso8601_utc(m.start_unix_ns));
+  write_string_attr(f, "rig", rig_json);
+  write_string_attr(s.frames, "units", "counts");
+  write_string_attr(s.frames, "long_name",
+                    fmt::format("raw Bayer mosaic (RGGB), {} significant bits in the low bits", m.bits));
+  write_string_attr(s.frames, "bayer_pattern", "RGGB");
+  write_string_attr(s.seq, "units", "1");
+  write_string_attr(s.seq, "long_name", "the source's frame sequence number (gaps: dropped frames)");
+  write_string_attr(s.t, "units", "ns");
+  write_string_attr(s.t, "long_name", "capture time since the recording's start (-1: frame not written)");
+  write_string_attr(s.t, "start", iso8601_utc(m.start_unix_ns));
+  write_int_attr(s.t, "start_unix_ns", m.start_unix_ns);
+  write_string_attr(s.t, "time_base", kTimeBase);
+}
+
 }  // namespace
 
 RecordingWriter::RecordingWriter(const fs::path& dir, RecordingManifest manifest, Options options)
@@ -426,6 +534,7 @@ RecordingWriter::RecordingWriter(const fs::path& dir, RecordingManifest manifest
   impl_->opt = options;
   impl_->manifest = manifest;
   write_text_atomically(dir / "manifest.json", manifest.to_json().dump(2) + "\n");
+  const std::string rig_json = rig_to_json(manifest.rig).dump();
   for (size_t c = 0; c < manifest.rig.cameras.size(); ++c) {
     const RigCamera& cam = manifest.rig.cameras[c];
     Impl::Stream s;
@@ -448,6 +557,7 @@ RecordingWriter::RecordingWriter(const fs::path& dir, RecordingManifest manifest
     write_int_attr(s.file, "height", s.h);
     write_int_attr(s.file, "bits", manifest.bits);
     write_int_attr(s.file, "camera", cam.id);
+    write_stream_description(s, int(c), manifest, rig_json);
     if (H5Fstart_swmr_write(s.file) < 0)
       throw RecordingError("cannot start SWMR writing of '" + path.string() + "'");
     impl_->streams.push_back(std::move(s));
@@ -525,68 +635,203 @@ MatchResult match_frame_sets(const std::vector<std::vector<FrameMeta>>& metas, i
   MatchResult r;
   const int n = static_cast<int>(metas.size());
   r.cameras.resize(n);
-  struct Item {
-    int64_t t;
-    int cam;
-    int64_t index;
-  };
-  std::vector<Item> all;
+  const int64_t half = period_ns / 2;
+  // Per camera: checks, drop and duplicate counts, the span of its frames.
+  int64_t min_first = INT64_MAX, max_first = INT64_MIN, min_last = INT64_MAX, max_last = INT64_MIN;
   for (int c = 0; c < n; ++c) {
     CameraMatchStats& st = r.cameras[c];
     st.frames = static_cast<int64_t>(metas[c].size());
     for (size_t i = 0; i < metas[c].size(); ++i) {
-      if (i > 0) {
-        const FrameMeta &a = metas[c][i - 1], &b = metas[c][i];
-        if (b.t_ns < a.t_ns)
-          throw RecordingError(fmt::format(
-              "stream {}: timestamps go backwards at frame {} ({} ns after {} ns)", c, i, b.t_ns, a.t_ns));
-        if (b.seq == a.seq)
-          ++st.duplicates;
-        else if (b.seq > a.seq)  // saturating: sequence numbers are the file's, any uint64
-          st.dropped = int64_t(std::min<uint64_t>(
-              uint64_t(st.dropped) + std::min<uint64_t>(b.seq - a.seq - 1, INT64_MAX), INT64_MAX));
-        else
-          throw RecordingError(fmt::format("stream {}: sequence numbers go backwards at frame {}", c, i));
-      }
-      all.push_back({metas[c][i].t_ns, c, static_cast<int64_t>(i)});
+      if (metas[c][i].t_ns < 0)
+        throw RecordingError(
+            fmt::format("stream {}: negative timestamp at frame {} ({} ns)", c, i, metas[c][i].t_ns));
+      if (i == 0) continue;
+      const FrameMeta &a = metas[c][i - 1], &b = metas[c][i];
+      if (b.t_ns < a.t_ns)
+        throw RecordingError(fmt::format("stream {}: timestamps go backwards at frame {} ({} ns after {} ns)",
+                                         c, i, b.t_ns, a.t_ns));
+      if (b.seq == a.seq)
+        ++st.duplicates;
+      else if (b.seq > a.seq)  // saturating: sequence numbers are the file's, any uint64
+        st.dropped = int64_t(std::min<uint64_t>(
+            uint64_t(st.dropped) + std::min<uint64_t>(b.seq - a.seq - 1, INT64_MAX), INT64_MAX));
+      else
+        throw RecordingError(fmt::format("stream {}: sequence numbers go backwards at frame {}", c, i));
     }
+    if (metas[c].empty()) continue;
+    min_first = std::min(min_first, metas[c].front().t_ns);
+    max_first = std::max(max_first, metas[c].front().t_ns);
+    min_last = std::min(min_last, metas[c].back().t_ns);
+    max_last = std::max(max_last, metas[c].back().t_ns);
   }
-  std::stable_sort(all.begin(), all.end(), [](const Item& a, const Item& b) { return a.t < b.t; });
-  const int64_t half = period_ns / 2;
-  FrameSet cur;
-  bool open = false;
-  auto close_set = [&] {
-    if (!open) return;
-    bool complete = true;
-    for (int c = 0; c < n; ++c)
-      if (cur.frame[c] < 0) {
-        ++r.cameras[c].missing;
+  if (min_first == INT64_MAX) return r;  // no frame at all
+  // The clock's first and last instants (header comment); all times >= 0, so no difference overflows.
+  const int64_t t0 = max_first - min_first <= period_ns ? std::max(min_first, max_first - half) : min_first;
+  const int64_t end = (max_last - min_last <= period_ns ? min_last : max_last) - t0;  // + half, relative
+  std::vector<size_t> next(n, 0);  // per camera: its first frame not yet in a set nor passed
+  std::vector<int64_t> used(n, 0);
+  for (int64_t k = 0;; ++k) {
+    if (k > (INT64_MAX - half) / period_ns) break;
+    int64_t at = k * period_ns;  // T_k - t0
+    if (at - half > end) break;  // (no overflow: 0 <= at, half)
+    // An instant with no frame near: jump to the first instant within half a period of the next frame.
+    int64_t soonest = INT64_MAX;
+    for (int c = 0; c < n; ++c) {
+      while (next[c] < metas[c].size() && metas[c][next[c]].t_ns - t0 < at - half) ++next[c];
+      if (next[c] < metas[c].size()) soonest = std::min(soonest, metas[c][next[c]].t_ns - t0);
+    }
+    if (soonest == INT64_MAX) break;
+    if (soonest > at + half) {
+      const int64_t lead = soonest - half;  // the first k with T_k >= t - half (no overflow)
+      const int64_t jump = lead / period_ns + (lead % period_ns != 0);
+      if (jump <= k) continue;  // cannot happen (soonest > at + half); keeps the loop finite
+      k = jump - 1;
+      continue;
+    }
+    FrameSet set{t0 + at, std::vector<int64_t>(n, -1)};
+    bool any = false, complete = true;
+    for (int c = 0; c < n; ++c) {
+      int64_t best = -1, best_d = INT64_MAX;
+      for (size_t i = next[c]; i < metas[c].size() && metas[c][i].t_ns - t0 <= at + half; ++i) {
+        if (i > 0 && metas[c][i].seq == metas[c][i - 1].seq) continue;  // a duplicate: never in a set
+        const int64_t d = std::abs(metas[c][i].t_ns - t0 - at);
+        if (d < best_d) best = int64_t(i), best_d = d;
+      }
+      if (best >= 0) {
+        set.frame[c] = best;
+        next[c] = size_t(best) + 1;  // earlier frames in the window are left out
+        ++used[c];
+        any = true;
+      } else {
         complete = false;
       }
+    }
+    if (!any) continue;
+    for (int c = 0; c < n; ++c)
+      if (set.frame[c] < 0) ++r.cameras[c].missing;
     r.complete_sets += complete;
     if (int64_t(r.sets.size() + 1) > kMaxFrameSetEntries / std::max(n, 1))
       throw RecordingError(fmt::format("more than {} frame sets of {} cameras (at most {} frame indices)",
                                        r.sets.size(), n, kMaxFrameSetEntries));
-    r.sets.push_back(cur);
-    open = false;
-  };
-  for (const Item& it : all) {
-    if (open && (it.t - cur.t_ns > half || cur.frame[it.cam] >= 0)) {
-      if (it.t - cur.t_ns <= half && cur.frame[it.cam] >= 0 &&
-          metas[it.cam][it.index].seq == metas[it.cam][cur.frame[it.cam]].seq) {
-        ++r.cameras[it.cam].extra;  // the same frame again within the set: left out
-        continue;
-      }
-      close_set();
-    }
-    if (!open) {
-      cur = FrameSet{it.t, std::vector<int64_t>(n, -1)};
-      open = true;
-    }
-    cur.frame[it.cam] = it.index;
+    r.sets.push_back(std::move(set));
   }
-  close_set();
+  for (int c = 0; c < n; ++c) r.cameras[c].extra = r.cameras[c].frames - used[c];
   return r;
+}
+
+IncompletePolicy parse_incomplete_policy(const std::string& s) {
+  if (s == "skip") return IncompletePolicy::kSkip;
+  if (s == "hold") return IncompletePolicy::kHold;
+  if (s == "fail") return IncompletePolicy::kFail;
+  throw std::invalid_argument("--incomplete must be skip, hold or fail, got '" + s + "'");
+}
+
+const char* incomplete_policy_name(IncompletePolicy p) {
+  switch (p) {
+    case IncompletePolicy::kSkip:
+      return "skip";
+    case IncompletePolicy::kHold:
+      return "hold";
+    case IncompletePolicy::kFail:
+      return "fail";
+  }
+  return "?";
+}
+
+bool FrameSetPlanOptions::IsValid(std::string* why) const {
+  if (max_hold_age_ns < 0) return invalid(why, "the hold age limit must be >= 0");
+  return true;
+}
+
+json FrameSetPlan::to_json() const {
+  return {{"policy", incomplete_policy_name(policy)},
+          {"max_hold_age_s", policy == IncompletePolicy::kHold ? json(max_hold_age_ns / 1e9) : json(nullptr)},
+          {"frame_sets", considered},
+          {"complete", complete},
+          {"incomplete", incomplete},
+          {"held_sets", held_sets},
+          {"held_frames", held_frames},
+          {"max_held_age_s", max_held_age_ns / 1e9},
+          {"skipped", skipped},
+          {"skipped_sets", skipped_sets},
+          {"rendered", int64_t(sets.size())},
+          {"holes", 0}};
+}
+
+FrameSetPlan plan_frame_sets(const MatchResult& match, const std::vector<std::vector<FrameMeta>>& metas,
+                             int64_t first, int64_t last, int64_t period_ns, const FrameSetPlanOptions& o,
+                             const std::vector<int>& ids) {
+  if (std::string why; !o.IsValid(&why)) throw std::invalid_argument(why);
+  if (period_ns <= 0) throw std::invalid_argument("the frame period must be positive");
+  const int64_t count = int64_t(match.sets.size());
+  if (first < 0 || last >= count || (last < first && count > 0))
+    throw std::invalid_argument(fmt::format("frame sets {}..{} outside 0..{}", first, last, count - 1));
+  FrameSetPlan p;
+  p.policy = o.policy;
+  if (o.policy == IncompletePolicy::kHold)
+    p.max_hold_age_ns =
+        o.max_hold_age_ns > 0 ? o.max_hold_age_ns : (period_ns > INT64_MAX / 2 ? INT64_MAX : 2 * period_ns);
+  auto id = [&](size_t c) { return c < ids.size() ? ids[c] : int(c); };
+  for (int64_t s = first; s <= last && s < count; ++s) {
+    const FrameSet& fs = match.sets[s];
+    ++p.considered;
+    std::vector<size_t> lacking;
+    for (size_t c = 0; c < fs.frame.size(); ++c)
+      if (fs.frame[c] < 0) lacking.push_back(c);
+    PlannedSet ps{s, fs.frame, std::vector<int64_t>(fs.frame.size(), 0)};
+    if (lacking.empty()) {
+      ++p.complete;
+      p.sets.push_back(std::move(ps));
+      continue;
+    }
+    ++p.incomplete;
+    if (o.policy == IncompletePolicy::kFail) {
+      int64_t total = 0;
+      for (int64_t k = first; k <= last && k < count; ++k)
+        for (const int64_t f : match.sets[k].frame)
+          if (f < 0) {
+            ++total;
+            break;
+          }
+      std::vector<int> lacking_ids;
+      for (const size_t c : lacking) lacking_ids.push_back(id(c));
+      throw RecordingError(fmt::format(
+          "frame set {} lacks camera(s) {}; {} of {} frame sets are incomplete (--incomplete skip leaves "
+          "them out, --incomplete hold fills them with the cameras' last frames)",
+          s, fmt::join(lacking_ids, ", "), total, std::min(last, count - 1) - first + 1));
+    }
+    bool filled = o.policy == IncompletePolicy::kHold;
+    int64_t held = 0, oldest = 0;
+    for (size_t c = 0; c < lacking.size() && filled; ++c) {
+      const auto& m = metas[lacking[c]];
+      // The camera's last frame captured at or before the set's instant.
+      const auto it = std::upper_bound(m.begin(), m.end(), fs.t_ns,
+                                       [](int64_t t, const FrameMeta& f) { return t < f.t_ns; });
+      if (it == m.begin()) {
+        filled = false;
+        break;
+      }
+      const int64_t age = fs.t_ns - std::prev(it)->t_ns;
+      if (age > p.max_hold_age_ns) {
+        filled = false;
+        break;
+      }
+      ps.frame[lacking[c]] = int64_t(std::prev(it) - m.begin());
+      ps.held_age_ns[lacking[c]] = age;
+      ++held;
+      oldest = std::max(oldest, age);
+    }
+    if (filled) {
+      ++p.held_sets;
+      p.held_frames += held;
+      p.max_held_age_ns = std::max(p.max_held_age_ns, oldest);
+      p.sets.push_back(std::move(ps));
+    } else {
+      ++p.skipped;
+      if (p.skipped_sets.size() < 1000) p.skipped_sets.push_back(s);
+    }
+  }
+  return p;
 }
 
 // ---- reader --------------------------------------------------------------------------------
@@ -782,7 +1027,7 @@ RecordingReader::RecordingReader(const fs::path& dir) : impl_(std::make_unique<I
     impl_->streams.push_back(std::move(s));
   }
   try {
-    match_ = match_frame_sets(metas_, static_cast<int64_t>(1e9 / manifest_.fps));
+    match_ = match_frame_sets(metas_, period_ns());
   } catch (const RecordingError& e) {
     throw RecordingError(fmt::format("recording '{}': {}", dir.string(), e.what()));
   }
@@ -821,6 +1066,36 @@ cv::Mat RecordingReader::read(int cam, int64_t i) const {
                     "(damaged stream or wrong bit depth)",
                     s.where, i, mx, manifest_.bits));
   return out;
+}
+
+std::vector<cv::Mat> RecordingReader::read_frames(const std::vector<int64_t>& frame) const {
+  if (int(frame.size()) != cameras())
+    throw RecordingError(fmt::format("{} frame indices for {} cameras", frame.size(), cameras()));
+  std::vector<cv::Mat> out(cameras());
+  for (int c = 0; c < cameras(); ++c)
+    if (frame[c] >= 0) out[c] = read(c, frame[c]);
+  return out;
+}
+
+int64_t RecordingReader::period_ns() const { return std::max<int64_t>(1, int64_t(1e9 / manifest_.fps)); }
+
+FrameSetPlan RecordingReader::plan(int64_t first, int64_t last, const FrameSetPlanOptions& options) const {
+  std::vector<int> ids;
+  for (const RigCamera& c : manifest_.rig.cameras) ids.push_back(c.id);
+  return plan_frame_sets(match_, metas_, first, last, period_ns(), options, ids);
+}
+
+std::string rig_mismatch(const Rig& rig, const Rig& recorded) {
+  if (rig.cameras.size() != recorded.cameras.size())
+    return fmt::format("has {} cameras, the recording {}", rig.cameras.size(), recorded.cameras.size());
+  for (size_t c = 0; c < rig.cameras.size(); ++c) {
+    const Intrinsics& a = rig.cameras[c].in;
+    const Intrinsics& b = recorded.cameras[c].in;
+    if (a.width != b.width || a.height != b.height)
+      return fmt::format("camera {} is {}x{}, the recording's {}x{} (another sensor mode)", rig.cameras[c].id,
+                         a.width, a.height, b.width, b.height);
+  }
+  return "";
 }
 
 std::vector<cv::Mat> RecordingReader::read_frame_set(int64_t i) const {

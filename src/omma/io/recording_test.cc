@@ -3,6 +3,7 @@
 
 #include <sys/stat.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 
@@ -103,6 +104,183 @@ TEST(Recording, MatchesFrameSetsWithinHalfAPeriodAndCountsDropsAndDuplicates) {
   } catch (const RecordingError& e) {
     EXPECT_NE(std::string(e.what()).find("stream 1: timestamps go backwards"), std::string::npos);
   }
+}
+
+// Free-running cameras as the thesis's (44-56 fps, each its own phase, 0.5 ms jitter), `seconds` long.
+std::vector<std::vector<FrameMeta>> free_running(int cameras, double seconds, uint64_t seed) {
+  cv::RNG rng(seed);
+  std::vector<std::vector<FrameMeta>> metas(cameras);
+  for (int c = 0; c < cameras; ++c) {
+    const double fps = c == 0 ? 44 : rng.uniform(44.0, 56.0), phase = rng.uniform(0.0, 1 / fps);
+    for (uint64_t k = 0;; ++k) {
+      const double t = phase + k / fps + std::clamp(rng.gaussian(0.5e-3), -0.25 / fps, 0.25 / fps);
+      if (t > seconds) break;
+      metas[c].push_back({k, int64_t(t * 1e9)});
+    }
+  }
+  return metas;
+}
+
+TEST(Recording, FreeRunningCamerasOfDifferentRatesGiveCompleteSets) {
+  // 24 cameras at 44-56 fps for 3 s. Sets gathered from each set's first frame within half a period
+  // (the matcher before the frame-set clock) gave 13 complete sets of 171 for such a recording
+  // (`omma record --source sim:colon --duration 3`, 30 fps); on the clock every set is complete, at
+  // the derived rate (0.9 x 44 fps) and at 30 fps alike.
+  const auto metas = free_running(24, 3, 7);
+  for (const double fps : {0.9 * 44, 30.0}) {
+    const int64_t period = int64_t(1e9 / fps);
+    const MatchResult r = match_frame_sets(metas, period);
+    EXPECT_GE(int64_t(r.sets.size()), int64_t(3 * fps) - 2) << fps;
+    EXPECT_EQ(r.complete_sets, int64_t(r.sets.size())) << fps;
+    for (size_t k = 0; k < r.sets.size(); ++k) {
+      if (k > 0) {
+        EXPECT_EQ(r.sets[k].t_ns - r.sets[k - 1].t_ns, period);  // one tick apart (no gap)
+      }
+      for (int c = 0; c < 24; ++c) {
+        const int64_t f = r.sets[k].frame[c];
+        ASSERT_GE(f, 0);
+        EXPECT_LE(std::abs(metas[c][size_t(f)].t_ns - r.sets[k].t_ns), period / 2);
+        if (k > 0) {
+          EXPECT_GT(f, r.sets[k - 1].frame[c]);  // never the same frame twice
+        }
+      }
+    }
+    // Every frame is in a set or counted as left out.
+    for (int c = 0; c < 24; ++c)
+      EXPECT_EQ(r.cameras[c].frames - r.cameras[c].extra, int64_t(r.sets.size())) << c;
+  }
+}
+
+TEST(Recording, ACameraThatStartsLateOrStopsEarlyIsMissingHonestly) {
+  const int64_t period = 25'000'000;
+  auto at = [](double first_ms, int n, double step_ms) {
+    std::vector<FrameMeta> v;
+    for (int k = 0; k < n; ++k) v.push_back({uint64_t(k), int64_t((first_ms + k * step_ms) * 1e6)});
+    return v;
+  };
+  // Camera 1 starts 100 ms late (4 sets without it); camera 2 stops after 200 ms.
+  const auto r = match_frame_sets({at(0, 40, 20), at(100, 35, 20), at(5, 10, 20)}, period);
+  EXPECT_EQ(r.sets.front().t_ns, 0);
+  EXPECT_EQ(r.cameras[1].missing, 4);
+  EXPECT_GT(r.cameras[2].missing, 20);
+  EXPECT_EQ(r.complete_sets, int64_t(r.sets.size()) - 4 - r.cameras[2].missing);
+  // The frame sets plan: skip, hold (with an age limit), fail.
+  const std::vector<std::vector<FrameMeta>> metas = {at(0, 40, 20), at(100, 35, 20), at(5, 10, 20)};
+  const int64_t last = int64_t(r.sets.size()) - 1;
+  FrameSetPlanOptions o;
+  o.policy = IncompletePolicy::kSkip;
+  const FrameSetPlan skip = plan_frame_sets(r, metas, 0, last, period, o);
+  EXPECT_EQ(skip.considered, int64_t(r.sets.size()));
+  EXPECT_EQ(skip.incomplete, skip.considered - r.complete_sets);
+  EXPECT_EQ(skip.skipped, skip.incomplete);
+  EXPECT_EQ(int64_t(skip.sets.size()), r.complete_sets);
+  o.policy = IncompletePolicy::kHold;
+  o.max_hold_age_ns = 60'000'000;  // camera 2's last frame (185 ms) is held until 245 ms: 2 more sets
+  const FrameSetPlan hold = plan_frame_sets(r, metas, 0, last, period, o);
+  EXPECT_EQ(hold.held_sets, 2);
+  EXPECT_EQ(hold.held_frames, 2);
+  EXPECT_LE(hold.max_held_age_ns, 60'000'000);
+  EXPECT_EQ(hold.skipped, hold.incomplete - 2);  // camera 1 has nothing to hold before it starts
+  EXPECT_EQ(hold.skipped_sets.front(), 0);
+  for (const PlannedSet& ps : hold.sets)
+    for (int c = 0; c < 3; ++c) {
+      ASSERT_GE(ps.frame[c], 0);
+      EXPECT_LE(metas[c][size_t(ps.frame[c])].t_ns, r.sets[ps.set].t_ns + period / 2);
+    }
+  o.max_hold_age_ns = 0;  // two periods
+  EXPECT_EQ(plan_frame_sets(r, metas, 0, last, period, o).max_hold_age_ns, 2 * period);
+  o.policy = IncompletePolicy::kFail;
+  try {
+    plan_frame_sets(r, metas, 0, last, period, o, {7, 8, 9});
+    ADD_FAILURE();
+  } catch (const RecordingError& e) {
+    EXPECT_NE(std::string(e.what()).find("frame set 0 lacks camera(s) 8;"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(plan_frame_sets(r, metas, 4, 4, period, o).sets.size(), 1u);  // a complete range passes
+  EXPECT_EQ(parse_incomplete_policy("hold"), IncompletePolicy::kHold);
+  EXPECT_THROW(parse_incomplete_policy("zero"), std::invalid_argument);
+  o.max_hold_age_ns = -1;
+  EXPECT_FALSE(o.IsValid());
+}
+
+// A string attribute of `obj` ("" if missing).
+std::string string_attr(hid_t obj, const char* name) {
+  if (H5Aexists(obj, name) <= 0) return "";
+  const hid_t a = H5Aopen(obj, name, H5P_DEFAULT), type = H5Aget_type(a);
+  std::string out;
+  if (H5Tis_variable_str(type) > 0) {
+    char* p = nullptr;
+    H5Aread(a, type, &p);
+    out = p ? p : "";
+    H5free_memory(p);
+  }
+  H5Tclose(type);
+  H5Aclose(a);
+  return out;
+}
+
+TEST(Recording, StreamsDescribeThemselvesAndOldStreamsStillRead) {
+  const fs::path dir = fresh_dir("describe");
+  const Rig rig = small_rig(2);
+  RecordingManifest m;
+  m.rig = rig;
+  m.fps = 40;
+  m.camera_fps = {47, 0};
+  m.exposure_s = 0.004;
+  m.sensor_mode = "skip5";
+  {
+    RecordingWriter w(dir, m);
+    for (int k = 0; k < 2; ++k)
+      for (int c = 0; c < 2; ++c) w.append(c, raw_frame(rig, c, k), k, k * 25'000'000LL);
+    w.close();
+  }
+  {
+    const hid_t f = H5Fopen((dir / "cam_01.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+    ASSERT_GE(f, 0);
+    const hid_t t = H5Dopen2(f, "t_ns", H5P_DEFAULT);
+    EXPECT_EQ(string_attr(t, "units"), "ns");
+    EXPECT_EQ(string_attr(t, "start").size(), 30u);  // 2026-12-03T18:26:04.123456789Z
+    EXPECT_EQ(string_attr(f, "bayer_pattern"), "RGGB");
+    EXPECT_EQ(string_attr(f, "sensor_mode"), "skip5");
+    EXPECT_EQ(rig_from_json(nlohmann::json::parse(string_attr(f, "rig"))).cameras.size(), 2u);
+    H5Dclose(t);
+    H5Fclose(f);
+  }
+  RecordingReader r(dir);
+  EXPECT_EQ(r.manifest().camera_fps, (std::vector<double>{47, 0}));
+  EXPECT_DOUBLE_EQ(r.manifest().exposure_s, 0.004);
+  // A stream of the first version (camera, width, height, bits only) and a manifest without the
+  // per-camera rates: read as before.
+  for (const char* s : {"cam_00.h5", "cam_01.h5"}) {
+    const hid_t f = H5Fopen((dir / s).c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+    std::vector<std::string> names;
+    H5Aiterate2(
+        f, H5_INDEX_NAME, H5_ITER_INC, nullptr,
+        [](hid_t, const char* name, const H5A_info_t*, void* out) -> herr_t {
+          static_cast<std::vector<std::string>*>(out)->push_back(name);
+          return 0;
+        },
+        &names);
+    for (const std::string& n : names)
+      if (n != "camera" && n != "width" && n != "height" && n != "bits") {
+        EXPECT_GE(H5Adelete(f, n.c_str()), 0);
+      }
+    for (const char* d : {"frames", "seq", "t_ns"}) {
+      const hid_t ds = H5Dopen2(f, d, H5P_DEFAULT);
+      for (const char* a : {"units", "long_name", "bayer_pattern", "start", "start_unix_ns", "time_base"})
+        if (H5Aexists(ds, a) > 0) H5Adelete(ds, a);
+      H5Dclose(ds);
+    }
+    H5Fclose(f);
+  }
+  auto j = nlohmann::json::parse(std::ifstream(dir / "manifest.json"));
+  for (auto& st : j["streams"]) st.erase("fps"), st.erase("exposure_s");
+  std::ofstream(dir / "manifest.json") << j.dump();
+  RecordingReader old(dir);
+  EXPECT_TRUE(old.manifest().camera_fps.empty());
+  EXPECT_EQ(old.frame_sets(), 2);
+  EXPECT_EQ(old.read(1, 1).at<uint16_t>(0, 0), 101);  // the mark of camera 1's frame 1
+  fs::remove_all(dir);
 }
 
 TEST(Recording, BadRecordingsGiveClearErrors) {
@@ -451,6 +629,17 @@ TEST(RecordingHostile, MatchingSaturatesDropsAndBoundsItsSets) {
   // Sequence numbers from 0 to 2^64 - 1 (twice) used to overflow the dropped count.
   const auto r = match_frame_sets({{{0, 0}, {UINT64_MAX / 2, 10}, {UINT64_MAX, 20}}}, 1000);
   EXPECT_EQ(r.cameras[0].dropped, INT64_MAX);
+  // Timestamps 2^62 ns apart on the shortest and longest periods: two sets at once; at the end of
+  // the clock's range (2^63 - 1 ns) no overflow (the last instants are not representable: one set).
+  for (const int64_t period : {int64_t(100'000), int64_t(1'000'000'000'000)}) {
+    const int64_t t = int64_t(1) << 62;
+    const auto far = match_frame_sets({{{0, 0}, {1, t}}, {{0, 1}, {1, t + 1}}}, period);
+    EXPECT_EQ(far.sets.size(), 2u) << period;
+    EXPECT_EQ(far.complete_sets, 2) << period;
+    const auto end = match_frame_sets({{{0, 0}, {1, INT64_MAX}}, {{0, 1}, {1, INT64_MAX - 1}}}, period);
+    EXPECT_GE(end.sets.size(), 1u) << period;
+  }
+  EXPECT_THROW(match_frame_sets({{{0, -5}}}, 1000), RecordingError);
 }
 
 }  // namespace

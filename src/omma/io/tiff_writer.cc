@@ -41,7 +41,37 @@ void remove_dead_temporaries(const std::filesystem::path& path) {
   }
 }
 
+// The resolution TIFF 6.0 requires (a panorama has no physical size: the customary 72 per inch).
+void set_resolution(TIFF* t) {
+  TIFFSetField(t, TIFFTAG_XRESOLUTION, 72.0f);
+  TIFFSetField(t, TIFFTAG_YRESOLUTION, 72.0f);
+  TIFFSetField(t, TIFFTAG_RESOLUTIONUNIT, RESUNIT_INCH);
+}
+
 }  // namespace
+
+bool needs_bigtiff(const std::filesystem::path& path, int width, int height) {
+  if (lower_extension(path) == ".btf") return true;
+  // The pixels (deflate may grow them by a fraction of a percent), the strip tables (16 bytes a row
+  // at most) and the directory, XMP included, within classic TIFF's 32-bit offsets with a margin.
+  const double bytes = double(width) * height * 3 * 1.01 + 16.0 * height + (1 << 20);
+  return bytes > double(uint64_t(1) << 32) - double(64 << 20);
+}
+
+void add_tiff_metadata(const std::filesystem::path& path, const std::string& xmp) {
+  TIFFSetWarningHandler(nullptr);
+  TIFF* t = TIFFOpen(path.c_str(), "r+");
+  if (!t) throw IoError("cannot open TIFF '" + path.string() + "' to add its metadata");
+  if (!xmp.empty()) TIFFSetField(t, TIFFTAG_XMLPACKET, uint32_t(xmp.size()), xmp.data());
+  float res = 0;
+  uint16_t unit = 0;
+  if (!TIFFGetField(t, TIFFTAG_XRESOLUTION, &res) || !TIFFGetField(t, TIFFTAG_YRESOLUTION, &res) ||
+      !TIFFGetField(t, TIFFTAG_RESOLUTIONUNIT, &unit))
+    set_resolution(t);
+  const bool ok = TIFFRewriteDirectory(t) == 1;
+  TIFFClose(t);
+  if (!ok) throw IoError("cannot add metadata to TIFF '" + path.string() + "' (disk full?)");
+}
 
 struct BigTiffWriter::Impl {
   std::filesystem::path final_path, tmp_path;
@@ -50,15 +80,16 @@ struct BigTiffWriter::Impl {
 };
 
 BigTiffWriter::BigTiffWriter(const std::filesystem::path& path, int width, int height, bool deflate,
-                             int rows_per_strip)
+                             int rows_per_strip, const std::string& xmp)
     : impl_(std::make_unique<Impl>()), width_(width), height_(height) {
   if (width < 1 || height < 1) throw IoError(fmt::format("TIFF size {}x{} must be positive", width, height));
+  big_ = needs_bigtiff(path, width, height);
   impl_->final_path = path;
   remove_dead_temporaries(path);
   impl_->tmp_path = path;
   impl_->tmp_path += fmt::format(".tmp{}", ::getpid());
   TIFFSetWarningHandler(nullptr);
-  impl_->tif = TIFFOpen(impl_->tmp_path.c_str(), "w8");  // "8": BigTIFF
+  impl_->tif = TIFFOpen(impl_->tmp_path.c_str(), big_ ? "w8" : "w");  // "8": BigTIFF
   if (!impl_->tif) throw IoError("cannot create '" + impl_->tmp_path.string() + "'");
   TIFF* t = impl_->tif;
   TIFFSetField(t, TIFFTAG_IMAGEWIDTH, uint32_t(width));
@@ -72,6 +103,8 @@ BigTiffWriter::BigTiffWriter(const std::filesystem::path& path, int width, int h
   TIFFSetField(t, TIFFTAG_COMPRESSION, deflate ? COMPRESSION_ADOBE_DEFLATE : COMPRESSION_NONE);
   if (deflate) TIFFSetField(t, TIFFTAG_PREDICTOR, PREDICTOR_HORIZONTAL);
   TIFFSetField(t, TIFFTAG_SOFTWARE, "omma render");
+  set_resolution(t);
+  if (!xmp.empty()) TIFFSetField(t, TIFFTAG_XMLPACKET, uint32_t(xmp.size()), xmp.data());
   impl_->row.resize(size_t(width) * 3);
 }
 

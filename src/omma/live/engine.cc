@@ -109,6 +109,7 @@ nlohmann::json EngineSummary::to_json() const {
        {{"seconds", window.seconds},
         {"fps", window.fps},
         {"latency_ms", window.latency_ms},
+        {"render_ms", window.render_ms},
         {"camera_fps_min", window.camera_fps_min},
         {"camera_fps_max", window.camera_fps_max}}},
       {"dropped_cameras", dropped},
@@ -477,7 +478,9 @@ class RenderLoop {
       render::render(*map_, *store_, pano_, {.threads = opt_.threads});
     }
     const auto done = Clock::now();
-    render_ms_sum_ += ms_between(r0, done);
+    const double render_ms = ms_between(r0, done);
+    render_ms_sum_ += render_ms;
+    window_render_ms_sum_ += render_ms;
     info_.index = stats_.frames;
     info_.rendered = done;
     info_.captured.assign(n_, Clock::time_point{});
@@ -526,12 +529,15 @@ class RenderLoop {
     stats_.seconds = std::chrono::duration<double>(Clock::now() - t0_).count();
     stats_.fps = stats_.frames / stats_.seconds;
     stats_.latency_ms = latency_sum_ / stats_.frames;
+    stats_.render_ms_mean = render_ms_sum_ / stats_.frames;  // so far (the summary's is the run's)
+    stats_.depth_ms_mean = depth_ms_sum_ / stats_.frames;
     stats_.camera_frames = 0;
     for (size_t c = 0; c < n_; ++c) stats_.camera_frames += used_seq_[c];
     camera_rates(seq_first_, t_first_, &stats_.camera_fps_min, &stats_.camera_fps_max);
     stats_.window.seconds = window_s;
     stats_.window.fps = window_frames_ / window_s;
     stats_.window.latency_ms = window_latency_sum_ / window_frames_;
+    stats_.window.render_ms = window_render_ms_sum_ / window_frames_;
     camera_rates(seq_window_, t_window_, &stats_.window.camera_fps_min, &stats_.window.camera_fps_max);
     stats_.cameras_live = int(std::count(live_.begin(), live_.end(), true));
     seq_window_ = used_seq_;
@@ -539,6 +545,7 @@ class RenderLoop {
     window_start_ = Clock::now();
     window_frames_ = 0;
     window_latency_sum_ = 0;
+    window_render_ms_sum_ = 0;
     const nlohmann::json j = stats_.to_json();
     for (auto& s : sinks_) s->set_stats(j);
     if (opt_.on_progress) opt_.on_progress(j);
@@ -600,7 +607,8 @@ class RenderLoop {
   std::vector<bool> pending_active_;
   cv::Mat pano_;
   PanoramaInfo info_;
-  double render_ms_sum_ = 0, depth_ms_sum_ = 0, latency_sum_ = 0, window_latency_sum_ = 0;
+  double render_ms_sum_ = 0, depth_ms_sum_ = 0, latency_sum_ = 0, window_latency_sum_ = 0,
+         window_render_ms_sum_ = 0;
   long window_frames_ = 0;
   Clock::time_point t0_, window_start_, next_frame_;
 };

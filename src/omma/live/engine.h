@@ -49,6 +49,7 @@ struct WindowStats {
   double seconds = 0;
   double fps = 0;             // panoramas/s
   double latency_ms = 0;      // mean frame age of its panoramas
+  double render_ms = 0;       // mean render time of its panoramas (as EngineSummary::render_ms_mean)
   double camera_fps_min = 0;  // frames delivered per second by the slowest live camera
   double camera_fps_max = 0;
 };
@@ -71,7 +72,9 @@ struct EngineOptions {
   // frame as it arrives, in its camera's thread (per-camera tables, isp/photometric.h), so that the
   // frame store holds corrected frames and the render loop does no extra work.
   bool photometric = true;
-  // Called about twice a second from the render loop with the running statistics (to_json()).
+  // Called about twice a second from the render loop with the running statistics (to_json()): every
+  // figure so far (render_ms_mean, depth estimate_ms_mean, latency_ms, fps ...) and `window`, the
+  // last interval. The same JSON goes to every sink's set_stats (the live view's /stats.json).
   std::function<void(const nlohmann::json&)> on_progress;
   // Called after every render (before the sinks), from the render loop (tests, measurements).
   std::function<void(const cv::Mat& panorama, const PanoramaInfo&)> on_panorama;
@@ -90,7 +93,8 @@ struct EngineSummary {
   long frames = 0;     // panoramas rendered
   double seconds = 0;  // wall time of the render loop
   double fps = 0;
-  double render_ms_mean = 0;       // render time per panorama
+  double render_ms_mean = 0;       // render time per panorama, ms (running: so far, in the progress
+                                   //   statistics; the sinks' set_stats and on_progress see it live)
   double latency_ms = 0;           // mean frame age (see above), mean over the panoramas
   double latency_ms_max = 0;       // the largest mean frame age of one panorama
   double oldest_frame_ms_max = 0;  // the oldest frame used in any panorama

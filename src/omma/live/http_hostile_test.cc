@@ -16,6 +16,9 @@
 #include <chrono>
 #include <cstdio>
 #include <fstream>
+#include <memory>
+#include <set>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -26,8 +29,11 @@
 #include <httplib.h>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <spdlog/sinks/ostream_sink.h>
+#include <spdlog/spdlog.h>
 
 #include "omma/live/sinks.h"
+#include "omma/testing/net.h"
 #include "omma/testing/synthetic.h"
 
 namespace omma::live {
@@ -47,25 +53,10 @@ long rss_kb() {
   return -1;
 }
 
-// A port that was free a moment ago.
-int free_port() {
-  const int s = ::socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  socklen_t len = sizeof a;
-  int port = 0;
-  if (::bind(s, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0 &&
-      ::getsockname(s, reinterpret_cast<sockaddr*>(&a), &len) == 0)
-    port = ntohs(a.sin_port);
-  ::close(s);
-  return port;
-}
-
 // The live view on a free loopback port (*port), or null after five ports that were taken meanwhile.
 std::unique_ptr<Sink> open_http_sink(const Rig& rig, cv::Size size, const SinkOptions& opt, int* port) {
   for (int attempt = 0; attempt < 5; ++attempt) {
-    *port = free_port();
+    *port = testing::free_port();
     try {
       return open_sink("http:" + std::to_string(*port), rig, size, opt);
     } catch (const SinkError&) {
@@ -441,6 +432,105 @@ TEST(HttpHostile, PastTheConnectionCapNewConnectionsGet503UntilTheIdleOnesAreDro
   EXPECT_LT(answered_s, 3.0);
   for (int fd : idle)
     if (fd >= 0) ::close(fd);
+}
+
+// What is and is not loopback (only a loopback address serves without a token by default), the
+// addresses --bind takes, the tokens and the token modes.
+TEST(LiveViewAddress, LoopbackIsRecognisedAndBadAddressesAreRefused) {
+  for (const char* a : {"127.0.0.1", "127.1.2.3", "127.255.255.254", "::1", "::ffff:127.0.0.1", "localhost"})
+    EXPECT_TRUE(is_loopback_address(a)) << a;
+  for (const char* a : {"0.0.0.0", "::", "192.168.1.2", "10.0.0.1", "128.0.0.1", "126.255.255.255",
+                        "::ffff:10.0.0.1", "fe80::1", "::2", "", "my.host", "127.0.0.1 ", "127.0.0.1:80"})
+    EXPECT_FALSE(is_loopback_address(a)) << a;
+  for (const char* a : {"127.0.0.1", "0.0.0.0", "::", "::1", "192.168.1.2", "localhost"}) {
+    SinkOptions opt;
+    opt.bind = a;
+    std::string why;
+    EXPECT_TRUE(opt.IsValid(&why)) << a << ": " << why;
+  }
+  for (const char* a : {"", "my.host", "256.0.0.1", "127.0.0.1:80", "[::1]", "fe80::1%eth0"}) {
+    SinkOptions opt;
+    opt.bind = a;
+    std::string why;
+    EXPECT_FALSE(opt.IsValid(&why)) << a;
+    EXPECT_NE(why.find("address"), std::string::npos) << why;
+    EXPECT_THROW(open_sink("http:1", testing::test_rig_24(64, 64), cv::Size(64, 64), opt), SinkError) << a;
+  }
+  std::set<std::string> tokens;
+  for (int i = 0; i < 200; ++i) {
+    const std::string t = random_token();
+    EXPECT_EQ(t.size(), 32u);
+    EXPECT_EQ(t.find_first_not_of("0123456789abcdef"), std::string::npos) << t;
+    tokens.insert(t);
+  }
+  EXPECT_EQ(tokens.size(), 200u);
+  EXPECT_EQ(parse_token_mode("auto"), TokenMode::kAuto);
+  EXPECT_EQ(parse_token_mode("random"), TokenMode::kRandom);
+  EXPECT_EQ(parse_token_mode("none"), TokenMode::kNone);
+  EXPECT_THROW(parse_token_mode("secret"), std::invalid_argument);
+}
+
+// With a token required (--token random; the default off loopback), nothing but the viewer's own
+// files answers without it: 403 before any frame or statistic is sent, also to a multi-range
+// request, and still 405 / 413 for the other methods and bodies (checked first, from the headers).
+// The token is the one logged; a wrong one of the same length is refused.
+TEST(HttpHostile, WithATokenNothingButTheViewerFilesAnswersWithoutIt) {
+  const Rig rig = testing::test_rig_24(64, 64);
+  SinkOptions opt;
+  opt.token = TokenMode::kRandom;
+  auto log = std::make_shared<std::ostringstream>();
+  auto log_sink = std::make_shared<spdlog::sinks::ostream_sink_mt>(*log);
+  spdlog::default_logger()->sinks().push_back(log_sink);
+  int port = 0;
+  std::unique_ptr<Sink> sink = open_http_sink(rig, cv::Size(128, 64), opt, &port);
+  spdlog::default_logger()->sinks().pop_back();
+  ASSERT_TRUE(sink) << "no free port";
+  sink->write(cv::Mat(64, 128, CV_8UC3, cv::Scalar(40, 90, 160)), render::FrameStore());
+  sink->set_stats(nlohmann::json{{"frames", 1}});
+  const std::string logged = log->str();
+  const std::string head = fmt::format("http://127.0.0.1:{}/?token=", port);
+  const size_t at = logged.find(head);
+  ASSERT_NE(at, std::string::npos) << logged;
+  const std::string token = logged.substr(at + head.size(), 32);
+  EXPECT_EQ(token.find_first_not_of("0123456789abcdef"), std::string::npos) << token;
+  EXPECT_EQ(sink->describe().find(token), std::string::npos) << sink->describe();
+  std::string wrong = token;
+  wrong[0] = wrong[0] == 'a' ? 'b' : 'a';
+
+  httplib::Client cli("127.0.0.1", port);
+  cli.set_read_timeout(3, 0);
+  for (const char* path : {"/", "/stats.json", "/config.json", "/frame.jpg", "/stream.mjpg", "/nothing"}) {
+    for (const std::string& query :
+         {std::string(), "?token=" + wrong, std::string("?token="), "?token=" + token + "0"}) {
+      auto res = cli.Get(path + query);
+      ASSERT_TRUE(res) << path << query;
+      EXPECT_EQ(res->status, 403) << path << query;
+      EXPECT_LT(res->body.size(), 200u) << path << query;
+    }
+  }
+  auto ranged = cli.Get("/frame.jpg", {{"Range", "bytes=0-,0-,0-,0-"}});
+  ASSERT_TRUE(ranged);
+  EXPECT_EQ(ranged->status, 403);
+  auto post = cli.Post("/stats.json?token=" + token, std::string(100000, 'x'), "text/plain");
+  EXPECT_TRUE(!post || post->status == 405 || post->status == 413) << post->status;
+  post = cli.Post("/stats.json", std::string(100000, 'x'), "text/plain");
+  EXPECT_TRUE(!post || post->status == 405 || post->status == 413) << post->status;
+  // The viewer's files need none; everything answers with it.
+  for (const char* path : {"/viewer/live.js", "/favicon.ico"}) {
+    auto res = cli.Get(path);
+    ASSERT_TRUE(res) << path;
+    EXPECT_LT(res->status, 300) << path;
+  }
+  for (const char* path : {"/", "/stats.json", "/config.json", "/frame.jpg"}) {
+    auto res = cli.Get(std::string(path) + "?token=" + token);
+    ASSERT_TRUE(res) << path;
+    EXPECT_EQ(res->status, 200) << path;
+    EXPECT_EQ(res->get_header_value("Referrer-Policy"), "no-referrer") << path;
+  }
+  int parts = 0;
+  auto stream = cli.Get("/stream.mjpg?token=" + token, [&](const char*, size_t) { return ++parts < 3; });
+  EXPECT_GE(parts, 3);
+  EXPECT_EQ(nlohmann::json::parse(cli.Get("/stats.json?token=" + token)->body)["frames"], 1);
 }
 
 }  // namespace

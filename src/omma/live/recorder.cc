@@ -1,5 +1,6 @@
 #include "omma/live/recorder.h"
 
+#include <algorithm>
 #include <chrono>
 #include <condition_variable>
 #include <deque>
@@ -21,10 +22,20 @@ bool RecordOptions::IsValid(std::string* why) const {
   if (!(flush_interval_s > 0 && flush_interval_s <= 1))
     return invalid(why, "flush interval must be in (0, 1] s");
   // The manifest's own validators: `omma record` never writes a recording its reader refuses.
-  if (!io::valid_recording_fps(fps, why) || !io::valid_recording_clock_mhz(clock_mhz, why) ||
+  if (!(exposure_s >= 0 && exposure_s <= io::kMaxExposureS))
+    return invalid(why, fmt::format("exposure must be in [0, {:g}] s", io::kMaxExposureS));
+  if ((fps != 0 && !io::valid_recording_fps(fps, why)) || !io::valid_recording_clock_mhz(clock_mhz, why) ||
       !io::valid_sensor_mode(sensor_mode, why))
     return false;
   return true;
+}
+
+double derived_recording_fps(const std::vector<double>& source_fps) {
+  double slowest = 0;
+  for (const double f : source_fps)
+    if (f > 0 && (slowest == 0 || f < slowest)) slowest = f;
+  if (slowest == 0) return kFallbackFps;
+  return std::clamp(kDerivedRateFactor * slowest, io::kMinRecordingFps, io::kMaxRecordingFps);
 }
 
 namespace {
@@ -63,13 +74,17 @@ void capture(int c, CameraSource& src, const io::RecordingManifest& manifest, co
              Shared& sh, std::chrono::steady_clock::time_point t0) {
   uint64_t seq = 0;
   const double fps = src.fps();
+  // A source with its own capture clock paces itself and says when each frame was captured.
+  const bool own_clock = src.next_capture() != Clock::time_point{};
   auto next_due = std::chrono::steady_clock::now();
   try {
     cv::Mat frame;
     while (!sh.stop && (opt.frames == 0 || int64_t(seq) < opt.frames) && src.read(frame)) {
-      // Capture time: when the source delivered the frame.
-      const int64_t t =
-          std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count();
+      // Capture time: the source's own capture instant, else when the source delivered the frame.
+      const Clock::time_point captured = own_clock && src.last_capture() != Clock::time_point{}
+                                             ? std::max(src.last_capture(), t0)
+                                             : std::chrono::steady_clock::now();
+      const int64_t t = std::chrono::duration_cast<std::chrono::nanoseconds>(captured - t0).count();
       cv::Mat raw = io::to_raw_mosaic(frame, manifest.bits);
       if (raw.cols != manifest.rig.cameras[c].in.width || raw.rows != manifest.rig.cameras[c].in.height)
         throw std::runtime_error(fmt::format("frames are {}x{}, the rig says {}x{}", raw.cols, raw.rows,
@@ -85,7 +100,7 @@ void capture(int c, CameraSource& src, const io::RecordingManifest& manifest, co
       }
       sh.cv.notify_one();
       ++seq;
-      if (fps > 0) {  // free-running at the source's own rate (as the live engine does)
+      if (fps > 0 && !own_clock) {  // free-running at the source's own rate (as the live engine does)
         next_due += std::chrono::microseconds(long(1e6 / fps));
         const auto now = std::chrono::steady_clock::now();
         if (next_due < now) next_due = now;
@@ -112,7 +127,12 @@ RecordSummary record(std::vector<std::unique_ptr<CameraSource>> sources, const s
     throw std::invalid_argument(fmt::format("record: {} sources for {} cameras", sources.size(), n));
   manifest.sensor_mode = opt.sensor_mode;
   manifest.clock_mhz = opt.clock_mhz;
-  manifest.fps = opt.fps;
+  std::vector<double> rates;
+  for (const auto& src : sources) rates.push_back(std::max(0.0, src->fps()));
+  manifest.fps = opt.fps > 0 ? opt.fps : derived_recording_fps(rates);
+  manifest.camera_fps.clear();
+  for (const double f : rates) manifest.camera_fps.push_back(io::valid_recording_fps(f) ? f : 0);
+  manifest.exposure_s = opt.exposure_s;
   io::RecordingWriter writer(dir, manifest, io::RecordingWriter::Options{opt.flush_interval_s});
   Shared sh;
   std::vector<CameraQueue> queues(n);
@@ -125,6 +145,8 @@ RecordSummary record(std::vector<std::unique_ptr<CameraSource>> sources, const s
   // The writer: this thread, round robin over the queues.
   RecordSummary sum;
   sum.frames.assign(n, 0);
+  sum.fps = manifest.fps;
+  sum.camera_fps = manifest.camera_fps;
   Progress progress("recording", opt.frames > 0 ? size_t(opt.frames) * n : 0, opt.progress && opt.frames > 0);
   auto should_stop = [&] {
     return (opt.stop && *opt.stop) ||

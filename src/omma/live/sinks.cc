@@ -1,14 +1,19 @@
 #include "omma/live/sinks.h"
 
+#include <arpa/inet.h>
 #include <netdb.h>
+#include <netinet/in.h>
 #include <poll.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
+#include <csignal>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -16,11 +21,13 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <random>
 #include <string_view>
 #include <thread>
 
 #include <fmt/format.h>
 #include <httplib.h>
+#include <ifaddrs.h>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
 #include <spdlog/spdlog.h>
@@ -28,6 +35,8 @@
 #include "omma/core/io.h"
 #include "omma/core/valid.h"
 #include "omma/io/metadata.h"
+#include "omma/io/video_writer.h"
+#include "omma/live/engine.h"
 #include "omma/live/sources.h"
 #include "omma/live/web_assets.h"
 
@@ -45,90 +54,89 @@ void remove_leftover(const fs::path& tmp, const fs::path& target) {
                ec ? "could not remove" : "removed", tmp.string(), target.string());
 }
 
+// A video file through io::VideoWriter (H.264 / VP9, atomic: the temporary file .NAME.partial.EXT
+// is renamed into place by finish(), removed by abort()), with the 360-degree metadata of its
+// projection.
 class VideoSink : public Sink {
  public:
-  VideoSink(const fs::path& path, cv::Size size, double fps, std::optional<Projection> projection)
-      : path_(path), size_(size), projection_(projection) {
-    const std::string ext = lower_extension(path);
-    const int fourcc = ext == ".mp4" ? cv::VideoWriter::fourcc('m', 'p', '4', 'v')
-                                     : cv::VideoWriter::fourcc('M', 'J', 'P', 'G');
-    const fs::path dir = path.has_parent_path() ? path.parent_path() : fs::path(".");
-    std::error_code ec;
-    if (!fs::is_directory(dir, ec))
-      throw SinkError("cannot write video " + path.string() + ": folder " + dir.string() + " does not exist");
-    tmp_ = dir / fmt::format(".{}.partial{}", path.stem().string(),
-                             ext);  // (fmt: GCC 12 -Wrestrict false positive on "." + string)
-    remove_leftover(tmp_, path_);
-    if (!writer_.open(tmp_.string(), cv::CAP_FFMPEG, fourcc, fps, size, true) || !writer_.isOpened()) {
-      fs::remove(tmp_, ec);
-      throw SinkError("cannot write video " + path.string() +
-                      " (VideoWriter did not open; folder writable?)");
+  VideoSink(const fs::path& path, cv::Size size, const io::VideoOptions& options,
+            std::optional<Projection> projection)
+      : path_(path) {
+    try {
+      writer_ = std::make_unique<io::VideoWriter>(path, size, options, projection);
+    } catch (const std::exception& e) {
+      throw SinkError(e.what());
     }
   }
   ~VideoSink() override { abort(); }
   void write(const cv::Mat& pano, const render::FrameStore&) override {
-    writer_.write(pano);
-    ++frames_;
+    try {
+      writer_->write(pano);
+    } catch (const std::exception& e) {
+      throw SinkError(std::string(e.what()) + "; nothing was left under its name");
+    }
   }
   void finish() override {
     if (done_) return;
     done_ = true;
-    writer_.release();
-    std::error_code ec;
-    if (frames_ == 0) {
-      fs::remove(tmp_, ec);
-      throw SinkError("no frames were rendered: video " + path_.string() + " not written");
-    }
-    // VideoWriter reports no write errors: check that the file plays to its last frame before it
-    // takes the final name (a full disk leaves a file without its index, or short).
-    if (const std::string bad = check_playable(); !bad.empty()) {
-      fs::remove(tmp_, ec);
-      throw SinkError("video " + path_.string() + " could not be written completely (disk full?): " + bad +
-                      "; nothing was left under its name");
-    }
-    // 360-degree metadata (metadata.h) in the checked file, rewritten atomically with its frames
-    // unchanged. The rewrite needs room for a second copy: if it fails, the video is kept untagged.
-    if (projection_ && lower_extension(path_) == ".mp4") {
-      try {
-        io::add_spherical_video_metadata(tmp_, PanoGrid{*projection_, size_.width, size_.height});
-      } catch (const IoError& e) {
-        spdlog::warn("{} (the video is kept without 360-degree metadata)", e.what());
-      }
-    }
-    fs::rename(tmp_, path_, ec);
-    if (ec) {
-      fs::remove(tmp_, ec);
-      throw SinkError("cannot move video into place at " + path_.string());
+    try {
+      writer_->close();
+    } catch (const std::exception& e) {
+      throw SinkError(std::string(e.what()) + "; nothing was left under its name");
     }
   }
   void abort() override {
     if (done_) return;
     done_ = true;
-    writer_.release();
-    std::error_code ec;
-    fs::remove(tmp_, ec);
+    writer_->abort();
   }
   std::string describe() const override { return path_.string(); }
 
  private:
-  // Empty if the temporary file opens, holds the frames written and decodes its last one.
-  std::string check_playable() const {
-    cv::VideoCapture cap;
-    if (!cap.open(tmp_.string(), cv::CAP_FFMPEG) || !cap.isOpened()) return "it does not open";
-    const long count = long(cap.get(cv::CAP_PROP_FRAME_COUNT));
-    // Matroska gives the count from its duration (+-1 frame); MP4 and AVI exactly.
-    if (count < frames_ - 1) return fmt::format("it holds {} of {} frames", count, frames_);
-    cap.set(cv::CAP_PROP_POS_FRAMES, double(std::min(count, frames_) - 1));
-    cv::Mat last;
-    if (!cap.read(last) || last.empty()) return "its last frame does not decode";
-    return {};
-  }
-  fs::path path_, tmp_;
-  cv::Size size_;
-  std::optional<Projection> projection_;
-  cv::VideoWriter writer_;
-  long frames_ = 0;
+  fs::path path_;
+  std::unique_ptr<io::VideoWriter> writer_;
   bool done_ = false;
+};
+
+// Raw frames on stdout (`--sink -`): each panorama as width x height x 3 bytes, row by row, BGR
+// (FFmpeg's rawvideo bgr24), nothing else; the size and rate are stated on stderr at the start. A
+// reader that goes away (EPIPE: ffmpeg -frames N, head -c) stops the run as Ctrl-C does, and the
+// other sinks are finished.
+class StdoutSink : public Sink {
+ public:
+  StdoutSink(cv::Size size, double fps) : size_(size) {
+    std::signal(SIGPIPE, SIG_IGN);  // a closed pipe is a write error, not the end of the process
+    std::fprintf(
+        stderr,
+        "omma: raw video on stdout: %dx%d bgr24 at %g frames/s (ffmpeg -f rawvideo -pix_fmt bgr24 -s "
+        "%dx%d -r %g -i - OUT)\n",
+        size.width, size.height, fps, size.width, size.height, fps);
+  }
+  void write(const cv::Mat& pano, const render::FrameStore&) override {
+    if (closed_) return;
+    if (pano.size() != size_ || pano.type() != CV_8UC3)
+      throw SinkError("stdout: unexpected frame size or type");
+    const cv::Mat c = pano.isContinuous() ? pano : pano.clone();
+    const char* p = reinterpret_cast<const char*>(c.data);
+    for (size_t left = c.total() * c.elemSize(); left > 0;) {
+      const ssize_t n = ::write(STDOUT_FILENO, p, left);
+      if (n < 0 && errno == EINTR) continue;
+      if (n < 0 && errno == EPIPE) {
+        spdlog::info("the reader of stdout closed it: stopping");
+        closed_ = true;
+        request_stop();
+        return;
+      }
+      if (n <= 0) throw SinkError(std::string("cannot write raw video to stdout: ") + std::strerror(errno));
+      p += n;
+      left -= size_t(n);
+    }
+  }
+  std::string describe() const override { return "-"; }
+
+ private:
+  cv::Size size_;
+  bool closed_ = false;
 };
 
 class PngSink : public Sink {
@@ -189,7 +197,7 @@ class PassthroughSink : public Sink {
 
 // The live view's HTTP server: cpp-httplib parses the requests and writes the answers; the
 // connections are this code's, so that no client can starve another (any web page the user visits
-// can reach 127.0.0.1). Limits:
+// can reach 127.0.0.1, and with --bind anyone on the network the address it serves). Limits:
 //   - every connection runs on a thread of its own (ConnectionThreads), up to a cap of
 //     max_streams + kOtherConnections open at once; past the cap a new connection is answered 503
 //     (Retry-After: 1) by the accepting thread at once and closed;
@@ -389,12 +397,63 @@ bool LiveServer::process_and_close_socket(socket_t sock) {
   return ok;
 }
 
+// Whether `given` is `want`, in time that does not depend on where they differ (only on their
+// lengths, which are public: a token is 32 hex digits), so that a client cannot guess a token byte
+// by byte from the answers' timing.
+bool same_token(std::string_view given, std::string_view want) {
+  volatile unsigned char diff = given.size() == want.size() ? 0 : 1;
+  for (size_t i = 0; i < want.size(); ++i)
+    diff = diff | static_cast<unsigned char>(want[i] ^ (i < given.size() ? given[i] : 0));
+  return diff == 0;
+}
+
+// The addresses of this machine's network interfaces at which a server on a wildcard address
+// (0.0.0.0: IPv4 only; ::, ipv6_too: IPv4 and IPv6) can be reached from the network: not loopback,
+// not IPv6 link-local (which needs a zone in a URL).
+std::vector<std::string> interface_addresses(bool ipv6_too) {
+  std::vector<std::string> out;
+  ifaddrs* list = nullptr;
+  if (::getifaddrs(&list) != 0) return out;
+  for (const ifaddrs* i = list; i; i = i->ifa_next) {
+    if (!i->ifa_addr) continue;
+    const int family = i->ifa_addr->sa_family;
+    if (family != AF_INET && !(ipv6_too && family == AF_INET6)) continue;
+    if (family == AF_INET6 &&
+        IN6_IS_ADDR_LINKLOCAL(&reinterpret_cast<const sockaddr_in6*>(i->ifa_addr)->sin6_addr))
+      continue;
+    char host[NI_MAXHOST];
+    const socklen_t len = family == AF_INET ? sizeof(sockaddr_in) : sizeof(sockaddr_in6);
+    if (::getnameinfo(i->ifa_addr, len, host, sizeof host, nullptr, 0, NI_NUMERICHOST) != 0) continue;
+    if (!is_loopback_address(host) && std::find(out.begin(), out.end(), host) == out.end())
+      out.push_back(host);
+  }
+  ::freeifaddrs(list);
+  return out;
+}
+
+// "http://HOST:PORT/" (IPv6 in brackets).
+std::string http_url(const std::string& host, int port) {
+  return host.find(':') == std::string::npos ? fmt::format("http://{}:{}/", host, port)
+                                             : fmt::format("http://[{}]:{}/", host, port);
+}
+
 // The live view (sinks.h). The page and its viewer are files of web/, embedded at build time
 // (web_assets.h).
 class HttpSink : public Sink {
  public:
-  HttpSink(int port, cv::Size size, const SinkOptions& opt)
-      : port_(port), quality_(opt.jpeg_quality), max_streams_(opt.max_streams) {
+  HttpSink(const std::string& host, int port, cv::Size size, const SinkOptions& opt)
+      : host_(host == "localhost" ? "127.0.0.1" : host),
+        port_(port),
+        quality_(opt.jpeg_quality),
+        max_streams_(opt.max_streams) {
+    const bool loopback = is_loopback_address(host_);
+    if (opt.token == TokenMode::kRandom || (opt.token == TokenMode::kAuto && !loopback)) {
+      try {
+        token_ = random_token();
+      } catch (const std::exception& e) {  // std::random_device without a source of entropy
+        throw SinkError(std::string("live view: cannot make a token: ") + e.what());
+      }
+    }
     if (max_streams_ < 1 || max_streams_ > kMaxStreams)
       throw SinkError(
           fmt::format("live view: the stream limit must be 1-{}, got {}", kMaxStreams, max_streams_));
@@ -409,7 +468,7 @@ class HttpSink : public Sink {
     server_.new_task_queue = [cap] { return new ConnectionThreads(cap); };
     // No bodies: methods other than GET and HEAD, and requests with a body, are refused from their
     // headers.
-    server_.set_pre_routing_handler([](const httplib::Request& req, httplib::Response& res) {
+    server_.set_pre_routing_handler([this](const httplib::Request& req, httplib::Response& res) {
       if (req.method != "GET" && req.method != "HEAD") {
         res.status = 405;
         res.set_header("Allow", "GET, HEAD");
@@ -422,7 +481,22 @@ class HttpSink : public Sink {
         res.set_content("omma live view: requests take no body", "text/plain");
         return httplib::Server::HandlerResponse::Handled;
       }
+      // The token, where one is required: everything but the viewer's own files (the same for every
+      // omma) needs it.
+      if (!token_.empty() && req.path.rfind("/viewer/", 0) != 0 && req.path != "/favicon.ico" &&
+          !same_token(req.get_param_value("token"), token_)) {
+        res.status = 403;
+        res.set_content(
+            "omma live view: this address needs its token (the URL with ?token=... that omma run "
+            "printed)",
+            "text/plain");
+        return httplib::Server::HandlerResponse::Handled;
+      }
       return httplib::Server::HandlerResponse::Unhandled;
+    });
+    // The page's URL holds the token: no Referer carries it to another site.
+    server_.set_post_routing_handler([](const httplib::Request&, httplib::Response& res) {
+      res.set_header("Referrer-Policy", "no-referrer");
     });
     server_.set_expect_100_continue_handler([](const httplib::Request& req, httplib::Response& res) {
       if (req.method == "GET" || req.method == "HEAD") return 100;
@@ -498,15 +572,17 @@ class HttpSink : public Sink {
       int yes = 1;
       setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, reinterpret_cast<const void*>(&yes), sizeof(yes));
     });
-    if (!server_.bind_to_port("127.0.0.1", port))
-      throw SinkError("cannot serve the live view on 127.0.0.1:" + std::to_string(port) +
-                      " (port in use or not permitted)");
+    if (!server_.bind_to_port(host_.c_str(), port))
+      throw SinkError(
+          fmt::format("cannot serve the live view on {}:{} (port in use, address not of this "
+                      "machine, or not permitted)",
+                      host_, port));
     server_.widen_backlog();
     thread_ = std::thread([this] {
       try {
         server_.listen_after_bind();
       } catch (const std::exception& e) {
-        spdlog::error("live view on 127.0.0.1:{} stopped: {}", port_, e.what());
+        spdlog::error("live view on {}:{} stopped: {}", host_, port_, e.what());
       }
       listen_ended_ = true;
     });
@@ -516,7 +592,7 @@ class HttpSink : public Sink {
       stop();
       throw;
     }
-    spdlog::info("live view: http://127.0.0.1:{}/", port);
+    announce(loopback);
   }
   ~HttpSink() override { stop(); }
   // The panorama is JPEG-encoded in the sink's own thread, so that encoding never slows the render
@@ -536,10 +612,32 @@ class HttpSink : public Sink {
   }
   void finish() override { stop(); }
   void abort() override { stop(); }
-  std::string describe() const override { return "http://127.0.0.1:" + std::to_string(port_) + "/"; }
+  // The URL without its token (the summary is no place for it).
+  std::string describe() const override {
+    return http_url(host_, port_) + (token_.empty() ? "" : " (with its token)");
+  }
 
  private:
   static constexpr int kMaxStreams = 256;  // each stream is a thread
+  // Logs where the live view can be opened: the URL with its token, on the wildcards one per
+  // network interface; a warning first if the network can see it. With a token at warning level, so
+  // that --quiet still shows the one URL that opens the page.
+  void announce(bool loopback) const {
+    if (!loopback)
+      spdlog::warn("live view on {}: the panorama is visible to the network: {}", http_url(host_, port_),
+                   token_.empty() ? "anyone who can reach this port can watch it (--token none)"
+                                  : "anyone who has the URL with its token can watch it");
+    std::vector<std::string> hosts;
+    if (host_ == "0.0.0.0" || host_ == "::") hosts = interface_addresses(host_ == "::");
+    if (hosts.empty()) hosts.push_back(host_);
+    for (const auto& h : hosts) {
+      const std::string url = http_url(h, port_) + (token_.empty() ? "" : "?token=" + token_);
+      if (token_.empty())
+        spdlog::info("live view: {}", url);
+      else
+        spdlog::warn("live view: {}", url);
+    }
+  }
   static void serve_asset(const std::string& path, httplib::Response& res) {
     const WebAsset* a = find_web_asset(path);
     if (!a) {
@@ -582,6 +680,8 @@ class HttpSink : public Sink {
     if (thread_.joinable()) thread_.join();
     if (encoder_.joinable()) encoder_.join();
   }
+  std::string host_;   // the address it listens on
+  std::string token_;  // required in every URL but the viewer's files; empty: none
   int port_, quality_, max_streams_;
   std::string config_;
   LiveServer server_;
@@ -614,25 +714,64 @@ bool SinkOptions::IsValid(std::string* why) const {
   if (!valid_rate(fps, false)) return invalid(why, fmt::format("fps must be {}..{}", kMinRate, kMaxRate));
   if (jpeg_quality < 1 || jpeg_quality > 100) return invalid(why, "jpeg quality must be 1..100");
   if (max_streams < 1) return invalid(why, "max streams must be >= 1");
+  in_addr a4{};
+  in6_addr a6{};
+  if (bind != "localhost" && ::inet_pton(AF_INET, bind.c_str(), &a4) != 1 &&
+      ::inet_pton(AF_INET6, bind.c_str(), &a6) != 1)
+    return invalid(why, "live view address '" + bind +
+                            "': expected a numeric IPv4 or IPv6 address (0.0.0.0 or :: for every interface) "
+                            "or localhost");
+  // Video files' own options (their rate is `fps`, checked by the writer: at most 1000 frames/s).
+  if (io::VideoOptions v = video; v.fps = 30, !v.IsValid(why)) return false;
   return true;
+}
+
+bool is_loopback_address(const std::string& address) {
+  if (address == "localhost") return true;
+  in_addr a4{};
+  if (::inet_pton(AF_INET, address.c_str(), &a4) == 1) return (ntohl(a4.s_addr) >> 24) == 127;
+  in6_addr a6{};
+  if (::inet_pton(AF_INET6, address.c_str(), &a6) != 1) return false;
+  return IN6_IS_ADDR_LOOPBACK(&a6) || (IN6_IS_ADDR_V4MAPPED(&a6) && a6.s6_addr[12] == 127);
+}
+
+std::string random_token() {
+  std::random_device rd;  // the system's entropy (Linux: getrandom, /dev/urandom or RDRAND)
+  static_assert(std::random_device::max() >= 0xffffffffu, "32 bits per draw");
+  std::string token;
+  for (int i = 0; i < 4; ++i) token += fmt::format("{:08x}", uint32_t(rd() & 0xffffffffu));
+  return token;
+}
+
+TokenMode parse_token_mode(const std::string& text) {
+  if (text == "auto") return TokenMode::kAuto;
+  if (text == "random") return TokenMode::kRandom;
+  if (text == "none") return TokenMode::kNone;
+  throw std::invalid_argument("--token '" + text + "': expected auto, random or none");
 }
 
 std::unique_ptr<Sink> open_sink(const std::string& spec, const Rig& rig, cv::Size pano_size,
                                 const SinkOptions& opt) {
   if (std::string why; !opt.IsValid(&why)) throw SinkError("sink '" + spec + "': " + why);
   if (spec.rfind("http://", 0) == 0) {
-    const std::string rest = spec.substr(7);
+    // http://HOST:PORT: HOST is the address to serve on (as --bind; IPv6 in brackets).
+    std::string rest = spec.substr(7);
+    if (!rest.empty() && rest.back() == '/') rest.pop_back();
     const size_t colon = rest.rfind(':');
-    if (colon == std::string::npos) throw SinkError("sink '" + spec + "': expected http://127.0.0.1:PORT");
-    const std::string host = rest.substr(0, colon);
-    if (host != "127.0.0.1" && host != "localhost")
-      throw SinkError("sink '" + spec + "': the live view serves on 127.0.0.1 only");
-    std::string port = rest.substr(colon + 1);
-    if (!port.empty() && port.back() == '/') port.pop_back();
-    return std::make_unique<HttpSink>(parse_port(spec, port), pano_size, opt);
+    if (colon == std::string::npos) throw SinkError("sink '" + spec + "': expected http://ADDRESS:PORT");
+    std::string host = rest.substr(0, colon);
+    if (host.size() >= 2 && host.front() == '[' && host.back() == ']') host = host.substr(1, host.size() - 2);
+    SinkOptions at = opt;
+    at.bind = host;
+    if (std::string why; !at.IsValid(&why)) throw SinkError("sink '" + spec + "': " + why);
+    const SinkOptions defaults;
+    if (opt.bind != defaults.bind && opt.bind != host)
+      throw SinkError("sink '" + spec + "': serves on " + host + ", but the live view's address is " +
+                      opt.bind + " (--bind): give one of them");
+    return std::make_unique<HttpSink>(host, parse_port(spec, rest.substr(colon + 1)), pano_size, at);
   }
   if (spec.rfind("http:", 0) == 0)
-    return std::make_unique<HttpSink>(parse_port(spec, spec.substr(5)), pano_size, opt);
+    return std::make_unique<HttpSink>(opt.bind, parse_port(spec, spec.substr(5)), pano_size, opt);
   if (spec.rfind("cam:", 0) == 0) {
     const std::string rest = spec.substr(4);
     const size_t colon = rest.find(':');
@@ -658,10 +797,16 @@ std::unique_ptr<Sink> open_sink(const std::string& spec, const Rig& rig, cv::Siz
   const auto metadata = opt.spherical_metadata ? std::optional(opt.projection) : std::nullopt;
   if (spec.rfind("png:", 0) == 0) return std::make_unique<PngSink>(spec.substr(4), pano_size, metadata);
   if (!spec.empty() && spec.back() == '/') return std::make_unique<PngSink>(spec, pano_size, metadata);
-  const std::string ext = lower_extension(spec);
-  if (ext == ".mp4" || ext == ".mkv" || ext == ".avi")
-    return std::make_unique<VideoSink>(spec, pano_size, opt.fps, metadata);
-  throw SinkError("sink '" + spec + "': use FILE.mp4|.mkv|.avi, png:DIR, DIR/, cam:ID:SINK or http:PORT");
+  if (spec == "-") return std::make_unique<StdoutSink>(pano_size, opt.fps);
+  if (io::is_video_path(spec)) {
+    io::VideoOptions vo = opt.video;
+    vo.fps = opt.fps;
+    return std::make_unique<VideoSink>(spec, pano_size, vo, metadata);
+  }
+  throw SinkError(
+      "sink '" + spec +
+      "': use FILE.mp4|.mov|.mkv|.webm|.avi, - (raw frames on stdout), png:DIR, DIR/, cam:ID:SINK or "
+      "http:PORT");
 }
 
 }  // namespace omma::live

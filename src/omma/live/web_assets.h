@@ -1,7 +1,8 @@
 // The live view's web files (web/: the page, its script, the Pannellum viewer from npm), embedded
 // in the binary at build time by cmake/embed_web.cmake, so that `omma run --sink http:PORT` serves
-// them from 127.0.0.1 with no network and no install folder to find: the program alone is enough,
-// and the page always matches the server that serves it.
+// them (from 127.0.0.1, or the --bind address) with no network access and no install folder to find:
+// the program alone is enough, and the page always matches the server that serves it. The viewer's
+// files (/viewer/...) are the same in every omma and need no token; the page (/) does (sinks.h).
 #pragma once
 
 #include <string_view>
