@@ -1,5 +1,8 @@
 #include "arrays.h"
 
+#include <algorithm>
+#include <cmath>
+
 #include <fmt/format.h>
 
 #include "omma/core/grid.h"
@@ -62,7 +65,44 @@ cv::Mat mat_from_array(const py::handle& obj, const std::string& what, const Ima
   const size_t step = rows == 1 ? size_t(cols * channels * item) : size_t(row_stride);
   // cv::Mat never writes through this view in the bindings (inputs are const); the cast only
   // satisfies its constructor.
-  return cv::Mat(int(rows), int(cols), CV_MAKETYPE(depth, channels), const_cast<void*>(a.data()), step);
+  cv::Mat m(int(rows), int(cols), CV_MAKETYPE(depth, channels), const_cast<void*>(a.data()), step);
+  if (depth == CV_32F) check_float_range(m, what);
+  return m;
+}
+
+void check_float_range(const cv::Mat& m, const std::string& what) {
+  int64_t not_finite = 0, below = 0, above = 0;
+  float lo = 0, hi = 1;
+  const int n = m.cols * m.channels();
+  for (int y = 0; y < m.rows; ++y) {
+    const float* p = m.ptr<float>(y);
+    for (int i = 0; i < n; ++i) {
+      const float v = p[i];
+      if (v >= 0.f && v <= 1.f) continue;  // the common case; NaN fails both comparisons
+      if (!std::isfinite(v)) {
+        ++not_finite;
+      } else if (v < 0.f) {
+        ++below;
+        lo = std::min(lo, v);
+      } else {
+        ++above;
+        hi = std::max(hi, v);
+      }
+    }
+  }
+  const int64_t total = int64_t(m.rows) * n;
+  if (not_finite > 0)
+    throw py::value_error(
+        fmt::format("{} holds {} NaN or infinite value(s) of {}: float32 images must hold "
+                    "finite values in [0, 1] (e.g. numpy.nan_to_num)",
+                    what, not_finite, total));
+  if (below + above > 0) {
+    const std::string msg = fmt::format(
+        "{}: {} of {} float32 values outside [0, 1] ({} below 0, min {:g}; {} above 1, max {:g}) are "
+        "clipped to [0, 1]",
+        what, below + above, total, below, lo, above, hi);
+    if (PyErr_WarnEx(PyExc_RuntimeWarning, msg.c_str(), 2) < 0) throw py::error_already_set();
+  }
 }
 
 py::object array_from_mat(cv::Mat m) {

@@ -1,6 +1,7 @@
 // NumPy arrays <-> cv::Mat for the Python bindings, without copies where the layout allows.
 //
-// In: an image is a numpy.ndarray of dtype uint8, uint16 or float32 (float32: values in [0, 1]) and
+// In: an image is a numpy.ndarray of dtype uint8, uint16 or float32 (float32: finite values in [0, 1],
+// checked: check_float_range) and
 // shape (H, W) or (H, W, C) with C = 1 or 3 (BGR, as OpenCV's cv2 reads images), C = 4 (BGRA)
 // where a function says so. Its pixels must be contiguous within each row (the channels of a pixel
 // and the pixels of a row side by side, rows at any positive stride), so C-contiguous arrays and
@@ -28,6 +29,11 @@ struct ImageSpec {
   bool allow_u8 = true, allow_u16 = true, allow_f32 = true;
   bool allow_gray = true, allow_bgra = false;
 };
+
+// float32 images: values must be finite (NaN or inf raises ValueError with their count) and lie in
+// [0, 1]: values outside are clipped where they are used, so they raise a RuntimeWarning (Python's
+// warnings module: an error under `-W error`) with their count, minimum and maximum.
+void check_float_range(const cv::Mat& m, const std::string& what);
 
 // A view of `obj` (no copy). `what` names the argument in messages ("frames[3]", "truth").
 // The returned Mat points into the array's memory: keep `obj` alive while it is used.

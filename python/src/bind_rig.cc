@@ -21,14 +21,24 @@ py::dict stat_dict(const calib::Stat& s) {
   return d;
 }
 
+// A rig file, or a built-in rig by name: the resolver of the command line's --rig.
+Rig load_rig_spec(const py::object& path) {
+  const std::string spec = py::str(py::module_::import("os").attr("fspath")(path)).cast<std::string>();
+  py::gil_scoped_release release;
+  return design::load_rig_or_builtin(spec);
+}
+
 }  // namespace
 
 void add_rig(py::module_& m) {
   py::class_<Rig>(m, "Rig",
                   "A dome of cameras (omma/core/rig.h): JSON in millimetres and degrees. Build one with "
                   "Rig.load, Rig.from_json, Rig.from_dict, design() or thesis_prototype_rig().")
-      .def_static("load", &load_rig, py::arg("path"),
-                  "Loads and validates a rig file (RigError naming the field at fault).")
+      .def_static(
+          "load", &load_rig_spec, py::arg("path"),
+          "Loads and validates a rig file (RigError naming the field at fault), or a built-in rig by\n"
+          "name as every --rig takes it (thesis-24, gigaeye-44, gigaeye-44-skip1, ...: "
+          "builtin_rig_names()).")
       .def_static(
           "from_json", [](const std::string& text) { return rig_from_json(nlohmann::json::parse(text)); },
           py::arg("text"), "Parses and validates rig JSON text.")
@@ -65,7 +75,7 @@ void add_rig(py::module_& m) {
                            r.dome.sphere ? ", sphere" : "");
       });
 
-  m.def("load_rig", &load_rig, py::arg("path"), "Rig.load(path).");
+  m.def("load_rig", &load_rig_spec, py::arg("path"), "Rig.load(path): a rig file or a built-in rig's name.");
   m.def("thesis_prototype_rig", &design::thesis_prototype_rig,
         "The thesis's 24-camera prototype (max-volume, 1x1x2 mm cameras, 5 mm dome; 'thesis-24').");
 

@@ -10,6 +10,7 @@
 #include "omma/core/rig.h"
 #include "omma/core/version.h"
 #include "omma/live/sinks.h"
+#include "omma/render/compiled_map.h"
 #include "omma/sim/scene.h"
 
 namespace omma::py {
@@ -19,6 +20,12 @@ py::object to_python(const nlohmann::json& j) { return py::module_::import("json
 nlohmann::json from_python(const py::handle& obj) {
   const std::string text = py::module_::import("json").attr("dumps")(obj).cast<std::string>();
   return nlohmann::json::parse(text);
+}
+
+std::string cache_dir_from_python(const py::object& cache_dir) {
+  if (cache_dir.is_none()) return render::default_cache_dir().string();
+  if (py::isinstance<py::bool_>(cache_dir) && !cache_dir.cast<bool>()) return "";
+  return py::str(py::module_::import("os").attr("fspath")(cache_dir)).cast<std::string>();
 }
 
 void set_fields(py::object options, const py::kwargs& kwargs, const std::string& function) {
@@ -37,16 +44,29 @@ void set_fields(py::object options, const py::kwargs& kwargs, const std::string&
   }
 }
 
+PyObject* make_error(const char* name, PyObject* builtin, const char* doc) {
+  // The docstring starts with "Name(*args)\n--\n\n" so that the type has a __text_signature__
+  // (inspect.signature(omma.RigError) works); __doc__ is then set to the plain text.
+  const std::string qual = name;
+  const std::string short_name = qual.substr(qual.rfind('.') + 1);
+  const std::string sig_doc = short_name + "(*args)\n--\n\n" + doc;
+  static PyObject* base = nullptr;
+  PyObject* bases = nullptr;
+  if (builtin) bases = base ? PyTuple_Pack(2, base, builtin) : PyTuple_Pack(1, builtin);
+  PyObject* type = PyErr_NewExceptionWithDoc(name, sig_doc.c_str(), bases, nullptr);
+  Py_XDECREF(bases);
+  if (!type) throw py::error_already_set();
+  if (PyObject_SetAttrString(type, "__doc__", py::str(doc).ptr()) < 0) throw py::error_already_set();
+  if (!base) base = type;  // the first one made is omma.Error, the base of the others
+  return type;
+}
+
 void add_errors(py::module_& m) {
   // omma.Error is the base of every omma error; the subclasses also derive from the built-in
   // exception a Python caller would expect (a bad rig is a ValueError, a missing file an OSError).
-  static PyObject* error =
-      PyErr_NewExceptionWithDoc("omma.Error", "Base class of omma's errors.", nullptr, nullptr);
+  static PyObject* error = make_error("omma.Error", nullptr, "Base class of omma's errors.");
   auto make = [&](const char* name, PyObject* builtin, const char* doc) {
-    PyObject* bases = PyTuple_Pack(2, error, builtin);
-    PyObject* type = PyErr_NewExceptionWithDoc(name, doc, bases, nullptr);
-    Py_DECREF(bases);
-    return type;
+    return make_error(name, builtin, doc);
   };
   static PyObject* rig_error =
       make("omma.RigError", PyExc_ValueError, "An invalid rig (file, JSON or camera).");
@@ -90,6 +110,9 @@ PYBIND11_MODULE(_omma, m) {
   omma::py::add_sim(m);
   omma::py::add_pano(m);
   omma::py::add_engine(m);
+  omma::py::add_io(m);
+  omma::py::add_live(m);
+  omma::py::add_design(m);
   m.def(
       "set_verbosity",
       [](const std::string& level) {
