@@ -9,6 +9,7 @@
 #include <iostream>
 
 #include "apps/command.h"
+#include "apps/help.h"
 #include "omma/core/log.h"
 #include "omma/core/progress.h"
 #include "omma/core/version.h"
@@ -47,7 +48,9 @@ static const CommandEntry kCommands[] = {
     {"run", add_run_command},
     {"bench", add_bench_command},
     {"hw", add_hw_command},
+    {"meta", add_meta_command},
     {"demo", add_demo_command},
+    {"completion", add_completion_command},
 };
 
 // Every numeric option of every command takes only what its type holds, checked where the value
@@ -106,9 +109,16 @@ int main(int argc, char** argv) {
   bool verbose = false, quiet = false;
   app.add_flag("-v,--verbose", verbose, "More log output (stderr)");
   app.add_flag("-q,--quiet", quiet, "Only warnings and errors on stderr");
-  app.set_version_flag("--version", "omma " + omma::version());
+  app.set_version_flag("--version", omma::app::version_text());
   for (const auto& c : omma::app::kCommands) c.add(app);
   omma::app::check_numeric_options(app);
+  omma::app::add_examples(app);
+  // A mistyped command is named, with the closest one, before CLI11 would answer "A subcommand is
+  // required" or "The following arguments were not expected".
+  if (const std::string bad = omma::app::unknown_command_error(app, {argv + 1, argv + argc}); !bad.empty()) {
+    std::fprintf(stderr, "omma: error: %s\nRun omma --help for more information.\n", bad.c_str());
+    return 1;
+  }
   omma::init_logging(false, false);
   app.parse_complete_callback([&] {
     spdlog::set_level(verbose ? spdlog::level::debug : quiet ? spdlog::level::warn : spdlog::level::info);

@@ -12,7 +12,17 @@ version=$(head -n1 "$src/VERSION")
 
 cmake --install "$build" --prefix "$work/prefix" >"$work/install.log"
 test -x "$work/prefix/bin/omma"
-[ "$("$work/prefix/bin/omma" --version)" = "omma $version" ] || { echo "installed omma --version is wrong"; exit 1; }
+[ "$("$work/prefix/bin/omma" --version | sed -n 1p)" = "omma $version" ] || { echo "installed omma --version is wrong"; exit 1; }
+# Man pages (when help2man made them) and bash completion, where man and bash-completion look.
+if command -v help2man >/dev/null; then
+  for page in omma omma-stitch omma-render; do
+    test -f "$work/prefix/share/man/man1/$page.1" || { echo "man page $page.1 not installed"; exit 1; }
+  done
+  MANPATH="$work/prefix/share/man" man -w omma-stitch | grep -q "/prefix/share/man/man1/omma-stitch.1" ||
+    { echo "man does not find omma-stitch"; exit 1; }
+fi
+grep -q "complete -o filenames -o bashdefault -F _omma omma" "$work/prefix/share/bash-completion/completions/omma" ||
+  { echo "bash completion not installed"; exit 1; }
 test -f "$work/prefix/include/omma/core/conventions.h"
 
 # CMake: find_package(omma) and omma::omma.
