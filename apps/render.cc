@@ -44,23 +44,6 @@ struct RenderArgs {
        no_photometric = false;
 };
 
-// A recording's frame sets as planned (io::plan_frame_sets): item i is planned set i, every camera
-// filled (held frames in place of missing ones).
-class PlannedFrameSets : public render::FrameSetReader {
- public:
-  PlannedFrameSets(const io::RecordingReader& rec, const io::FrameSetPlan& plan) : rec_(rec), plan_(plan) {}
-  const Rig& rig() const override { return rec_.rig(); }
-  int bits() const override { return rec_.bits(); }
-  int64_t frame_sets() const override { return int64_t(plan_.sets.size()); }
-  std::vector<cv::Mat> read_frame_set(int64_t i) const override {
-    return rec_.read_frames(plan_.sets.at(size_t(i)).frame);
-  }
-
- private:
-  const io::RecordingReader& rec_;
-  const io::FrameSetPlan& plan_;
-};
-
 // One input (a recording or a frames folder) rendered frame set by frame set: the work of
 // dist::run_job (one item per frame set), of --split tiles (every rank on one set) and of --repeat.
 class RenderJob : public dist::Job {
@@ -111,7 +94,7 @@ class RenderJob : public dist::Job {
   // Sets lacking cameras: --incomplete (io::plan_frame_sets; deterministic, the same on every rank).
   void plan_frame_sets() {
     plan_ = rec_->plan(first_, last_, incomplete_);  // throws under fail
-    planned_ = std::make_unique<PlannedFrameSets>(*rec_, plan_);
+    planned_ = std::make_unique<io::PlannedFrameSets>(*rec_, plan_);
     if (plan_.incomplete > 0 && root_)
       spdlog::warn(
           "{} of {} frame sets lack cameras (--incomplete {}): {} completed with held frames ({} frames, "
@@ -196,7 +179,7 @@ class RenderJob : public dist::Job {
   io::FrameSetPlanOptions incomplete_;
   bool root_ = true;
   io::FrameSetPlan plan_;
-  std::unique_ptr<PlannedFrameSets> planned_;
+  std::unique_ptr<io::PlannedFrameSets> planned_;
   bool recording_ = false;
   std::unique_ptr<io::RecordingReader> rec_;
   Rig rig_;

@@ -4,6 +4,7 @@
 #include <atomic>
 #include <charconv>
 #include <chrono>
+#include <cmath>
 #include <condition_variable>
 #include <memory>
 #include <mutex>
@@ -164,7 +165,8 @@ py::dict render_files(const py::object& input, const fs::path& out, const py::ob
                       const py::object& size, const std::string& projection, const std::string& method,
                       const py::object& sets, int band_rows, const std::string& demosaic,
                       const std::string& awb, int bits, int threads, const py::object& cache_dir,
-                      bool photometric, bool raw, double min_weight, bool progress) {
+                      bool photometric, bool raw, double min_weight, const std::string& incomplete,
+                      double hold_max_age_ms, bool progress) {
   render::PanoRenderOptions o;
   const Size2 s = banded_size(size);
   o.grid = PanoGrid{parse_projection(projection), s.width, s.height};
@@ -242,6 +244,31 @@ py::dict render_files(const py::object& input, const fs::path& out, const py::ob
   }
   if (rec && rec->frame_sets() == 0) throw py::value_error("the recording has no frame sets");
 
+  // Sets lacking cameras, as `omma render --incomplete` (io::plan_frame_sets): held, skipped or refused,
+  // never rendered with black cameras.
+  io::FrameSetPlan plan;
+  std::unique_ptr<io::PlannedFrameSets> planned;
+  if (rec) {
+    io::FrameSetPlanOptions po;
+    po.policy = io::parse_incomplete_policy(incomplete);
+    if (!(hold_max_age_ms >= 0 && hold_max_age_ms <= 3.6e6))
+      throw py::value_error("hold_max_age_ms must be in [0, 3600000] (0: two frame-set periods)");
+    po.max_hold_age_ns = int64_t(std::llround(hold_max_age_ms * 1e6));
+    plan = rec->plan(first, last, po);  // raises RecordingError under "fail"
+    planned = std::make_unique<io::PlannedFrameSets>(*rec, plan);
+    if (plan.incomplete > 0)
+      PyErr_WarnEx(
+          PyExc_RuntimeWarning,
+          fmt::format("{} of {} frame sets lack cameras (incomplete='{}'): {} completed with held frames, "
+                      "{} skipped",
+                      plan.incomplete, plan.considered, io::incomplete_policy_name(plan.policy),
+                      plan.held_sets, plan.skipped)
+              .c_str(),
+          2);
+    if (plan.sets.empty()) throw py::value_error("no frame set to render: every frame set lacks cameras");
+  }
+  const int64_t items = rec ? int64_t(plan.sets.size()) : 1;
+
   std::vector<std::string> outputs;
   double read_s = 0, develop_s = 0, render_s = 0, write_s = 0;
   size_t memory = 0;
@@ -251,10 +278,11 @@ py::dict render_files(const py::object& input, const fs::path& out, const py::ob
     if (photometric && (rec || raw)) gains = isp::flat_gains_from_rig(rig);
     render::PanoRenderer renderer(rig, o);
     memory = renderer.memory().total();
-    for (int64_t i = first; i <= last; ++i) {
-      const fs::path path = io::frame_set_path(out.string(), i, last > first);
+    for (int64_t i = 0; i < items; ++i) {
+      const int64_t set = rec ? plan.sets[size_t(i)].set : first;
+      const fs::path path = io::frame_set_path(out.string(), set, last > first);
       if (rec) {
-        const render::FrameSetTimes t = io::render_frame_set(*rec, i, renderer, iso, path);
+        const render::FrameSetTimes t = io::render_frame_set(*planned, i, renderer, iso, path);
         read_s += t.read, develop_s += t.develop, render_s += t.render, write_s += t.write;
       } else {
         std::vector<cv::Mat> frames;
@@ -276,6 +304,7 @@ py::dict render_files(const py::object& input, const fs::path& out, const py::ob
   py::dict d;
   d["outputs"] = outputs;
   d["frame_sets"] = rec ? py::object(py::int_(last - first + 1)) : py::object(py::none());
+  d["incomplete"] = rec ? to_python(plan.to_json()) : py::object(py::none());
   d["width"] = s.width;
   d["height"] = s.height;
   d["projection"] = to_string(o.grid.projection);
@@ -426,21 +455,23 @@ void add_io(py::module_& m) {
   m.def(
       "record",
       [](const Rig& rig, const py::object& source, const fs::path& out, double duration, int64_t frames,
-         double fps, const py::object& source_fps, const py::object& sensor_mode, double clock_mhz, int queue,
-         double flush_s, bool progress) {
+         const py::object& fps, const py::object& source_fps, const py::object& sensor_mode, double clock_mhz,
+         int queue, double flush_s, bool progress) {
         if (duration <= 0 && frames <= 0) throw py::value_error("give duration or frames (or both)");
         live::RecordOptions o;
         o.duration_s = duration;
         o.frames = frames;
         o.queue_frames = queue;
         o.flush_interval_s = flush_s;
-        o.fps = fps;
+        o.fps = fps.is_none() ? 0.0 : fps.cast<double>();  // 0: derived from the sources' own rates
         o.clock_mhz = clock_mhz;
         o.sensor_mode = sensor_mode.is_none() ? rig.name : sensor_mode.cast<std::string>();
         o.progress = progress;
         if (std::string why; !o.IsValid(&why)) throw py::value_error(why);
         live::SourceOptions so;
-        so.fps = source_fps.is_none() ? fps : source_fps.cast<double>();
+        so.fps = !source_fps.is_none() ? source_fps.cast<double>()
+                 : fps.is_none()       ? live::kFallbackFps
+                                       : o.fps;
         so.sim.progress = progress;
         if (std::string why; !so.IsValid(&why)) throw py::value_error(why);
         const std::vector<std::string> specs = source_specs(source);
@@ -503,35 +534,41 @@ void add_io(py::module_& m) {
         return d;
       },
       py::arg("rig"), py::arg("source"), py::arg("out"), py::arg("duration") = 0.0, py::arg("frames") = 0,
-      py::arg("fps") = 30.0, py::arg("source_fps") = py::none(), py::arg("sensor_mode") = py::none(),
+      py::arg("fps") = py::none(), py::arg("source_fps") = py::none(), py::arg("sensor_mode") = py::none(),
       py::arg("clock_mhz") = 0.0, py::arg("queue") = 4, py::arg("flush_s") = 0.5, py::arg("progress") = false,
       "Records free-running camera sources into the recording folder `out` (must not exist) as 12-bit RGGB\n"
       "mosaics with capture timestamps, as `omma record`: source is one spec for all cameras or one per "
       "camera\n"
       "(as omma.run: 'sim:colon', 'frames:DIR', 'pano:IMAGE', videos, image folders, ...). Stops after\n"
-      "`duration` seconds and/or `frames` frames per camera. Returns the summary dict (frames, dropped per\n"
+      "`duration` seconds and/or `frames` frames per camera. fps: the frame-set rate (None: 0.9 x the\n"
+      "slowest camera's own rate, as `omma record`). Returns the summary dict (frames, dropped per\n"
       "camera, bytes, seconds, mb_per_s, error); an early stop (disk full) warns and sets 'error'. Ctrl-C\n"
       "(SIGINT) stops the recording cleanly, then raises KeyboardInterrupt.");
 
-  m.def("render", &render_files, py::arg("input"), py::arg("out"), py::arg("rig") = py::none(),
-        py::arg("size") = py::make_tuple(9000, 2400), py::arg("projection") = "equirect-100",
-        py::arg("method") = "mrf", py::arg("sets") = py::none(), py::arg("band_rows") = 256,
-        py::arg("demosaic") = "hybrid", py::arg("awb") = "grayworld", py::arg("bits") = 12,
-        py::arg("threads") = 0, py::arg("cache_dir") = py::none(), py::arg("photometric") = true,
-        py::arg("raw") = false, py::arg("min_weight") = 1.0 / 20, py::arg("progress") = false,
-        "Renders a panorama file band by band, as `omma render`: input is a recording folder (every frame "
-        "set,\n"
-        "or `sets`: an index, (first, stop) or a slice), a frames folder (cam_XX.png + rig.json; raw=True: "
-        "16-bit\n"
-        "mosaics developed by the ISP), or frames in memory (a list or (N, H, W, 3) array; rig= required).\n"
-        "out: .tif/.tiff is written as BigTIFF (any size, memory = one band), other extensions through "
-        "OpenCV;\n"
-        "atomic; with several sets '{set}' in the name is replaced by the 5-digit index (else _00012 is "
-        "added).\n"
-        "method: nn | linear | gaussian | mrf | mrf-spherical | sad | hq (the offline double-precision "
-        "blend).\n"
-        "cache_dir: None = the default map cache, False = no cache, or a folder. Returns a dict: outputs, \n"
-        "width, height, seconds per stage, memory_bytes.");
+  m.def(
+      "render", &render_files, py::arg("input"), py::arg("out"), py::arg("rig") = py::none(),
+      py::arg("size") = py::make_tuple(9000, 2400), py::arg("projection") = "equirect-100",
+      py::arg("method") = "mrf", py::arg("sets") = py::none(), py::arg("band_rows") = 256,
+      py::arg("demosaic") = "hybrid", py::arg("awb") = "grayworld", py::arg("bits") = 12,
+      py::arg("threads") = 0, py::arg("cache_dir") = py::none(), py::arg("photometric") = true,
+      py::arg("raw") = false, py::arg("min_weight") = 1.0 / 20, py::arg("incomplete") = "hold",
+      py::arg("hold_max_age_ms") = 0.0, py::arg("progress") = false,
+      "Renders a panorama file band by band, as `omma render`: input is a recording folder (every frame "
+      "set,\n"
+      "or `sets`: an index, (first, stop) or a slice), a frames folder (cam_XX.png + rig.json; raw=True: "
+      "16-bit\n"
+      "mosaics developed by the ISP), or frames in memory (a list or (N, H, W, 3) array; rig= required).\n"
+      "out: .tif/.tiff is written as BigTIFF (any size, memory = one band), other extensions through "
+      "OpenCV;\n"
+      "atomic; with several sets '{set}' in the name is replaced by the 5-digit index (else _00012 is "
+      "added).\n"
+      "method: nn | linear | gaussian | mrf | mrf-spherical | sad | hq (the offline double-precision "
+      "blend).\n"
+      "cache_dir: None = the default map cache, False = no cache, or a folder.\n"
+      "incomplete: what a recording's frame set lacking cameras becomes, as `omma render --incomplete`:\n"
+      "'hold' (each missing camera's last frame up to hold_max_age_ms old, 0 = two periods; else skipped),\n"
+      "'skip', or 'fail' (RecordingError); never black cameras; a RuntimeWarning gives the counts.\n"
+      "Returns a dict: outputs, width, height, seconds per stage, memory_bytes, incomplete (the counts).");
 
   m.def(
       "export_pto",

@@ -158,3 +158,37 @@ def test_plan_matches_the_command():
         assert [r["bandwidth_mib_s"] for r in cli71["rows"]] == [r["bandwidth_mib_s"] for r in rows]
     with pytest.raises(ValueError, match="row must be 1..8"):
         omma.plan(row=9)
+
+
+def test_render_never_renders_a_missing_camera_black(rig, tmp_path):
+    """A recording whose second camera stops early: sets 3..5 lack it. render() holds a recent frame,
+    skips the rest, or refuses (incomplete='fail'), as `omma render --incomplete`; a warning gives the
+    counts, and the result dict holds them."""
+    d = rig.to_dict()
+    d["cameras"] = d["cameras"][:2]
+    two = omma.Rig.from_dict(d)
+    sources = []
+    for c, n in enumerate((6, 3)):
+        folder = tmp_path / f"s{c}"
+        folder.mkdir()
+        w, h = two.camera_sizes[c]
+        for k in range(n):
+            omma.write_image(folder / f"f{k}.png", np.full((h, w, 3), 40 + 20 * k, np.uint8))
+        sources.append(str(folder))
+    out = tmp_path / "rec"
+    omma.record(two, sources, out, frames=6, fps=10)
+    rec = omma.Recording(out)
+    assert (len(rec), rec.complete_sets) == (6, 3)
+    common = dict(size=(128, 64), projection="equirect-full", method="linear", cache_dir=False)
+    with pytest.warns(RuntimeWarning, match="3 of 6 frame sets lack cameras"):
+        skip = omma.render(out, tmp_path / "skip_{set}.png", incomplete="skip", **common)
+    assert [p[-9:-4] for p in skip["outputs"]] == ["00000", "00001", "00002"]
+    assert (skip["incomplete"]["skipped"], skip["incomplete"]["held_sets"]) == (3, 0)
+    with pytest.warns(RuntimeWarning):
+        hold = omma.render(out, tmp_path / "hold_{set}.png", incomplete="hold", hold_max_age_ms=150, **common)
+    assert (hold["incomplete"]["held_sets"], hold["incomplete"]["skipped"]) == (1, 2)
+    assert len(hold["outputs"]) == 4 and hold["outputs"][-1].endswith("hold_00003.png")
+    with pytest.raises(omma.RecordingError, match="lacks camera"):
+        omma.render(out, tmp_path / "fail_{set}.png", incomplete="fail", **common)
+    with pytest.raises(ValueError, match="hold_max_age_ms"):
+        omma.render(out, tmp_path / "x.png", hold_max_age_ms=-1, **common)

@@ -303,4 +303,22 @@ class RecordingReader : public render::FrameSetReader {
   MatchResult match_;
 };
 
+// A recording's frame sets as planned (plan_frame_sets): item i is planned set i (its output is
+// named after plan.sets[i].set), every camera filled, held frames in place of missing ones. Both
+// references must outlive it.
+class PlannedFrameSets : public render::FrameSetReader {
+ public:
+  PlannedFrameSets(const RecordingReader& rec, const FrameSetPlan& plan) : rec_(rec), plan_(plan) {}
+  const Rig& rig() const override { return rec_.rig(); }
+  int bits() const override { return rec_.bits(); }
+  int64_t frame_sets() const override { return int64_t(plan_.sets.size()); }
+  std::vector<cv::Mat> read_frame_set(int64_t i) const override {
+    return rec_.read_frames(plan_.sets.at(size_t(i)).frame);
+  }
+
+ private:
+  const RecordingReader& rec_;
+  const FrameSetPlan& plan_;
+};
+
 }  // namespace omma::io
