@@ -109,7 +109,7 @@ int main(int argc, char** argv) {
   bool verbose = false, quiet = false;
   app.add_flag("-v,--verbose", verbose, "More log output (stderr)");
   app.add_flag("-q,--quiet", quiet, "Only warnings and errors on stderr");
-  app.set_version_flag("--version", omma::app::version_text());
+  app.set_version_flag("--version", [] { return omma::app::version_text(); });  // made only when asked
   for (const auto& c : omma::app::kCommands) c.add(app);
   omma::app::check_numeric_options(app);
   omma::app::add_examples(app);

@@ -42,11 +42,7 @@ void run_record(const RecordArgs& a) {
   o.queue_frames = a.queue;
   o.flush_interval_s = a.flush;
   o.fps = a.fps.value_or(0);  // 0: derived from the sources' own rates
-  if (a.fps && !io::valid_recording_fps(*a.fps)) {
-    std::string why;
-    io::valid_recording_fps(*a.fps, &why);
-    throw std::invalid_argument(why);
-  }
+  if (std::string why; a.fps && !io::valid_recording_fps(*a.fps, &why)) throw std::invalid_argument(why);
   if (!(a.exposure_ms >= 0)) throw std::invalid_argument("--exposure-ms must be >= 0");
   o.exposure_s = a.exposure_ms / 1e3;
   o.clock_mhz = a.clock;

@@ -7,6 +7,7 @@
 
 #include <fmt/format.h>
 #include <opencv2/imgcodecs.hpp>
+#include <spdlog/spdlog.h>
 
 namespace omma {
 namespace fs = std::filesystem;
@@ -51,6 +52,14 @@ cv::Mat read_image(const fs::path& path, int flags) {
   }
   if (m.empty()) throw IoError("cannot read image '" + path.string() + "' (not an image, or damaged)");
   return m;
+}
+
+void remove_leftover(const fs::path& tmp, const fs::path& target) {
+  std::error_code ec;
+  if (!fs::exists(tmp, ec)) return;
+  fs::remove(tmp, ec);
+  spdlog::warn("{} the temporary file {} of an interrupted earlier run writing {}",
+               ec ? "could not remove" : "removed", tmp.string(), target.string());
 }
 
 void write_image(const fs::path& path, const cv::Mat& image,

@@ -22,6 +22,9 @@ class IoError : public std::runtime_error {
 void write_atomically(const std::filesystem::path& path,
                       const std::function<void(const std::filesystem::path& tmp)>& write);
 void write_text_atomically(const std::filesystem::path& path, const std::string& text);
+// Removes `tmp`, a temporary file that an earlier run writing `target` left behind (killed before it
+// could finish), naming it in a warning; nothing if there is none.
+void remove_leftover(const std::filesystem::path& tmp, const std::filesystem::path& target);
 
 // Reads an image (any OpenCV format) with its stored depth and channels (IMREAD_UNCHANGED unless
 // flags given); throws IoError naming the path if it is missing or unreadable.

@@ -173,12 +173,18 @@ bool valid_recording_bits(int64_t bits, std::string* why) {
   return true;
 }
 
+namespace {
+// Does `text` hold an ASCII control character (below 0x20, or DEL; NUL included)?
+bool has_control_char(const std::string& text) {
+  return std::any_of(text.begin(), text.end(),
+                     [](char ch) { return static_cast<unsigned char>(ch) < 0x20 || ch == 0x7f; });
+}
+}  // namespace
+
 bool valid_sensor_mode(const std::string& mode, std::string* why) {
   if (mode.size() > kMaxSensorModeBytes)
     return invalid(why, fmt::format("sensor mode must be at most {} bytes", kMaxSensorModeBytes));
-  for (const char ch : mode)
-    if (static_cast<unsigned char>(ch) < 0x20 || ch == 0x7f)
-      return invalid(why, "sensor mode must not hold control characters");
+  if (has_control_char(mode)) return invalid(why, "sensor mode must not hold control characters");
   return true;
 }
 
@@ -192,9 +198,8 @@ bool valid_stream_file_name(const std::string& name, std::string* why) {
     return invalid(why, fmt::format("stream file names must have 1..{} bytes", kMaxStreamNameBytes));
   if (name.find('/') != std::string::npos || name.find("..") != std::string::npos || name == ".")
     return invalid(why, fmt::format("stream file name '{}' is not a plain name in the folder", name));
-  for (const char ch : name)
-    if (static_cast<unsigned char>(ch) < 0x20 || ch == 0x7f)
-      return invalid(why, "stream file names must not hold control characters (NUL included)");
+  if (has_control_char(name))
+    return invalid(why, "stream file names must not hold control characters (NUL included)");
   return true;
 }
 
@@ -494,7 +499,8 @@ void write_stream_description(const Stream& s, int c, const RecordingManifest& m
   write_double_attr(f, "clock_mhz", m.clock_mhz);
   write_string_attr(f, "time_base", kTimeBase);
   write_int_attr(f, "start_unix_ns", m.start_unix_ns);
-  write_string_attr(f, "start_time", iso8601_utc(m.start_unix_ns));
+  const std::string start = iso8601_utc(m.start_unix_ns);
+  write_string_attr(f, "start_time", start);
   write_string_attr(f, "rig", rig_json);
   write_string_attr(s.frames, "units", "counts");
   write_string_attr(s.frames, "long_name",
@@ -504,7 +510,7 @@ void write_stream_description(const Stream& s, int c, const RecordingManifest& m
   write_string_attr(s.seq, "long_name", "the source's frame sequence number (gaps: dropped frames)");
   write_string_attr(s.t, "units", "ns");
   write_string_attr(s.t, "long_name", "capture time since the recording's start (-1: frame not written)");
-  write_string_attr(s.t, "start", iso8601_utc(m.start_unix_ns));
+  write_string_attr(s.t, "start", start);
   write_int_attr(s.t, "start_unix_ns", m.start_unix_ns);
   write_string_attr(s.t, "time_base", kTimeBase);
 }
@@ -1101,10 +1107,7 @@ std::string rig_mismatch(const Rig& rig, const Rig& recorded) {
 std::vector<cv::Mat> RecordingReader::read_frame_set(int64_t i) const {
   if (i < 0 || i >= frame_sets())
     throw RecordingError(fmt::format("frame set {} does not exist ({} sets)", i, frame_sets()));
-  std::vector<cv::Mat> out(cameras());
-  for (int c = 0; c < cameras(); ++c)
-    if (match_.sets[i].frame[c] >= 0) out[c] = read(c, match_.sets[i].frame[c]);
-  return out;
+  return read_frames(match_.sets[i].frame);
 }
 
 }  // namespace omma::io

@@ -120,19 +120,28 @@ std::string plain_box(const std::string& type, const std::string& payload) {
   return b + type + payload;
 }
 
+// The `equi` projection bounds of the grid's layout: the fractions of the full sphere cut off at the
+// top, bottom, left and right, 0.32 fixed point (value * 2^32, rounded down). The MP4 box and
+// FFmpeg's side data (Matroska) carry the same four numbers.
+struct EquiBounds {
+  uint32_t top = 0, bottom = 0, left = 0, right = 0;
+};
+EquiBounds equi_bounds(const PanoGrid& grid) {
+  const SphericalLayout l = spherical_layout(grid);
+  auto frac = [](int part, int whole) { return uint32_t((uint64_t(part) << 32) / uint64_t(whole)); };
+  return {frac(l.top, l.full_height), frac(l.full_height - l.top - l.height, l.full_height),
+          frac(l.left, l.full_width), frac(l.full_width - l.left - l.width, l.full_width)};
+}
+
 // st3d (mono) + sv3d for the grid's layout (Spherical Video V2).
 std::string spherical_v2_boxes(const PanoGrid& grid) {
-  const SphericalLayout l = spherical_layout(grid);
   const std::string st3d = full_box("st3d", std::string(1, '\0'));        // stereo_mode 0: monoscopic
   const std::string svhd = full_box("svhd", std::string("omma") + '\0');  // metadata source, NUL-terminated
   std::string prhd_payload;
   for (int i = 0; i < 3; ++i) put_u32(prhd_payload, 0);  // pose yaw, pitch, roll: 0 (16.16 fixed point)
-  auto frac = [](int part, int whole) { return uint32_t((uint64_t(part) << 32) / uint64_t(whole)); };
+  const EquiBounds b = equi_bounds(grid);
   std::string equi_payload;
-  put_u32(equi_payload, frac(l.top, l.full_height));
-  put_u32(equi_payload, frac(l.full_height - l.top - l.height, l.full_height));
-  put_u32(equi_payload, frac(l.left, l.full_width));
-  put_u32(equi_payload, frac(l.full_width - l.left - l.width, l.full_width));
+  for (const uint32_t v : {b.top, b.bottom, b.left, b.right}) put_u32(equi_payload, v);
   const std::string proj = plain_box("proj", full_box("prhd", prhd_payload) + full_box("equi", equi_payload));
   return st3d + plain_box("sv3d", svhd + proj);
 }
@@ -319,12 +328,6 @@ bool set_isobmff(const fs::path& path, const PanoGrid& grid) {
 
 // ---- libavformat ---------------------------------------------------------------------------------
 
-std::string av_error(int code) {
-  char buf[AV_ERROR_MAX_STRING_SIZE] = {};
-  av_strerror(code, buf, sizeof buf);
-  return buf;
-}
-
 struct InputCloser {
   void operator()(AVFormatContext* c) const { avformat_close_input(&c); }
 };
@@ -462,16 +465,21 @@ std::optional<std::map<std::string, std::string>> read_v1(const fs::path& path) 
 
 }  // namespace
 
+std::string av_error(int code) {
+  char buf[AV_ERROR_MAX_STRING_SIZE] = {};
+  av_strerror(code, buf, sizeof buf);
+  return buf;
+}
+
 std::pair<AVSphericalMapping*, size_t> spherical_side_data(const PanoGrid& grid) {
   size_t size = 0;
   AVSphericalMapping* s = av_spherical_alloc(&size);
   if (!s) throw std::bad_alloc();
-  const SphericalLayout l = spherical_layout(grid);
-  auto frac = [](int part, int whole) { return uint32_t((uint64_t(part) << 32) / uint64_t(whole)); };
-  s->bound_top = frac(l.top, l.full_height);
-  s->bound_bottom = frac(l.full_height - l.top - l.height, l.full_height);
-  s->bound_left = frac(l.left, l.full_width);
-  s->bound_right = frac(l.full_width - l.left - l.width, l.full_width);
+  const EquiBounds b = equi_bounds(grid);
+  s->bound_top = b.top;
+  s->bound_bottom = b.bottom;
+  s->bound_left = b.left;
+  s->bound_right = b.right;
   const bool whole = !s->bound_top && !s->bound_bottom && !s->bound_left && !s->bound_right;
   s->projection = whole ? AV_SPHERICAL_EQUIRECTANGULAR : AV_SPHERICAL_EQUIRECTANGULAR_TILE;
   return {s, size};

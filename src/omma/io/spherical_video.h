@@ -48,6 +48,9 @@ namespace omma::io {
 // value is its size in bytes. Throws std::bad_alloc.
 std::pair<AVSphericalMapping*, size_t> spherical_side_data(const PanoGrid& grid);
 
+// FFmpeg's text for one of its (negative) error codes (av_strerror), for messages.
+std::string av_error(int code);
+
 // The V1 RDF/XML of `grid` (UTF-8), as it goes into the uuid box.
 std::string spherical_v1_xml(const PanoGrid& grid);
 

@@ -31,12 +31,6 @@ namespace {
 const char* const kPresets[] = {"ultrafast", "superfast", "veryfast", "faster",  "fast",
                                 "medium",    "slow",      "slower",   "veryslow"};
 
-std::string av_error(int code) {
-  char buf[AV_ERROR_MAX_STRING_SIZE] = {};
-  av_strerror(code, buf, sizeof buf);
-  return buf;
-}
-
 // The muxer for an extension ("" if none).
 std::string muxer_for(const std::string& ext) {
   if (ext == ".mp4" || ext == ".m4v") return "mp4";
@@ -203,11 +197,7 @@ VideoWriter::VideoWriter(const fs::path& path, cv::Size size, const VideoOptions
   if (!fs::is_directory(dir, ec))
     throw IoError("cannot write video " + path.string() + ": folder " + dir.string() + " does not exist");
   m.tmp = partial_path(path);
-  if (fs::exists(m.tmp, ec)) {
-    fs::remove(m.tmp, ec);
-    spdlog::warn("{} the temporary file {} of an interrupted earlier run writing {}",
-                 ec ? "could not remove" : "removed", m.tmp.string(), path.string());
-  }
+  remove_leftover(m.tmp, path);
   quiet_ffmpeg_log();
   const std::string what = "cannot write video '" + path.string() + "': ";
   const std::string ext = lower_extension(path);
@@ -296,7 +286,7 @@ VideoWriter::VideoWriter(const fs::path& path, cv::Size size, const VideoOptions
   }
   m.active = true;
   AVDictionary* mux_opts = nullptr;
-  if (ext == ".mp4" || ext == ".m4v" || ext == ".mov") av_dict_set(&mux_opts, "movflags", "+faststart", 0);
+  if (is_isobmff_path(path)) av_dict_set(&mux_opts, "movflags", "+faststart", 0);
   const int header = avformat_write_header(m.fmt, &mux_opts);
   av_dict_free(&mux_opts);
   if (header < 0) m.fail(av_error(header));

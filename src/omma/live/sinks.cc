@@ -44,16 +44,6 @@ namespace omma::live {
 namespace fs = std::filesystem;
 namespace {
 
-// Removes a temporary file that an earlier run writing `target` left behind (it was killed before
-// it could finish), naming it in a warning.
-void remove_leftover(const fs::path& tmp, const fs::path& target) {
-  std::error_code ec;
-  if (!fs::exists(tmp, ec)) return;
-  fs::remove(tmp, ec);
-  spdlog::warn("{} the temporary file {} of an interrupted earlier run writing {}",
-               ec ? "could not remove" : "removed", tmp.string(), target.string());
-}
-
 // A video file through io::VideoWriter (H.264 / VP9, atomic: the temporary file .NAME.partial.EXT
 // is renamed into place by finish(), removed by abort()), with the 360-degree metadata of its
 // projection.
