@@ -46,11 +46,14 @@ void add_run_command(CLI::App& root) {
       "(video), /dev/videoN or v4l2:N (V4L2), frames:DIR (cam_XX.png stills), pano:IMAGE[@DEG_S] "
       "(views of a turning 360x180 photograph), sim:SCENE[@SPEED] (the simulator: colon, photo:PATH, usaf, "
       "checker; free-running cameras at 44-56 fps, a loop pre-rendered at start-up), link:FILE or FILE.bin "
-      "(raw sensor link), a pattern with {id} (two-digit camera id).\n"
+      "(raw sensor link), gst:PIPELINE (any GStreamer pipeline ending in raw video: RTSP/IP cameras, "
+      "v4l2src, files of any container; a camera that errors or stalls for --stall-timeout is dropped), a "
+      "pattern with {id} (two-digit camera id).\n"
       "Sinks: FILE.mp4|mov|mkv|webm|avi (H.264, VP9 in webm; 360-degree metadata), - (raw bgr24 frames on "
       "stdout, for ffmpeg), png:DIR or DIR/, cam:ID:SINK (one camera passed through), "
       "http:PORT (live view on 127.0.0.1, or --bind: / 360-degree viewer, /stream.mjpg MJPEG, /frame.jpg, "
-      "/stats.json).\n"
+      "/stats.json), rtsp://HOST:PORT/PATH (an RTSP server, H.264), srt://HOST:PORT[?mode=caller] (H.264 in "
+      "MPEG-TS over SRT, a listener by default; neither carries 360-degree metadata).\n"
       "Latency = mean age of a panorama's camera frames when it is rendered (docs/guide/live.md).\n"
       "A camera that ends or fails is dropped and the map recompiled without it. Ctrl-C, SIGTERM or SIGHUP "
       "stops "
@@ -58,7 +61,7 @@ void add_run_command(CLI::App& root) {
   struct Opts {
     std::string rig, method = "linear", projection = "vr180", size = "1080x1080", cache, sim_fps = "44-56";
     std::vector<std::string> sources, sinks;
-    double duration = 0, fps = 30, source_fps = 30, first_timeout = 10,
+    double duration = 0, fps = 30, source_fps = 30, first_timeout = 10, stall = live::SourceOptions{}.stall_s,
            min_weight = render::MapOptions{}.min_weight;
     double sim_jitter = live::SimCameraOptions{}.jitter_ms, sim_loop = live::SimCameraOptions{}.loop_s;
     long frames = 0;
@@ -94,6 +97,10 @@ void add_run_command(CLI::App& root) {
       ->check(CLI::Range(0.0, live::kMaxRate));
   cmd->add_option("--first-frame-timeout", o.first_timeout,
                   "A camera without a first frame after this many seconds is dropped (default 10)")
+      ->check(CLI::Range(1e-3, 1e6));
+  cmd->add_option("--stall-timeout", o.stall,
+                  "A gst: camera that delivers no new frame for this many seconds fails and is dropped "
+                  "(default 5)")
       ->check(CLI::Range(1e-3, 1e6));
   cmd->add_flag(
       "--depth", o.depth,
@@ -171,6 +178,7 @@ void add_run_command(CLI::App& root) {
     live::SourceOptions so;
     so.fps = o.source_fps;
     so.loop = o.loop;
+    so.stall_s = o.stall;
     so.sim.jitter_ms = o.sim_jitter;
     so.sim.loop_s = o.sim_loop;
     so.sim.progress = !o.json && progress_enabled();

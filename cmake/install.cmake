@@ -33,6 +33,9 @@ install(FILES ${PROJECT_BINARY_DIR}/ommaConfig.cmake ${PROJECT_BINARY_DIR}/ommaC
 
 # pkg-config: the stage libraries in link order (dependents first) and what they need.
 set(OMMA_PC_REQUIRES "opencv4 eigen3 tbb nlohmann_json spdlog fmt zlib libtiff-4 hdf5 libxxhash cpp-httplib libavcodec libavformat libavutil libswscale")
+if(OMMA_GSTREAMER_ENABLED)
+  string(APPEND OMMA_PC_REQUIRES " gstreamer-1.0 gstreamer-base-1.0 gstreamer-app-1.0 gstreamer-video-1.0 gstreamer-rtsp-server-1.0")
+endif()
 if(OMMA_MPI_ENABLED)
   string(APPEND OMMA_PC_REQUIRES " ompi-cxx")
 endif()

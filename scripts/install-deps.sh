@@ -14,6 +14,12 @@ pkgs=(cmake g++ ninja-build ccache pkg-config libopencv-dev libeigen3-dev libcer
       libbenchmark-dev hugin-tools libcpp-httplib-dev zlib1g-dev libtiff-dev libhdf5-dev python3-dev pybind11-dev
       python3-numpy libxxhash-dev libopenmpi-dev openmpi-bin help2man)
 pkgs+=(libavcodec-dev libavformat-dev libavutil-dev libswscale-dev)  # video files (src/omma/io/video_writer.h)
+# GStreamer: gst: sources, rtsp:// and srt:// sinks (src/omma/live/gst.h) and the plugin (gst/): the
+# development files, gst-rtsp-server, and the plugins they run (x264enc: ugly; srtsink, mpegtsmux: bad;
+# avdec_h264: libav), gst-launch-1.0 and gst-inspect-1.0 (tools).
+pkgs+=(libgstreamer1.0-dev libgstreamer-plugins-base1.0-dev libgstrtspserver-1.0-dev gstreamer1.0-tools
+       gstreamer1.0-plugins-base gstreamer1.0-plugins-good gstreamer1.0-plugins-bad gstreamer1.0-plugins-ugly
+       gstreamer1.0-libav)
 [ "${1:-}" = "--test" ] && pkgs+=(chromium verilator yosys iverilog python3-pytest libimage-exiftool-perl ffmpeg xxhash
                     tesseract-ocr tesseract-ocr-eng clang-format python3-mypy hdf5-tools)
 [ "${1:-}" = "--test" ] && pkgs+=(python3-h5py)  # reads recordings back (tests/cli/recording_cli_test.cc)

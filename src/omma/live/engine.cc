@@ -316,7 +316,7 @@ class RenderLoop {
   EngineSummary run() {
     t0_ = window_start_ = next_frame_ = Clock::now();
     try {
-      while (!g_stop) {
+      while (!stopping()) {
         wait_for_tick();
         const double elapsed = std::chrono::duration<double>(Clock::now() - t0_).count();
         if (opt_.duration_s > 0 && elapsed >= opt_.duration_s) break;
@@ -344,6 +344,8 @@ class RenderLoop {
   }
 
  private:
+  bool stopping() const { return g_stop.load() || (opt_.stop && opt_.stop->load()); }
+
   // The map of every camera (cached), a warm-up render, and the depth-adaptive renderer if asked.
   void compile_maps() {
     mopt_ = opt_.map;
@@ -383,7 +385,9 @@ class RenderLoop {
       next_frame_ += std::chrono::microseconds(long(1e6 / opt_.fps));
       const auto now = Clock::now();
       if (next_frame_ < now) next_frame_ = now;
-      wake_.wait_until(lock, next_frame_, [] { return g_stop.load(); });
+      // In slices of at most 50 ms: an outside stop flag (EngineOptions::stop) has no one to notify.
+      while (!stopping() && Clock::now() < next_frame_)
+        wake_.wait_until(lock, std::min(next_frame_, Clock::now() + std::chrono::milliseconds(50)));
     } else {
       wake_.wait_for(lock, std::chrono::milliseconds(2));
     }

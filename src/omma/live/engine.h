@@ -18,6 +18,7 @@
 // clock) or else the moment the source delivered it.
 #pragma once
 
+#include <atomic>
 #include <chrono>
 #include <filesystem>
 #include <functional>
@@ -76,6 +77,10 @@ struct EngineOptions {
   // figure so far (render_ms_mean, depth estimate_ms_mean, latency_ms, fps ...) and `window`, the
   // last interval. The same JSON goes to every sink's set_stats (the live view's /stats.json).
   std::function<void(const nlohmann::json&)> on_progress;
+  // Stops this run when it becomes true (set from any thread; the render loop checks it at every
+  // tick and at least every 50 ms): for an engine embedded in another program (the GStreamer
+  // element, gst/), where request_stop() would stop every engine of the process. Not owned.
+  const std::atomic<bool>* stop = nullptr;
   // Called after every render (before the sinks), from the render loop (tests, measurements).
   std::function<void(const cv::Mat& panorama, const PanoramaInfo&)> on_panorama;
   bool IsValid(std::string* why = nullptr) const;

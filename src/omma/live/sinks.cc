@@ -37,6 +37,7 @@
 #include "omma/io/metadata.h"
 #include "omma/io/video_writer.h"
 #include "omma/live/engine.h"
+#include "omma/live/gst.h"
 #include "omma/live/sources.h"
 #include "omma/live/web_assets.h"
 
@@ -743,6 +744,8 @@ TokenMode parse_token_mode(const std::string& text) {
 std::unique_ptr<Sink> open_sink(const std::string& spec, const Rig& rig, cv::Size pano_size,
                                 const SinkOptions& opt) {
   if (std::string why; !opt.IsValid(&why)) throw SinkError("sink '" + spec + "': " + why);
+  if (spec.rfind("rtsp://", 0) == 0 || spec.rfind("srt://", 0) == 0)
+    return open_gst_sink(spec, pano_size, opt);  // gst.h
   if (spec.rfind("http://", 0) == 0) {
     // http://HOST:PORT: HOST is the address to serve on (as --bind; IPv6 in brackets).
     std::string rest = spec.substr(7);
@@ -795,8 +798,8 @@ std::unique_ptr<Sink> open_sink(const std::string& spec, const Rig& rig, cv::Siz
   }
   throw SinkError(
       "sink '" + spec +
-      "': use FILE.mp4|.mov|.mkv|.webm|.avi, - (raw frames on stdout), png:DIR, DIR/, cam:ID:SINK or "
-      "http:PORT");
+      "': use FILE.mp4|.mov|.mkv|.webm|.avi, - (raw frames on stdout), png:DIR, DIR/, cam:ID:SINK, "
+      "http:PORT, rtsp://HOST:PORT/PATH or srt://HOST:PORT");
 }
 
 }  // namespace omma::live

@@ -31,6 +31,8 @@
 //                                    time. The page passes its own token on to its requests. The
 //                                    URL with the token is logged at warning level (shown even with
 //                                    --quiet); a non-loopback address is warned about.
+//   rtsp://HOST:PORT/PATH            RTSP server (H.264) at that URL (gst.h)
+//   srt://HOST:PORT[?mode=...]       H.264 in MPEG-TS over SRT, listener by default (gst.h)
 // Opening a sink checks that it can be written (folder creatable, writer opens, port free) and
 // throws SinkError otherwise; a failed or aborted run leaves no partial video file behind. An
 // interrupted run (SIGINT, SIGTERM: `omma run` stops cleanly) leaves a playable file; one killed

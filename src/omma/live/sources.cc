@@ -21,6 +21,7 @@
 #include "omma/isp/isp.h"
 #include "omma/isp/link.h"
 #include "omma/isp/photometric.h"
+#include "omma/live/gst.h"
 #include "omma/live/sim_loop.h"
 #include "omma/sim/panorama_views.h"
 
@@ -250,6 +251,7 @@ class LinkFile : public CameraSource {
 
 std::unique_ptr<CameraSource> open_one(const std::string& spec, const RigCamera& cam,
                                        const SourceOptions& opt) {
+  if (spec.rfind("gst:", 0) == 0) return open_gst_source(spec.substr(4), cam, opt);  // gst.h
   if (spec.rfind("link:", 0) == 0 || has_ext(fs::path(spec), {".bin"})) {
     const fs::path p = spec.rfind("link:", 0) == 0 ? spec.substr(5) : spec;
     return std::make_unique<LinkFile>(p, cam, opt.fps, opt.loop);
@@ -302,6 +304,7 @@ std::unique_ptr<CameraSource> still_source(cv::Mat frame, double fps, int limit,
 bool SourceOptions::IsValid(std::string* why) const {
   if (!valid_rate(fps, true))
     return invalid(why, fmt::format("fps must be 0 (as fast as possible) or {}..{}", kMinRate, kMaxRate));
+  if (!(stall_s > 0 && stall_s <= 1e6)) return invalid(why, "stall_s must be in (0, 1e6] seconds");
   return sim.IsValid(why);
 }
 

@@ -17,6 +17,7 @@
 //                       default 10); ideal cameras (no noise), one ray per pixel. The cameras
 //                       free-run at their own rates with their own phase and jitter (sim_loop.h):
 //                       a loop of the motion is pre-rendered at start-up, then played back
+//   gst:PIPELINE        any GStreamer pipeline ending in raw video of the camera's size (gst.h)
 //   PATTERN with {id}   expanded once per camera with its two-digit id, e.g. "cams/cam_{id}.mp4"
 #pragma once
 
@@ -95,6 +96,7 @@ struct SourceOptions {
   bool force_fps = false;
   bool loop = false;     // image sequences and video files start again at their end
   SimCameraOptions sim;  // sim: sources (their rates are the sensors' own, not `fps`)
+  double stall_s = 5;    // gst: sources (gst.h): no new frame for this long fails the camera, s (> 0)
   bool IsValid(std::string* why = nullptr) const;  // fps >= 0, sim valid
 };
 
