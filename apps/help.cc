@@ -19,6 +19,9 @@
 #ifndef OMMA_RTL_BUILT
 #define OMMA_RTL_BUILT 0
 #endif
+#ifndef OMMA_GSTREAMER_BUILT
+#define OMMA_GSTREAMER_BUILT 0
+#endif
 #ifndef OMMA_PYTHON_BUILT
 #define OMMA_PYTHON_BUILT 0
 #endif
@@ -95,8 +98,13 @@ const std::map<std::string, std::vector<const char*>>& examples_table() {
       {"run",
        {"omma run --rig thesis-24 --source sim:colon --sink http:8080   # open http://127.0.0.1:8080/",
         "omma run --rig thesis-24 --source sim:colon --duration 5 --sink pano.mp4",
-        "omma run --rig calibrated.json --source /dev/video{id} --sink http:8080 --depth"}},
-      {"bench", {"omma bench --quick", "omma bench --only render --depth --json"}},
+        "omma run --rig calibrated.json --source /dev/video{id} --sink http:8080 --depth",
+        "omma run --rig thesis-24 --source sim:colon --sink rtsp://127.0.0.1:8554/pano   # ffplay the URL",
+        "omma run --rig rig.json --source 'gst:rtspsrc location=rtsp://cam{id}.local/s ! decodebin' "
+        "--stall-timeout 3 --sink srt://127.0.0.1:9000"}},
+      {"bench",
+       {"omma bench --quick", "omma bench --only render --depth --json",
+        "omma bench --stream --max-readers 8   # latency through the element, RTSP and MJPEG"}},
       {"hw",
        {"omma hw simulate --rig thesis-24 --frames frames --out hw",
         "omma hw export thesis-24 hw_tables && omma hw import hw_tables imported.json"}},
@@ -242,6 +250,8 @@ std::string version_text() {
   out << "OpenCV: " << CV_VERSION << "\n";
   out << "MPI (mpirun omma render): " << (OMMA_MPI_BUILT ? "yes" : "no") << "\n";
   out << "RTL co-simulation (hw/rtl): " << (OMMA_RTL_BUILT ? "yes" : "no") << "\n";
+  out << "GStreamer (gst: sources, rtsp:// srt:// sinks, plugin): " << (OMMA_GSTREAMER_BUILT ? "yes" : "no")
+      << "\n";
   out << "Python bindings: " << (OMMA_PYTHON_BUILT ? "yes" : "no") << "\n";
   out << "render kernel: " << render::to_string(render::best_kernel()) << " (of";
   for (render::Kernel k : {render::Kernel::kScalar, render::Kernel::kAvx2, render::Kernel::kAvx512Vnni})
