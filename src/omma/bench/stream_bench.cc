@@ -1,7 +1,5 @@
 #include "omma/bench/stream_bench.h"
 
-#include <netinet/in.h>
-#include <sys/socket.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -23,6 +21,8 @@
 #include "omma/core/valid.h"
 #include "omma/live/engine.h"
 #include "omma/live/gst.h"
+#include "omma/live/gst_util.h"
+#include "omma/testing/net.h"
 
 #if OMMA_HAVE_GSTREAMER
 #include <gst/app/gstappsink.h>
@@ -130,21 +130,12 @@ class FlashSource : public live::CameraSource {
   cv::Mat black_, white_, texture_;
 };
 
-// A free port on 127.0.0.1 (bound and released: another program could take it in between).
+// A free port on 127.0.0.1 (testing/net.h; bound and released: another program could take it in
+// between).
 int free_port() {
-  const int s = ::socket(AF_INET, SOCK_STREAM, 0);
-  if (s < 0) throw std::runtime_error("stream bench: no socket");
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  socklen_t len = sizeof a;
-  if (::bind(s, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0 ||
-      ::getsockname(s, reinterpret_cast<sockaddr*>(&a), &len) != 0) {
-    ::close(s);
-    throw std::runtime_error("stream bench: cannot find a free port");
-  }
-  ::close(s);
-  return ntohs(a.sin_port);
+  const int port = testing::free_port();
+  if (port <= 0) throw std::runtime_error("stream bench: cannot find a free port");
+  return port;
 }
 
 // The mean grey level of a GRAY8 sample from every 7th byte (whatever the row stride; the padding
@@ -205,12 +196,10 @@ class Reader {
  private:
   void loop() {
     while (!stop_) {
-      GError* err = nullptr;
-      GstElement* pipe = gst_parse_launch(launch_.c_str(), &err);
-      if (!pipe || err) {
-        set_error(err ? err->message : "cannot build the pipeline");
-        if (err) g_error_free(err);
-        if (pipe) gst_object_unref(pipe);
+      std::string why;
+      GstElement* pipe = live::parse_pipeline(launch_, &why);  // live/gst_util.h
+      if (!pipe) {
+        set_error(why);
         return;
       }
       GstElement* sink = gst_bin_get_by_name(GST_BIN(pipe), "out");
@@ -224,10 +213,7 @@ class Reader {
         }
         if (GstMessage* m = gst_bus_pop_filtered(bus, GstMessageType(GST_MESSAGE_ERROR | GST_MESSAGE_EOS))) {
           if (GST_MESSAGE_TYPE(m) == GST_MESSAGE_ERROR) {
-            GError* e = nullptr;
-            gst_message_parse_error(m, &e, nullptr);
-            set_error(e ? e->message : "error");
-            if (e) g_error_free(e);
+            set_error(live::message_text(m));
           } else {
             set_error("end of stream");
           }
@@ -357,14 +343,9 @@ nlohmann::json measure_element(const Rig& rig, const StreamBenchOptions& opt, co
       "video/x-raw,format=GRAY8 ! appsink name=out sync=false max-buffers=4 drop=true",
       rig_path.string(), opt.size.width, opt.size.height, opt.fps);
 
-  GError* err = nullptr;
-  GstElement* pipe = gst_parse_launch(launch.c_str(), &err);
-  if (!pipe || err) {
-    const std::string why = err ? err->message : "cannot build the pipeline";
-    if (err) g_error_free(err);
-    if (pipe) gst_object_unref(pipe);
-    return {{"error", why}};
-  }
+  std::string why;
+  GstElement* pipe = live::parse_pipeline(launch, &why);
+  if (!pipe) return {{"error", why}};
   std::vector<GstElement*> srcs;
   for (int c = 0; c < n; ++c)
     srcs.push_back(gst_bin_get_by_name(GST_BIN(pipe), fmt::format("c{}", c).c_str()));
@@ -412,10 +393,7 @@ nlohmann::json measure_element(const Rig& rig, const StreamBenchOptions& opt, co
     }
     while (GstMessage* m = gst_bus_pop(bus)) {
       if (GST_MESSAGE_TYPE(m) == GST_MESSAGE_ERROR) {
-        GError* e = nullptr;
-        gst_message_parse_error(m, &e, nullptr);
-        error = e ? e->message : "error";
-        if (e) g_error_free(e);
+        error = live::message_text(m);
       } else if (GST_MESSAGE_TYPE(m) == GST_MESSAGE_ELEMENT) {
         const GstStructure* st = gst_message_get_structure(m);
         if (st && gst_structure_has_name(st, "omma-stats")) {

@@ -5,7 +5,6 @@
 #include <atomic>
 #include <cerrno>
 #include <cmath>
-#include <cstdlib>
 #include <cstring>
 #include <mutex>
 #include <string>
@@ -16,6 +15,7 @@
 #include <spdlog/spdlog.h>
 
 #include "omma/live/gst.h"
+#include "omma/live/gst_util.h"
 
 #if OMMA_HAVE_GSTREAMER
 #include <arpa/inet.h>
@@ -77,12 +77,7 @@ Endpoint parse_endpoint(const std::string& spec) {
     e.host = rest.substr(0, colon);
   }
   if (colon == std::string::npos) fail(spec, form + " (the port is missing)");
-  const std::string port = rest.substr(colon + 1);
-  char* end = nullptr;
-  const long p = std::strtol(port.c_str(), &end, 10);
-  if (port.empty() || *end != '\0' || p < 1 || p > 65535)
-    fail(spec, "port '" + port + "': expected a port number 1-65535");
-  e.port = int(p);
+  e.port = parse_port(spec, rest.substr(colon + 1));  // sinks.h
   if (e.host.empty()) fail(spec, form + " (the host is missing: 127.0.0.1 serves this machine only)");
   SinkOptions at;
   at.bind = e.host;
@@ -439,15 +434,9 @@ class SrtSink : public Sink {
         encoder_launch(spec, size, opt) +
         " ! h264parse config-interval=-1 ! mpegtsmux alignment=7 ! srtsink name=omma_srt uri=\"" + uri +
         "\" wait-for-connection=false sync=false async=false";
-    GError* err = nullptr;
-    pipeline_ = gst_parse_launch(launch.c_str(), &err);
-    if (!pipeline_ || err) {
-      const std::string why = err ? err->message : "unknown error";
-      if (err) g_error_free(err);
-      if (pipeline_) gst_object_unref(pipeline_);
-      pipeline_ = nullptr;
-      fail(spec, "cannot build the SRT pipeline: " + why);
-    }
+    std::string why;
+    pipeline_ = parse_pipeline(launch, &why);  // gst_util.h
+    if (!pipeline_) fail(spec, "cannot build the SRT pipeline: " + why);
     src_ = GST_APP_SRC(gst_bin_get_by_name(GST_BIN(pipeline_), "omma_src"));
     GstElement* srt = gst_bin_get_by_name(GST_BIN(pipeline_), "omma_srt");
     g_signal_connect(srt, "caller-added", G_CALLBACK(&SrtSink::on_caller_added), this);
@@ -508,13 +497,9 @@ class SrtSink : public Sink {
     }
     gst_object_unref(bus);
     if (!msg) return "";
-    GError* err = nullptr;
-    gchar* debug = nullptr;
-    gst_message_parse_error(msg, &err, &debug);
-    std::string why = err ? err->message : "error";
-    if (debug) spdlog::debug("{}: {}", url_, debug);
-    if (err) g_error_free(err);
-    g_free(debug);
+    std::string debug;
+    const std::string why = message_text(msg, &debug);  // gst_util.h
+    if (!debug.empty()) spdlog::debug("{}: {}", url_, debug);
     gst_message_unref(msg);
     return why;
   }

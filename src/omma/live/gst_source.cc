@@ -4,6 +4,7 @@
 #include <stdexcept>
 
 #include "omma/live/gst.h"
+#include "omma/live/gst_util.h"
 
 #if OMMA_HAVE_GSTREAMER
 #include <atomic>
@@ -60,15 +61,9 @@ class GstSource : public CameraSource {
     const std::string desc = pipeline +
                              " ! videoconvert ! video/x-raw,format=BGR ! appsink name=" + kSinkName +
                              " max-buffers=1 drop=true sync=true enable-last-sample=false";
-    GError* err = nullptr;
-    GstElement* top = gst_parse_launch_full(desc.c_str(), nullptr, GST_PARSE_FLAG_FATAL_ERRORS, &err);
-    if (!top || err) {
-      const std::string why = err ? err->message : "unknown error";
-      if (err) g_error_free(err);
-      if (top) gst_object_unref(top);
-      throw SourceError("source '" + spec_ + "': the pipeline cannot be built: " + why);
-    }
-    gst_object_ref_sink(top);  // a floating reference from the parser
+    std::string why;
+    GstElement* top = parse_pipeline(desc, &why);  // gst_util.h
+    if (!top) throw SourceError("source '" + spec_ + "': the pipeline cannot be built: " + why);
     pipeline_ = top;
     appsink_ = GST_IS_BIN(top) ? gst_bin_get_by_name(GST_BIN(top), kSinkName) : nullptr;
     if (!appsink_) {
@@ -132,26 +127,15 @@ class GstSource : public CameraSource {
     while (GstMessage* msg = gst_bus_pop(bus_)) {
       if (GST_MESSAGE_TYPE(msg) == GST_MESSAGE_ERROR || GST_MESSAGE_TYPE(msg) == GST_MESSAGE_WARNING) {
         const bool error = GST_MESSAGE_TYPE(msg) == GST_MESSAGE_ERROR;
-        GError* err = nullptr;
-        gchar* debug = nullptr;
-        if (error)
-          gst_message_parse_error(msg, &err, &debug);
-        else
-          gst_message_parse_warning(msg, &err, &debug);
+        std::string d;
         std::string text =
             fmt::format("source '{}': GStreamer {} from element '{}': {}", spec_, error ? "error" : "warning",
-                        GST_OBJECT_NAME(GST_MESSAGE_SRC(msg)), err ? err->message : "unknown");
+                        GST_OBJECT_NAME(GST_MESSAGE_SRC(msg)), message_text(msg, &d));  // gst_util.h
         // The debug text's last line is the detail (e.g. 'No such file "/x"'); the rest is source
         // locations and the element's path.
-        if (debug) {
-          std::string d = debug;
-          while (!d.empty() && (d.back() == '\n' || d.back() == ' ')) d.pop_back();
-          const size_t nl = d.rfind('\n');
-          if (nl != std::string::npos) d = d.substr(nl + 1);
-          if (!d.empty() && d.size() < 300 && d.find(".c(") == std::string::npos) text += " (" + d + ")";
-        }
-        if (err) g_error_free(err);
-        g_free(debug);
+        while (!d.empty() && (d.back() == '\n' || d.back() == ' ')) d.pop_back();
+        if (const size_t nl = d.rfind('\n'); nl != std::string::npos) d = d.substr(nl + 1);
+        if (!d.empty() && d.size() < 300 && d.find(".c(") == std::string::npos) text += " (" + d + ")";
         gst_message_unref(msg);
         if (error) throw SourceError(text);
         if (warned_.size() < 16 && warned_.insert(text).second) spdlog::warn("{}", text);  // each once

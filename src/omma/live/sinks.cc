@@ -689,6 +689,8 @@ class HttpSink : public Sink {
   nlohmann::json stats_ = nlohmann::json::object();
 };
 
+}  // namespace
+
 int parse_port(const std::string& spec, const std::string& text) {
   try {
     size_t pos = 0;
@@ -696,10 +698,8 @@ int parse_port(const std::string& spec, const std::string& text) {
     if (pos == text.size() && p > 0 && p < 65536) return p;
   } catch (const std::exception&) {
   }
-  throw SinkError("sink '" + spec + "': expected a port number 1-65535");
+  throw SinkError("sink '" + spec + "': port '" + text + "': expected a port number 1-65535");
 }
-
-}  // namespace
 
 bool SinkOptions::IsValid(std::string* why) const {
   if (!valid_rate(fps, false)) return invalid(why, fmt::format("fps must be {}..{}", kMinRate, kMaxRate));

@@ -108,6 +108,10 @@ std::string random_token();
 // Token parsing for the command line: "auto", "random", "none" (std::invalid_argument otherwise).
 TokenMode parse_token_mode(const std::string& text);
 
+// The port of a network sink spec (http:PORT, http://HOST:PORT, rtsp://, srt://): TEXT as a number
+// 1..65535, else SinkError "sink 'SPEC': port 'TEXT': expected a port number 1-65535".
+int parse_port(const std::string& spec, const std::string& text);
+
 // Opens one sink. `pano_size` is the panorama size; the rig gives camera sizes for cam:ID sinks.
 std::unique_ptr<Sink> open_sink(const std::string& spec, const Rig& rig, cv::Size pano_size,
                                 const SinkOptions& opt = {});
