@@ -47,6 +47,7 @@ void add_isp_command(CLI::App& root);
 void add_calibrate_command(CLI::App& root);
 void add_rig_diff_command(CLI::App& root);
 void add_pto_command(CLI::App& root);
+void add_real_command(CLI::App& root);
 void add_run_command(CLI::App& root);
 void add_bench_command(CLI::App& root);
 void add_plan_command(CLI::App& root);

@@ -76,6 +76,13 @@ const std::map<std::string, std::vector<const char*>>& examples_table() {
        {"omma pto export calibrated.json rig.pto --frames frames",
         "nona -o pano rig.pto                       # Hugin renders the same panorama"}},
       {"pto import", {"omma pto import rig.pto > from_hugin.json", "omma pto import edited.pto --json"}},
+      {"real",
+       {"omma real stitch leuven --out real_out", "omma real depth --json",
+        "scripts/real_images.sh                    # every case into docs/results/real_images.md"}},
+      {"real stereo-calib",
+       {"omma real stereo-calib --out real_out", "omma real stereo-calib --no-peers --json"}},
+      {"real depth", {"omma real depth --out real_out", "omma real depth --quick --json"}},
+      {"real stitch", {"omma real stitch leuven --out real_out", "omma real stitch graf --no-peers --json"}},
       {"stitch",
        {"omma stitch --rig thesis-24 --frames frames --out pano.png",
         "omma stitch --rig calibrated.json --frames frames --method linear --projection equirect "

@@ -39,6 +39,7 @@ static const CommandEntry kCommands[] = {
     {"calibrate", add_calibrate_command},
     {"rig-diff", add_rig_diff_command},
     {"pto", add_pto_command},
+    {"real", add_real_command},
     {"stitch", add_stitch_command},
     {"eval", add_eval_command},
     {"resolution", add_resolution_command},

@@ -23,6 +23,10 @@ pkgs+=(libgstreamer1.0-dev libgstreamer-plugins-base1.0-dev libgstrtspserver-1.0
 [ "${1:-}" = "--test" ] && pkgs+=(chromium verilator yosys iverilog python3-pytest libimage-exiftool-perl ffmpeg xxhash
                     tesseract-ocr tesseract-ocr-eng clang-format python3-mypy hdf5-tools)
 [ "${1:-}" = "--test" ] && pkgs+=(python3-h5py)  # reads recordings back (tests/cli/recording_cli_test.cc)
+# Real photographs with ground truth (opencv-doc: a stereo pair with a chessboard, Middlebury Aloe, leuven,
+# aero, Graffiti; src/omma/testing/real_data.h) and the peers that stitch and calibrate them beside omma:
+# COLMAP and Hugin (hugin-tools, above).
+[ "${1:-}" = "--test" ] && pkgs+=(opencv-doc colmap)
 command -v npm >/dev/null || pkgs+=(nodejs npm)
 missing=()
 for p in "${pkgs[@]}"; do
