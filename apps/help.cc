@@ -38,8 +38,27 @@ const std::map<std::string, std::vector<const char*>>& examples_table() {
        {"omma demo                                  # the whole pipeline on the simulated colon",
         "omma stitch --help                         # every command has its own help",
         "omma completion bash > ~/.local/share/bash-completion/completions/omma"}},
-      {"rig", {"omma rig check thesis-24", "omma rig check my_rig.json --json"}},
+      {"rig",
+       {"omma rig check thesis-24", "omma rig new --camera size=640x480,fov=60 --out cam.json",
+        "omma rig export thesis-24 --colmap colmap_model --pto rig.pto --opencv rig.yml",
+        "omma rig import colmap_model --out from_colmap.json"}},
       {"rig check", {"omma rig check thesis-24", "omma rig check calibrated.json --json"}},
+      {"rig new",
+       {"omma rig new --camera size=640x480,fov=60 --camera size=640x480,focal=535,ypr=-90,0,180,pos=0,60,0 "
+        "--out pair.json",
+        "omma rig new --stereo /usr/share/doc/opencv-doc/examples/data/intrinsics.yml --size 640x480 "
+        "--baseline 60 --out stereo.json --json",
+        "omma rig new --camera opencv=/usr/share/doc/opencv-doc/examples/data/left_intrinsics.yml --out "
+        "left.json"}},
+      {"rig export",
+       {"omma rig export thesis-24 --colmap colmap_model --pto rig.pto --opencv rig.yml",
+        "mkdir -p colmap_bin && colmap model_converter --input_path colmap_model --output_path colmap_bin "
+        "--output_type BIN",
+        "omma rig export stereo.json --opencv stereo.yml --json"}},
+      {"rig import",
+       {"omma rig import colmap_model --out from_colmap.json",
+        "omma rig import project/sparse --scale 1000 --out from_sfm.json --json   # COLMAP units in metres",
+        "omma rig import rig.pto --out from_hugin.json", "omma rig import stereo.yml --out stereo.json"}},
       {"design",
        {"omma design --method max-volume --cam-size 1x1x2 --out rig.json   # the thesis prototype",
         "omma design --method cvt --aov 64 --r-virtual 18 --sphere --out cvt.json"}},
