@@ -34,6 +34,7 @@ struct StitchArgs {
   std::string rig, frames, method = "mrf", projection = "vr180", size, out;
   std::string boundary, boundary_overlay, single_camera, coverage;
   std::string depth = "inf", depth_out;
+  std::string depth_pitch;  // --depth-pitch: DEG or "camera"; empty = the sweep's default (1.33 deg)
   double threshold = 0.2;
   bool json = false;
   // --raw: develop DIR/cam_XX_raw.png with the ISP (thesis §5.1.2, appendix A) before stitching.
@@ -85,8 +86,27 @@ pano::PlaneSweepOptions parse_sweep(const std::string& text) {
   return so;
 }
 
-DepthChoice choose_depth(const std::string& spec, const Rig& rig, const std::vector<cv::Mat>& frames,
-                         const PanoGrid& grid) {
+// --depth-pitch: the sweep grid's pitch in degrees, or "camera" (the finest camera's pixel pitch at its
+// centre, pano::camera_pitch_deg). Sets pitch_deg with factor 0 (the coarse factor nearest to it).
+void apply_depth_pitch(const std::string& pitch, const Rig& rig, pano::PlaneSweepOptions& so) {
+  if (pitch.empty()) return;
+  if (pitch == "camera") {
+    so.pitch_deg = pano::camera_pitch_deg(rig);
+  } else {
+    const std::optional<double> deg = parse_double(pitch);  // core/parse.h
+    if (!deg || !(*deg > 0) || !(*deg <= 90))
+      throw std::invalid_argument("--depth-pitch must be an angle in (0, 90] degrees or 'camera', got '" +
+                                  pitch + "'");
+    so.pitch_deg = *deg;
+  }
+  so.factor = 0;
+}
+
+DepthChoice choose_depth(const std::string& spec, const std::string& pitch, const Rig& rig,
+                         const std::vector<cv::Mat>& frames, const PanoGrid& grid) {
+  const bool estimate = spec == "estimate" || spec.rfind("estimate:", 0) == 0;
+  if (!pitch.empty() && !estimate)
+    throw std::invalid_argument("--depth-pitch applies to --depth estimate only, got --depth " + spec);
   DepthChoice d;
   auto after = [&](const std::string& prefix) { return spec.substr(prefix.size()); };
   if (spec == "inf") {
@@ -101,8 +121,9 @@ DepthChoice choose_depth(const std::string& spec, const Rig& rig, const std::vec
     d.depth = pano::read_depth(after("truth:"), grid);
     pano::check_depth_outside_dome(d.depth, rig, grid, Vec3::Zero(), "depth file " + after("truth:"));
     d.info = {{"mode", "truth"}, {"file", after("truth:")}};
-  } else if (spec == "estimate" || spec.rfind("estimate:", 0) == 0) {
-    const pano::PlaneSweepOptions so = parse_sweep(spec == "estimate" ? "" : after("estimate:"));
+  } else if (estimate) {
+    pano::PlaneSweepOptions so = parse_sweep(spec == "estimate" ? "" : after("estimate:"));
+    apply_depth_pitch(pitch, rig, so);
     const pano::DepthSweep sweep(rig, grid, so);
     const pano::DepthEstimate e = sweep.estimate(frames);
     // A range that excludes the scene piles the confident estimates up at one of its ends.
@@ -125,6 +146,7 @@ DepthChoice choose_depth(const std::string& spec, const Rig& rig, const std::vec
         {"far_mm", so.far_mm},
         {"steps", so.steps},
         {"coarse", {sweep.coarse_grid().width, sweep.coarse_grid().height}},
+        {"pitch_deg", so.pitch_deg},
         {"prior_mm", e.prior_mm},
         {"confident_fraction", double(e.confident) / sweep.coarse_grid().width / sweep.coarse_grid().height},
         {"at_near", e.at_near},
@@ -203,7 +225,7 @@ void run_stitch(const StitchArgs& a) {
     depth_data = std::filesystem::path(p).replace_extension(".tiff");
   }
   const auto td = std::chrono::steady_clock::now();
-  const DepthChoice depth = choose_depth(a.depth, rig, frames, grid);
+  const DepthChoice depth = choose_depth(a.depth, a.depth_pitch, rig, frames, grid);
   const double depth_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - td).count();
 
@@ -312,6 +334,11 @@ void add_stitch_command(CLI::App& root) {
          "  estimate[:NEAR,FAR,STEPS]  estimated from the cameras' overlaps by a sphere sweep (ZNCC,\n"
          "                        semi-global smoothing); default 8,inf,96 (mm, mm, candidates)")
       ->capture_default_str();
+  cmd->add_option(
+      "--depth-pitch", a.depth_pitch,
+      "With --depth estimate: the pitch of the sweep's grid, DEG (degrees) or 'camera' (the finest\n"
+      "camera's pixel pitch at its centre: the cameras' own resolution, where the output grid is\n"
+      "that fine) [default: 1.33, about 5 pixels of the prototype's cameras]");
   cmd->add_option(
       "--depth-out", a.depth_out,
       "Write the depth used as a colour picture with a legend (this name, e.g. depth.png) and as\n"

@@ -6,10 +6,12 @@
 #include <cstdio>
 #include <cstdlib>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 
 #include <fmt/format.h>
 #include <opencv2/imgproc.hpp>
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include "omma/core/valid.h"
@@ -33,6 +35,8 @@ bool PlaneSweepOptions::IsValid(std::string* why) const {
   if (window < 1 || window > 8) return invalid(why, fmt::format("patch radius must be 1..8, got {}", window));
   if (band_ratio != 0 && !(band_ratio > 1)) return invalid(why, "band-pass ratio must be 0 (none) or > 1");
   if (paths != 4 && paths != 8) return invalid(why, "paths must be 4 or 8");
+  if (grid_camera < -1)
+    return invalid(why, fmt::format("grid camera must be -1 or an index, got {}", grid_camera));
   if (!(noise_sigma > 0) || !(w0 > 0) || !(p1 >= 0) || !(p2 >= p1) || !(edge_gray > 0) ||
       !(margin_scale > 0) || !(fill_sigma > 0) || !(fill_lambda > 0) || !(prior_mm >= 0) ||
       !(temporal_weight >= 0))
@@ -88,10 +92,23 @@ struct DepthSweep::Impl {
   std::vector<double> sigma;  // per camera: blur to the coarse pitch, camera pixels
   std::vector<int> level;     // per camera: pyramid level the gray levels are computed at (see estimate)
   bool cached = false;
-  std::vector<Layer> layers;  // [k * cameras + i] when cached
+  std::vector<Layer> layers;             // [k * cameras + i] when cached
+  std::optional<CameraModel> on_camera;  // the camera grid's camera (plane_sweep.h), if any
+  int factor = 1;
   int cams() const { return static_cast<int>(rig.cameras.size()); }
+  // Continuous coarse pixel of direction w (from q). On a projection's grid: nullopt outside it. On a
+  // camera grid: clamped to the grid's bounds (a footprint that leaves the camera's image still
+  // bounds the part inside it), nullopt behind the camera.
+  std::optional<Vec2> coarse_pixel(const Vec3& w) const {
+    if (!on_camera) return coarse.pixel(w);
+    const auto px = on_camera->project(w);
+    if (!px) return std::nullopt;
+    return Vec2(std::clamp(px->x() / factor, 0.0, coarse.width - 1e-6),
+                std::clamp(px->y() / factor, 0.0, coarse.height - 1e-6));
+  }
 
-  Layer make_layer(int k, int i) const;
+  // Fills L (reusing its buffers).
+  void make_layer(int k, int i, Layer& L) const;
   // The phases of estimate(), in order (see plane_sweep.h).
   // Per camera: the gray levels blurred to the coarse pitch, and their band-pass.
   void gray_levels(const std::vector<cv::Mat>& frames, std::vector<cv::Mat>& gray,
@@ -114,8 +131,8 @@ struct DepthSweep::Impl {
   void upsample_to_output(DepthEstimate& out) const;
 };
 
-Layer DepthSweep::Impl::make_layer(int k, int i) const {
-  Layer L;
+void DepthSweep::Impl::make_layer(int k, int i, Layer& L) const {
+  L.rect = cv::Rect();
   const RigCamera& rc = rig.cameras[i];
   const CameraModel cam = rc.model();
   const Vec3 q = opt.search.q;
@@ -136,7 +153,7 @@ Layer DepthSweep::Impl::make_layer(int k, int i) const {
         const double t = -bb + std::sqrt(bb * bb - cc);
         w = (o + t * d).normalized();
       }
-      const auto px = coarse.pixel(w);
+      const auto px = coarse_pixel(w);
       if (!px) continue;
       c0 = std::min(c0, int(std::floor(px->x())));
       c1 = std::max(c1, int(std::floor(px->x())));
@@ -144,9 +161,9 @@ Layer DepthSweep::Impl::make_layer(int k, int i) const {
       r1 = std::max(r1, int(std::floor(px->y())));
       cols.push_back(px->x());
     }
-  if (c1 < 0) return L;
+  if (c1 < 0) return;
   // On the 360-degree grids a footprint across phi = 0 spans the whole width.
-  if (coarse.projection != Projection::kVr180 && c1 - c0 > coarse.width / 2) wraps = true;
+  if (!on_camera && coarse.projection != Projection::kVr180 && c1 - c0 > coarse.width / 2) wraps = true;
   // A footprint around a pole of the grid (its top row, and the bottom row of vr180 and
   // equirect-full, where every column is one direction) spans the whole width down to that row.
   const Vec3 b = q - rc.position_mm;
@@ -156,11 +173,11 @@ Layer DepthSweep::Impl::make_layer(int k, int i) const {
     const auto px = cam.project(ray);
     return px && cam.inside(*px);
   };
-  if (sees_point(coarse.direction(0.5 * coarse.width, 0))) {
+  if (!on_camera && sees_point(coarse.direction(0.5 * coarse.width, 0))) {
     wraps = true;
     r0 = 0;
   }
-  if (coarse.projection != Projection::kEquirect &&
+  if (!on_camera && coarse.projection != Projection::kEquirect &&
       sees_point(coarse.direction(0.5 * coarse.width, coarse.height))) {
     wraps = true;
     r1 = coarse.height - 1;
@@ -179,13 +196,17 @@ Layer DepthSweep::Impl::make_layer(int k, int i) const {
   L.map_y.create(L.rect.size(), CV_32FC1);
   L.valid.create(L.rect.size(), CV_8UC1);
   const double scale = 1.0 / (1 << level[i]);
+  const bool image_field = cam.in.field == Intrinsics::Field::kImage;
   int any = 0;
   for (int r = 0; r < L.rect.height; ++r)
     for (int c = 0; c < L.rect.width; ++c) {
       const Vec3& w = dirs[size_t(r + r0) * coarse.width + (c + c0)];
       const Vec3 ray = (w + inv[k] * b).normalized();  // contributors.h: w + s (q - c_i)
       std::optional<Vec2> px;
-      if (cam.sees(ray)) px = cam.project(ray);
+      if (image_field)  // sees() is project() inside the image: project once
+        px = cam.project(ray);
+      else if (cam.sees(ray))
+        px = cam.project(ray);
       const bool ok = px && cam.inside(*px);
       L.valid.at<uint8_t>(r, c) = ok ? 255 : 0;
       // cv::remap's convention (centres at integers) at the camera's pyramid level: pyrDown's pixel j
@@ -195,7 +216,6 @@ Layer DepthSweep::Impl::make_layer(int k, int i) const {
       any += ok;
     }
   if (any == 0) L.rect = cv::Rect();
-  return L;
 }
 
 DepthSweep::DepthSweep(const Rig& rig, const PanoGrid& grid, const PlaneSweepOptions& opt)
@@ -214,26 +234,44 @@ DepthSweep::DepthSweep(const Rig& rig, const PanoGrid& grid, const PlaneSweepOpt
   m.rig = rig;
   m.grid = grid;
   m.opt = opt;
+  double cam_pitch = 0;  // camera grid: the camera's pixel pitch at its centre, radians
+  if (opt.grid_camera >= 0) {
+    if (opt.grid_camera >= m.cams())
+      throw std::invalid_argument(fmt::format(
+          "depth sweep: grid camera {} is not one of the rig's {} cameras", opt.grid_camera, m.cams()));
+    const RigCamera& gc = rig.cameras[opt.grid_camera];
+    if (grid.width != gc.in.width || grid.height != gc.in.height)
+      throw std::invalid_argument(
+          fmt::format("depth sweep: on camera {}'s grid the output grid must be its image ({}x{}), got {}x{}",
+                      gc.id, gc.in.width, gc.in.height, grid.width, grid.height));
+    m.on_camera = gc.model();
+    cam_pitch = std::atan(1 / std::max(gc.in.fu, gc.in.fv));
+  }
   int factor = opt.factor;
   if (factor == 0) {
     const AngularSpan span = angular_span(grid.projection);
     const double out_pitch =
-        rad2deg(std::max(span.width / grid.width, span.height / grid.height));  // degrees
+        m.on_camera ? rad2deg(cam_pitch)
+                    : rad2deg(std::max(span.width / grid.width, span.height / grid.height));  // degrees
     factor = std::clamp(static_cast<int>(std::lround(opt.pitch_deg / out_pitch)), 1, 64);
   }
+  m.factor = factor;
   m.coarse = PanoGrid{grid.projection, std::max(1, (grid.width + factor / 2) / factor),
                       std::max(1, (grid.height + factor / 2) / factor)};
   m.dirs.resize(size_t(m.coarse.width) * m.coarse.height);
   for (int r = 0; r < m.coarse.height; ++r)
     for (int c = 0; c < m.coarse.width; ++c)
-      m.dirs[size_t(r) * m.coarse.width + c] = m.coarse.pixel_direction(c, r);
+      m.dirs[size_t(r) * m.coarse.width + c] =
+          m.on_camera ? m.on_camera->unproject(Vec2((c + 0.5) * factor, (r + 0.5) * factor))
+                      : m.coarse.pixel_direction(c, r);
   for (int k = 0; k < opt.steps; ++k) {
     const double t = double(k) / (opt.steps - 1);
     m.inv.push_back((1 - t) / opt.near_mm + t / opt.far_mm);
   }
   // Coarse pitch (rad): the larger of the two axes' spacing.
   const AngularSpan span = angular_span(grid.projection);
-  const double pitch = std::max(span.width / m.coarse.width, span.height / m.coarse.height);
+  const double pitch =
+      m.on_camera ? factor * cam_pitch : std::max(span.width / m.coarse.width, span.height / m.coarse.height);
   for (const auto& c : rig.cameras) {
     m.sigma.push_back(0.5 * pitch * std::max(c.in.fu, c.in.fv));
     // The blur to the coarse pitch makes full resolution unnecessary: each halving (cv::pyrDown, a
@@ -244,13 +282,14 @@ DepthSweep::DepthSweep(const Rig& rig, const PanoGrid& grid, const PlaneSweepOpt
     m.level.push_back(l);
   }
   // Cache the layers when they are small (the engine's coarse grids); else build them per call.
-  const double px_per_layer = double(m.coarse.width) * m.coarse.height * 0.15;
+  // (a footprint holds about 15 % of a projection's grid, and most of a camera grid)
+  const double px_per_layer = double(m.coarse.width) * m.coarse.height * (m.on_camera ? 1.0 : 0.15);
   const double bytes = px_per_layer * 9 * opt.steps * m.cams();
   m.cached = bytes < 96e6;
   if (m.cached) {
     m.layers.resize(size_t(opt.steps) * m.cams());
     tbb::parallel_for(0, opt.steps * m.cams(),
-                      [&](int ki) { m.layers[ki] = m.make_layer(ki / m.cams(), ki % m.cams()); });
+                      [&](int ki) { m.make_layer(ki / m.cams(), ki % m.cams(), m.layers[ki]); });
   }
 }
 
@@ -434,38 +473,41 @@ void DepthSweep::Impl::pair_costs(const std::vector<cv::Mat>& gray, const std::v
   const int r = opt.window;
   const float win_area = float((2 * r + 1) * (2 * r + 1));
   const float sn2 = float(opt.noise_sigma * opt.noise_sigma);
-  tbb::parallel_for(0, K, [&](int k) {
+  // Candidates in chunks, each with its own buffers kept from one candidate to the next.
+  tbb::parallel_for(tbb::blocked_range<int>(0, K), [&](const tbb::blocked_range<int>& range) {
     std::vector<Layer> own(cached ? 0 : nc);
     std::vector<const Layer*> lay(nc);
-    for (int i = 0; i < nc; ++i) {
-      if (cached) {
-        lay[i] = &layers[size_t(k) * nc + i];
-      } else {
-        own[i] = make_layer(k, i);
-        lay[i] = &own[i];
-      }
-    }
     std::vector<cv::Mat> val(nc);
-    for (int i = 0; i < nc; ++i)
-      if (!lay[i]->empty())
-        cv::remap(band[i], val[i], lay[i]->map_x, lay[i]->map_y, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
-    if (k == kmid)
-      for (int i = 0; i < nc; ++i) {
-        if (lay[i]->empty()) continue;
-        cv::Mat gv;
-        cv::remap(gray[i], gv, lay[i]->map_x, lay[i]->map_y, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
-        cv::Mat gs = guide_sum(lay[i]->rect), gn = guide_n(lay[i]->rect);
-        cv::add(gs, gv, gs, lay[i]->valid);
-        cv::add(gn, cv::Scalar(1), gn, lay[i]->valid);
-      }
-    float* nk = num.data() + size_t(k) * N;
-    float* dk = den.data() + size_t(k) * N;
     std::vector<float> ch[6], sum[6], tmp;
-    for (int i = 0; i < nc; ++i)
-      for (int j = i + 1; j < nc; ++j) {
-        if (lay[i]->empty() || lay[j]->empty()) continue;
-        add_pair_cost(*lay[i], *lay[j], val[i], val[j], r, win_area, sn2, W, nk, dk, ch, sum, tmp);
+    for (int k = range.begin(); k != range.end(); ++k) {
+      for (int i = 0; i < nc; ++i) {
+        if (cached) {
+          lay[i] = &layers[size_t(k) * nc + i];
+        } else {
+          make_layer(k, i, own[i]);
+          lay[i] = &own[i];
+        }
       }
+      for (int i = 0; i < nc; ++i)
+        if (!lay[i]->empty())
+          cv::remap(band[i], val[i], lay[i]->map_x, lay[i]->map_y, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+      if (k == kmid)
+        for (int i = 0; i < nc; ++i) {
+          if (lay[i]->empty() || (on_camera && i != opt.grid_camera)) continue;
+          cv::Mat gv;
+          cv::remap(gray[i], gv, lay[i]->map_x, lay[i]->map_y, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+          cv::Mat gs = guide_sum(lay[i]->rect), gn = guide_n(lay[i]->rect);
+          cv::add(gs, gv, gs, lay[i]->valid);
+          cv::add(gn, cv::Scalar(1), gn, lay[i]->valid);
+        }
+      float* nk = num.data() + size_t(k) * N;
+      float* dk = den.data() + size_t(k) * N;
+      for (int i = 0; i < nc; ++i)
+        for (int j = i + 1; j < nc; ++j) {
+          if (lay[i]->empty() || lay[j]->empty()) continue;
+          add_pair_cost(*lay[i], *lay[j], val[i], val[j], r, win_area, sn2, W, nk, dk, ch, sum, tmp);
+        }
+    }
   });
   cv::divide(guide_sum, cv::max(guide_n, 1.0), guide);
 }
@@ -642,6 +684,156 @@ DepthEstimate DepthSweep::estimate(const std::vector<cv::Mat>& frames_in, const 
   DepthEstimate out;
   m.fallback(s_best, conf, kbest, out);
   if (upsample) m.upsample_to_output(out);
+  return out;
+}
+
+double camera_pitch_deg(const Rig& rig) {
+  if (rig.cameras.empty()) throw std::invalid_argument("camera pitch: the rig has no cameras");
+  double f = 0;
+  for (const auto& c : rig.cameras) f = std::max({f, c.in.fu, c.in.fv});
+  return rad2deg(std::atan(1 / f));
+}
+
+Rig rectified_pair_rig(int width, int height, double focal_px, double baseline_mm) {
+  if (!(focal_px > 0) || !(baseline_mm > 0))
+    throw std::invalid_argument(fmt::format("rectified pair: focal {} px and baseline {} mm must be positive",
+                                            focal_px, baseline_mm));
+  Rig rig;
+  rig.name = "rectified pair";
+  for (int i = 0; i < 2; ++i) {
+    RigCamera c;
+    c.id = i;
+    c.frame.t = Vec3::UnitZ();  // looking along +z, image right +x, image down +y: u x v = t
+    c.frame.u = Vec3::UnitX();
+    c.frame.v = Vec3::UnitY();
+    c.position_mm = Vec3(i * baseline_mm, 0, 0);
+    c.in.width = width;
+    c.in.height = height;
+    c.in.fu = c.in.fv = focal_px;
+    c.in.cu = 0.5 * width;
+    c.in.cv = 0.5 * height;
+    c.in.field = Intrinsics::Field::kImage;
+    c.in.aov = c.in.bounding_aov();
+    try {
+      validate_camera(c);
+    } catch (const std::exception& e) {
+      throw std::invalid_argument(fmt::format("rectified pair: camera {}: {}", i, e.what()));
+    }
+    rig.cameras.push_back(c);
+  }
+  return rig;
+}
+
+namespace {
+// f B of a rectified_pair_rig (px mm), checked.
+double pair_fb(const Rig& pair) {
+  if (pair.cameras.size() != 2) throw std::invalid_argument("rectified pair: the rig must have two cameras");
+  const double b = (pair.cameras[1].position_mm - pair.cameras[0].position_mm).norm();
+  return pair.cameras[0].in.fu * b;
+}
+}  // namespace
+
+PlaneSweepOptions rectified_sweep_options(const Rig& pair, double d_min, double d_max, double step_px,
+                                          PlaneSweepOptions base) {
+  const double fb = pair_fb(pair);
+  if (!(d_min > 0) || !(d_max > d_min) || !(step_px > 0))
+    throw std::invalid_argument(fmt::format(
+        "rectified sweep: disparities must satisfy 0 < d_min < d_max and step > 0, got {}..{} by {}", d_min,
+        d_max, step_px));
+  const CameraModel cam = pair.cameras[0].model();
+  double wt_min = 1;  // the smallest w.t over the image: at a corner
+  for (double x : {0.0, double(cam.in.width)})
+    for (double y : {0.0, double(cam.in.height)}) wt_min = std::min(wt_min, cam.unproject(Vec2(x, y)).z());
+  base.grid_camera = 0;
+  base.factor = 1;
+  base.search.q = pair.cameras[0].position_mm;
+  base.near_mm = fb / d_max;
+  base.far_mm = fb / (d_min * wt_min);
+  const double span = d_max - d_min * wt_min;  // f B (s_near - s_far), px on the axis
+  const double steps = std::ceil(span / step_px - 1e-9) + 1;
+  if (steps > kMaxSteps)
+    throw std::invalid_argument(
+        fmt::format("rectified sweep: disparities {}..{} px at {} px steps need {} candidates, more than {}",
+                    d_min, d_max, step_px, steps, kMaxSteps));
+  base.steps = std::max(2, int(steps));
+  std::string why;
+  if (!base.IsValid(&why)) throw std::invalid_argument("rectified sweep: " + why);
+  return base;
+}
+
+cv::Mat disparity_from_depth(const Rig& pair, const cv::Mat& depth_mm) {
+  const double fb = pair_fb(pair);
+  const CameraModel cam = pair.cameras[0].model();
+  if (depth_mm.type() != CV_32FC1 || depth_mm.cols != cam.in.width || depth_mm.rows != cam.in.height)
+    throw std::invalid_argument("disparity_from_depth: the depth is not a CV_32FC1 map of the left image");
+  cv::Mat d(depth_mm.size(), CV_32FC1);
+  for (int r = 0; r < d.rows; ++r)
+    for (int c = 0; c < d.cols; ++c) {
+      const double D = depth_mm.at<float>(r, c);
+      const double wt = cam.unproject(Vec2(c + 0.5, r + 0.5)).dot(cam.frame.t);
+      d.at<float>(r, c) = std::isfinite(D) && D > 0 ? float(fb / (D * wt)) : 0.f;
+    }
+  return d;
+}
+
+PlaneSweepOptions stereo_sweep_defaults(int window) {
+  PlaneSweepOptions o;
+  o.window = window;
+  o.band_ratio = 4;
+  o.p1 = 0.8;
+  o.p2 = 4.0 * window;
+  o.edge_gray = 0.1;
+  return o;
+}
+
+RectifiedDisparity rectified_disparity(const Rig& pair, const cv::Mat& left, const cv::Mat& right,
+                                       const PlaneSweepOptions& opt, double lr_tolerance_px) {
+  pair_fb(pair);  // checks the rig
+  const int W = pair.cameras[0].in.width, H = pair.cameras[0].in.height;
+  const PanoGrid grid{Projection::kVr180, W, H};
+  PlaneSweepOptions lo = opt, ro = opt;
+  lo.grid_camera = 0;
+  lo.search.q = pair.cameras[0].position_mm;
+  ro.grid_camera = 1;
+  ro.search.q = pair.cameras[1].position_mm;
+  const cv::Mat dl = disparity_from_depth(pair, DepthSweep(pair, grid, lo).estimate({left, right}).depth);
+  // The right sweep's depth is along the right camera's rays; its disparity d = f B / (D (w.t)) with the
+  // same intrinsics (disparity_from_depth evaluates w.t on camera 0's pixels, which are the same rays).
+  const cv::Mat dr = disparity_from_depth(pair, DepthSweep(pair, grid, ro).estimate({left, right}).depth);
+  RectifiedDisparity out;
+  out.left_only = dl;
+  out.consistent = cv::Mat(H, W, CV_8UC1, cv::Scalar(0));
+  for (int r = 0; r < H; ++r)
+    for (int c = 0; c < W; ++c) {
+      const float d = dl.at<float>(r, c);
+      const int xr = int(std::lround(c - d));
+      if (xr < 0 || xr >= W) continue;
+      if (std::abs(dr.at<float>(r, xr) - d) <= lr_tolerance_px) out.consistent.at<uint8_t>(r, c) = 255;
+    }
+  out.disparity = dl.clone();
+  for (int r = 0; r < H; ++r) {
+    const uint8_t* ok = out.consistent.ptr<uint8_t>(r);
+    const float* d = dl.ptr<float>(r);
+    float* o = out.disparity.ptr<float>(r);
+    std::vector<float> from_left(W, -1.f);
+    float last = -1.f;
+    for (int c = 0; c < W; ++c) {
+      if (ok[c]) last = d[c];
+      from_left[c] = last;
+    }
+    last = -1.f;
+    for (int c = W - 1; c >= 0; --c) {
+      if (ok[c]) {
+        last = d[c];
+        continue;
+      }
+      const float a = from_left[c], b = last;
+      if (a >= 0 && b >= 0)
+        o[c] = std::min(a, b);
+      else if (a >= 0 || b >= 0)
+        o[c] = std::max(a, b);
+    }
+  }
   return out;
 }
 

@@ -57,6 +57,18 @@
 // untextured or single-camera directions take the depth of confident neighbours, and far from any
 // the prior distance (prior_mm, or the median of the confident estimates).
 //
+// Camera grid (grid_camera >= 0): instead of a projection's grid the sweep runs on one rig camera's
+// own pixel grid, `factor` times smaller (factor 1: the camera's pixels; factor 0: the factor that
+// makes the pitch closest to pitch_deg, the camera's pitch being atan(1 / max(fu, fv)) at its centre).
+// Coarse pixel (c, r) looks along the camera's ray through its pixel (factor (c + 0.5), factor
+// (r + 0.5)) (CameraModel::unproject), the output grid is the camera's image (the `grid` passed in
+// must have its size; its projection is not used) and the guide G of the edge-aware P2 is that
+// camera's own gray level (the other cameras' at the middle candidate would double its edges). With
+// q at that camera's centre, a sphere |X - q| = D is the depth D along the camera's ray: for a
+// rectified pair (rectified_pair_rig below) the disparity is d = f B / (D (w.t)) (eq. 2.4 of both
+// cameras on X), so candidates uniform in 1/D are uniform in disparity along every ray, and a
+// 180-degree projection at the camera's pitch (most of it outside the camera's field) is not needed.
+//
 // Temporal (the engine): a previous inverse-depth map (coarse grid) adds
 // temporal_weight * min(|s_k - s_prev(u)| / (s_0 - s_{K-1}) * (K - 1), 1) to C, which keeps the
 // depth of static wall from flickering with the sensor noise.
@@ -104,6 +116,9 @@ struct PlaneSweepOptions {
   double prior_mm = 0;         // prior distance; 0 = median of the confident estimates
   double temporal_weight = 0;  // with a previous estimate (engine), see the file comment
   SearchOptions search;        // the observer q
+  // -1: the sweep runs on the output projection's coarse grid (above). >= 0: on the pixel grid of
+  // rig camera grid_camera (index into rig.cameras; see "Camera grid" above).
+  int grid_camera = -1;
   bool IsValid(std::string* why = nullptr) const;
 };
 
@@ -156,6 +171,61 @@ namespace detail {
 std::vector<float> aggregate_sgm(const std::vector<float>& C, int W, int H, int K, const cv::Mat& guide,
                                  double p1, double p2, double edge_gray, int paths);
 }  // namespace detail
+
+// The pixel pitch of the rig's finest camera at its image centre, degrees: min over the cameras of
+// atan(1 / max(fu, fv)). PlaneSweepOptions::pitch_deg = this runs the sweep at the cameras' own
+// resolution (`omma stitch --depth-pitch camera`).
+double camera_pitch_deg(const Rig& rig);
+
+// A rectified stereo pair (rows equal in both images, disparity d = x_left - x_right > 0) as a
+// two-camera rig: camera 0 (left) at the origin, camera 1 (right) at (baseline_mm, 0, 0), both
+// pinhole without distortion, looking along +z with image right u = +x and image down v = +y
+// (u x v = t), focal focal_px, principal point at the image centre, field = the image
+// (Intrinsics::kImage). A point at depth Z (mm, along +z) then has d = focal_px baseline_mm / Z.
+// Any focal and baseline describe the same pixels; they only set the depth scale. Throws
+// std::invalid_argument if the rig is not valid (validate_camera).
+Rig rectified_pair_rig(int width, int height, double focal_px, double baseline_mm);
+// Sweep options for rectified_pair_rig's rig that cover the disparities d_min .. d_max (px) of every
+// left pixel at steps of step_px on the optical axis (d = f B s / (w.t), s = 1/D, so the steps are
+// step_px / (w.t) elsewhere: 2.6 % larger at the corners of Aloe's field): the camera grid of camera 0 at
+// factor 1, q at its centre, near = f B / d_max, far = f B / (d_min min(w.t)), steps = the count that covers
+// them (throws std::invalid_argument beyond kMaxSteps or for an invalid range). The other fields come from
+// `base`.
+PlaneSweepOptions rectified_sweep_options(const Rig& pair, double d_min, double d_max, double step_px = 1,
+                                          PlaneSweepOptions base = {});
+// The disparity (px, CV_32FC1, camera 0's image) of a depth map on camera 0's grid (depth along the
+// ray from camera 0's centre, mm): d = f B / (D (w.t)); 0 where D is +infinity.
+cv::Mat disparity_from_depth(const Rig& pair, const cv::Mat& depth_mm);
+
+// The sweep's settings for a rectified pair on a camera grid at the cameras' own pixels, where the
+// defaults above (made for a coarse grid of about 5 camera pixels) match too little texture and smooth
+// too little: a (2 window + 1)^2 patch, the band-pass 4 times its blur (a ZNCC of detail 0.5 .. 2 px
+// across), SGM penalties P1 = 0.8 and P2 = 4 window (a larger patch's cost varies less between
+// candidates, so the same smoothness needs a larger P2) with the edge-aware scale 0.1 (a depth edge
+// wherever the gray level steps by some 10 %). The patch should span the images' finest reliable
+// texture: on the Middlebury Aloe pair (`omma real depth`) window 4 (9 x 9) at its full 1282 x 1110,
+// window 2 at a half and a quarter of it (bad-2 measured over windows 1..5, P2 4..32, P1 0.4..1.6, edge
+// scale 0.05..1, band-pass ratio 0, 2, 4; the final numbers: docs/results/real_images.md).
+PlaneSweepOptions stereo_sweep_defaults(int window = 4);
+
+// The disparity of a rectified pair by two sweeps and a left-right check (the consistency check of
+// semi-global matching, Hirschmueller 2008, on the sweep's winners): the sweep on the left camera's grid
+// (opt, as from rectified_sweep_options) gives d_L, the same sweep on the right camera's grid (q at its
+// centre) d_R; a left pixel x is consistent where |d_L(x) - d_R(x - d_L(x))| <= lr_tolerance_px (d_R at
+// the nearest pixel). The others are occluded in the right image or mismatched: each takes the smaller
+// (farther) of the nearest consistent disparities to its left and right in its row, since what one
+// camera sees and the other does not lies behind the occluding edge, i.e. is background (pixels with
+// no consistent one in their row keep d_L). The sweep itself has no model of visibility: on the Aloe pair
+// this check and fill take bad-2 from 17.0 % (d_L alone) to 14.0 %, at twice the time. Memory: each
+// sweep holds 3 floats per pixel and candidate at its peak (num, den and C; then C, S and the second
+// worker's paths), 3.0 GB for 1282 x 1110 pixels and 177 candidates; measured peak RSS 5.2 GB.
+struct RectifiedDisparity {
+  cv::Mat disparity;   // CV_32FC1 px, the left image, filled
+  cv::Mat consistent;  // CV_8UC1, 255 where the left-right check passed
+  cv::Mat left_only;   // CV_32FC1 px, the left sweep's own disparity (before the check)
+};
+RectifiedDisparity rectified_disparity(const Rig& pair, const cv::Mat& left, const cv::Mat& right,
+                                       const PlaneSweepOptions& opt, double lr_tolerance_px = 1);
 
 // One-shot: DepthSweep(rig, grid, opt).estimate(frames).
 DepthEstimate estimate_depth(const Rig& rig, const std::vector<cv::Mat>& frames, const PanoGrid& grid,
