@@ -1,11 +1,13 @@
 // CLI tests for the projection surface (pano/surface.h): `omma stitch --depth ... --depth-out`, the
 // simulator's true depth, `omma eval --depth`, and bad input.
+#include <cmath>
 #include <filesystem>
 #include <limits>
 
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 
+#include "omma/core/conventions.h"
 #include "omma/testing/test_scenes.h"
 #include "tests/cli/cli_util.h"
 
@@ -73,6 +75,30 @@ TEST(DepthCli, BadInput) {
   fails("estimate:8,x", "is not a number");
   fails("nearby", "must be inf, sphere:R, truth:FILE or estimate");
   fails("inf", "--depth-out names the picture", " --depth-out " + (d / "x.tiff").string());
+}
+
+// --depth-pitch: the sweep grid's pitch, an angle or the cameras' own pixel pitch (the test rig's 64 px
+// cameras have fu = 51.2 px: atan(1 / 51.2) = 1.119 deg at the centre); the default stays 1.33 deg.
+TEST(DepthCli, DepthPitch) {
+  const fs::path d = louvre_frames_folder("depth-pitch");
+  auto pitch = [&](const std::string& extra) {
+    const RunResult r = run_omma(stitch(d, "estimate", d / "p.png") + extra + " --json");
+    EXPECT_EQ(r.exit_code, 0) << extra << ": " << r.err;
+    return r.exit_code == 0 ? r.json().at("depth").at("pitch_deg").get<double>() : -1.0;
+  };
+  EXPECT_NEAR(pitch(""), 1.33, 1e-9);
+  EXPECT_NEAR(pitch(" --depth-pitch camera"), rad2deg(std::atan(1 / 51.2107)), 1e-3);
+  EXPECT_NEAR(pitch(" --depth-pitch 2.5"), 2.5, 1e-9);
+  for (const std::string& bad : {std::string(" --depth-pitch 0"), std::string(" --depth-pitch abc"),
+                                 std::string(" --depth-pitch 100")}) {
+    const RunResult r = run_omma(stitch(d, "estimate", d / "never.png") + bad);
+    EXPECT_EQ(r.exit_code, 1) << bad;
+    EXPECT_NE(r.err.find("--depth-pitch must be an angle"), std::string::npos) << r.err;
+  }
+  const RunResult r = run_omma(stitch(d, "inf", d / "never.png") + " --depth-pitch camera");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("applies to --depth estimate only"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(d / "never.png"));
 }
 
 // The simulator writes the true depth of every truth pixel: inside a sphere of 50 mm around the
