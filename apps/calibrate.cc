@@ -24,10 +24,12 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 
 struct CalibrateArgs {
   std::vector<std::string> frames;
+  std::string shots = "auto", position = "fixed";
   std::string rig, out, flat, scene = "auto", focal = "per-camera", center = "per-camera",
                               distortion = "per-camera", loss = "auto";
   int radial_terms = 1, max_iterations = 50, min_matches = 30, upsample = 2, threads = 2,
       dense_rounds = calib::CalibrationOptions{}.dense_rounds;
+  double self_ratio = 0;
   double loss_scale = 1.0, ransac_px = 5, prior_deg = 5, prior_mean_focal = 0.002, tube = 0;
   bool tube_tilt = false;
   bool json = false, photometric = false, no_geometric = false;
@@ -57,8 +59,9 @@ void add_calibrate_command(CLI::App& root) {
       "matrix with parallax), then a Ceres bundle adjustment of each camera's rotation, fu, fv, cu, cv and\n"
       "radial distortion with a robust loss. Cameras with too few matches keep their nominal values "
       "(warning).\n"
-      "Several shots of a static scene (--frames repeated, or a shots folder) are averaged. --photometric "
-      "adds\n"
+      "Several shots (--frames repeated, or a shots folder): of a static scene they are averaged; of a\n"
+      "scene that changes between shots (a static rig, a moving chessboard) their matches are pooled into\n"
+      "one adjustment (--shots). --photometric adds\n"
       "each camera's vignetting and colour gains (from the overlaps, or --flat DIR), applied from then on "
       "by\n"
       "stitch, run and the engine.");
@@ -70,6 +73,18 @@ void add_calibrate_command(CLI::App& root) {
          "averages them in linear light (noise / sqrt(shots)), the photometric one pools their overlaps")
       ->required();
   cmd->add_option("--out", a.out, "Calibrated rig to write (JSON, atomic)")->required();
+  cmd->add_option(
+      "--shots", a.shots,
+      "Several shots: pool (features, matches and tracks per shot, one bundle adjustment: the "
+      "scene may change between shots, the rig may not), average (a static scene: frames averaged "
+      "in linear light) or auto (default: pool when the shots' frames of one camera differ, PSNR "
+      "below 28 dB, else average)");
+  cmd->add_option(
+      "--position", a.position,
+      "Camera positions (near field): fixed (default: at the nominal ones) or estimate (every "
+      "camera's direction from the first camera; the first camera's pose and every distance from it "
+      "are held: the gauge; a real baseline, e.g. a stereo pair; implies --prior-mean-focal 0 unless "
+      "given)");
   cmd->add_option("--scene", a.scene,
                   "Scene model: far (rotation only), near (parallax: scene points, camera "
                   "positions fixed at nominal) or auto (default: from the RANSAC consensus)");
@@ -84,8 +99,14 @@ void add_calibrate_command(CLI::App& root) {
       "Robust loss: auto (default: huber in the far field, cauchy in the near field), huber, cauchy or none");
   cmd->add_option("--loss-scale", a.loss_scale, "Robust loss scale, pixels (default 1)");
   cmd->add_option("--ransac-px", a.ransac_px, "RANSAC inlier threshold, pixels (default 5)");
-  cmd->add_option("--prior-deg", a.prior_deg, "Gauge prior on the rotation corrections, degrees (default 5)");
   cmd->add_option(
+         "--self-ratio", a.self_ratio,
+         "Repetitive texture (a chessboard): drop a match when either keypoint has a look-alike in its "
+         "own image closer than the match distance / this (0 = off, the default; 0.7 halves the "
+         "wrong matches on OpenCV's stereo chessboard shots)")
+      ->check(CLI::Range(0.0, 1.0));
+  cmd->add_option("--prior-deg", a.prior_deg, "Gauge prior on the rotation corrections, degrees (default 5)");
+  auto* prior_mean_focal = cmd->add_option(
       "--prior-mean-focal", a.prior_mean_focal,
       "Near field only: sigma (relative) of the prior holding the cameras' MEAN focal length at the "
       "nominal one, against the focal/depth ambiguity of small-baseline parallax (default 0.002; 0 = off)");
@@ -124,7 +145,7 @@ void add_calibrate_command(CLI::App& root) {
       "--no-geometric", a.no_geometric,
       "Keep the rig's geometry as given (already calibrated); only the photometric calibration runs");
   cmd->add_flag("--json", a.json, "Print one JSON object on stdout");
-  cmd->callback([] {
+  cmd->callback([prior_mean_focal] {
     set_json_mode(a.json);
     const Rig nominal = design::load_rig_or_builtin(a.rig);
     const bool photometric = a.photometric || !a.flat.empty();
@@ -149,9 +170,15 @@ void add_calibrate_command(CLI::App& root) {
     opt.loss = a.loss;
     opt.loss_scale_px = a.loss_scale;
     opt.match.ransac_threshold_px = a.ransac_px;
+    opt.match.self_ratio = a.self_ratio;
     opt.prior_rotation_deg = a.prior_deg;
     if (a.prior_mean_focal < 0) throw std::invalid_argument("--prior-mean-focal must be >= 0");
     opt.prior_mean_focal = a.prior_mean_focal;
+    if (a.position != "fixed" && a.position != "estimate")
+      throw std::invalid_argument("--position must be fixed or estimate (got '" + a.position + "')");
+    opt.estimate_position = a.position == "estimate";
+    if (opt.estimate_position && prior_mean_focal->count() == 0) opt.prior_mean_focal = 0;
+    const calib::ShotMode shot_mode = calib::parse_shot_mode(a.shots);
     opt.max_iterations = a.max_iterations;
     opt.dense_rounds = a.dense_rounds;
     if (a.tube < 0) throw std::invalid_argument("--tube must be a diameter in mm (> 0), or 0 for none");
@@ -167,9 +194,22 @@ void add_calibrate_command(CLI::App& root) {
     if (!a.no_geometric) {
       // With a flat field the frames are flat-fielded first: the patch alignment is then free of
       // the vignetting ramp (calib/photometric.h flat_field_frames).
-      std::vector<cv::Mat> frames = calib::average_frame_sets(sets);
-      if (!flats.empty()) frames = calib::flat_field_frames(frames, flats);
-      r = calib::calibrate_rig(nominal, frames, opt);
+      bool pool = sets.size() > 1 && shot_mode == calib::ShotMode::kPool;
+      if (sets.size() > 1 && shot_mode == calib::ShotMode::kAuto) {
+        const double psnr = calib::min_shot_psnr_db(sets);
+        pool = psnr < calib::kShotsDifferPsnrDb;
+        spdlog::info("calibrate: {} shots, lowest PSNR between shots {:.1f} dB -> {}", sets.size(), psnr,
+                     pool ? "pool (the scene changes)" : "average (a static scene)");
+      }
+      if (pool) {
+        if (!flats.empty())
+          throw std::invalid_argument("--flat with pooled shots is not supported: use --shots average");
+        r = calib::calibrate_shots(nominal, sets, calib::ShotMode::kPool, opt);
+      } else {
+        std::vector<cv::Mat> frames = calib::average_frame_sets(sets);
+        if (!flats.empty()) frames = calib::flat_field_frames(frames, flats);
+        r = calib::calibrate_rig(nominal, frames, opt);
+      }
     }
     const double geometric_s = seconds_since(t0);
     Rig out = r.rig;
@@ -201,6 +241,9 @@ void add_calibrate_command(CLI::App& root) {
             {{"id", c.id}, {"rms_px", c.rms_px}, {"matches", c.matches}, {"calibrated", c.calibrated}});
       print_json({{"cameras", out.cameras.size()},
                   {"shots", sets.size()},
+                  {"shot_mode", r.shots > 1       ? "pool"
+                                : sets.size() > 1 ? "average"
+                                                  : "single"},
                   {"geometric", !a.no_geometric},
                   {"matches", r.matches},
                   {"inliers", r.inliers},

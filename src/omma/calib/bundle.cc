@@ -71,6 +71,21 @@ struct NearCost {
   }
 };
 
+// Near field with the camera position estimated (CalibrationOptions::estimate_position): the centre
+// is c = c_ref + len * dir (c_ref the reference camera's fixed centre, len the fixed distance from
+// it, dir a unit vector on S^2); w = P - h c = (P - h len dir) - h c_ref, i.e. NearCost (with
+// c = c_ref) on the point (P - h len dir, h).
+struct NearPosCost {
+  NearCost near;  // near.c = the reference camera's centre
+  double len;     // mm
+  template <typename T>
+  bool operator()(const T* delta, const T* fcc, const T* k, const T* x, const T* dir, T* res) const {
+    const T xs[4] = {x[0] - x[3] * T(len) * dir[0], x[1] - x[3] * T(len) * dir[1],
+                     x[2] - x[3] * T(len) * dir[2], x[3]};
+    return near(delta, fcc, k, xs, res);
+  }
+};
+
 // Near field on the calibration tube (CalibrationOptions::tube_diameter_mm): the scene point lies on
 // the tube's wall, a cylinder of radius R about the axis (ox + tx z, oy + ty z, z) (the dome axis,
 // offset and tilted by the estimated axis = (ox, oy, tx, ty); first order in the small tilt), at
@@ -146,6 +161,10 @@ namespace detail {
 
 double* BundleBlocks::fcc_block(int i) { return fcc[share_intrinsics ? 0 : i].data(); }
 double* BundleBlocks::k_block(int i) { return kk[share_distortion ? 0 : i].data(); }
+bool BundleBlocks::moves(int i) const { return position && i != ref && len[i] > 0; }
+Vec3 BundleBlocks::centre(int i) const {
+  return moves(i) ? Vec3(c[ref] + len[i] * Vec3(dir[i][0], dir[i][1], dir[i][2])) : c[i];
+}
 
 BundleBlocks init_bundle_blocks(const Rig& nominal, const Rig& start,
                                 const std::vector<std::vector<TrackObservation>>& tracks, SceneModel scene,
@@ -162,6 +181,24 @@ BundleBlocks init_bundle_blocks(const Rig& nominal, const Rig& start,
     b.r_nom[i] = c.frame.dome_to_camera();
     b.fcc[i] = {c.in.fu, c.in.fv, c.in.cu, c.in.cv};
     b.kk[i] = c.in.k;
+    b.c.push_back(c.position_mm);
+  }
+  // Camera positions (near field, estimate_position): the first camera with observations is the
+  // reference (position and rotation held: the gauge); every other keeps its distance from it.
+  b.position = opt.estimate_position && scene == SceneModel::kNear;
+  b.len.assign(n, 0.0);
+  b.dir.assign(n, {0, 0, 1});
+  if (b.position) {
+    b.ref = n;
+    for (const auto& t : tracks)
+      for (const auto& o : t) b.ref = std::min(b.ref, o.cam);
+    if (b.ref == n) b.ref = 0;
+    for (int i = 0; i < n; ++i) {
+      const Vec3 d = b.c[i] - b.c[b.ref];
+      if (i == b.ref || d.norm() < 1e-9) continue;  // coincident centres: no direction to estimate
+      b.len[i] = d.norm();
+      b.dir[i] = {d.x() / b.len[i], d.y() / b.len[i], d.z() / b.len[i]};
+    }
   }
   // Sharing focal and centre is handled with one block for both when either is shared (documented
   // simplification: sharing one of them shares both).
@@ -175,7 +212,7 @@ BundleBlocks init_bundle_blocks(const Rig& nominal, const Rig& start,
     Vec3 mean = Vec3::Zero();
     for (const auto& o : tracks[ti]) {
       const Vec3 d = start.cameras[o.cam].model().unproject(o.px);
-      cs.push_back(nominal.cameras[o.cam].position_mm);
+      cs.push_back(b.c[o.cam]);
       ds.push_back(d);
       mean += d;
     }
@@ -251,12 +288,18 @@ int build_bundle_problem(ceres::Problem& problem, BundleManifolds& m, BundleBloc
       const int i = o.cam;
       if (b.on_tube[ti]) {
         auto* cost = new ceres::AutoDiffCostFunction<TubeCost, 2, 3, 4, 5, 2, 4>(
-            new TubeCost{{o.px, o.weight, b.r_nom[i], nominal.cameras[i].position_mm}, b.tube_r});
+            new TubeCost{{o.px, o.weight, b.r_nom[i], b.c[i]}, b.tube_r});
         problem.AddResidualBlock(cost, make_loss(), b.delta[i].data(), b.fcc_block(i), b.k_block(i),
                                  b.uv[ti].data(), b.axis.data());
+      } else if (b.near && b.moves(i)) {
+        auto* cost = new ceres::AutoDiffCostFunction<NearPosCost, 2, 3, 4, 5, 4, 3>(
+            new NearPosCost{{o.px, o.weight, b.r_nom[i], b.c[b.ref]}, b.len[i]});
+        problem.AddResidualBlock(cost, make_loss(), b.delta[i].data(), b.fcc_block(i), b.k_block(i),
+                                 b.points[ti].data(), b.dir[i].data());
+        problem.SetManifold(b.dir[i].data(), &m.sphere3);
       } else if (b.near) {
         auto* cost = new ceres::AutoDiffCostFunction<NearCost, 2, 3, 4, 5, 4>(
-            new NearCost{o.px, o.weight, b.r_nom[i], nominal.cameras[i].position_mm});
+            new NearCost{o.px, o.weight, b.r_nom[i], b.c[i]});
         problem.AddResidualBlock(cost, make_loss(), b.delta[i].data(), b.fcc_block(i), b.k_block(i),
                                  b.points[ti].data());
       } else {
@@ -276,8 +319,11 @@ int build_bundle_problem(ceres::Problem& problem, BundleManifolds& m, BundleBloc
   // Priors: the rotations (gauge), the mean focal length (near field without the tube).
   for (int i = 0; i < n; ++i) {
     if (!problem.HasParameterBlock(b.delta[i].data())) continue;
-    if (!opt.estimate_rotation) {
+    if (!opt.estimate_rotation || (b.position && i == b.ref)) {
+      // Positions estimated: the reference camera's rotation is the gauge (no prior on the others).
       problem.SetParameterBlockConstant(b.delta[i].data());
+    } else if (b.position) {
+      continue;
     } else if (opt.prior_rotation_deg > 0) {
       problem.AddResidualBlock(new ceres::AutoDiffCostFunction<RotationPrior, 3, 3>(
                                    new RotationPrior{1.0 / deg2rad(opt.prior_rotation_deg)}),
@@ -341,11 +387,24 @@ std::vector<char> drop_inactive_cameras(const Rig& nominal,
     active[i] = obs_count[i] >= opt.min_observations;
     if (!active[i]) res.uncalibrated_ids.push_back(nominal.cameras[i].id);
   }
-  if (std::count(active.begin(), active.end(), 1) < 2)
+  if (std::count(active.begin(), active.end(), 1) < 2) {
+    // Name the cameras: every camera's matched observations, and the pairs (the worst first).
+    std::string cams, pairs;
+    for (int i = 0; i < n; ++i)
+      cams += fmt::format("{}camera {}: {}", i ? ", " : "", nominal.cameras[i].id, obs_count[i]);
+    auto pp = res.per_pair;
+    std::sort(pp.begin(), pp.end(),
+              [](const PairReport& a, const PairReport& b) { return a.inliers < b.inliers; });
+    for (size_t p = 0; p < pp.size() && p < 8; ++p)
+      pairs += fmt::format("{}cameras {} and {}: {} matches, {} RANSAC inliers", p ? "; " : "", pp[p].cam_a,
+                           pp[p].cam_b, pp[p].matches, pp[p].inliers);
+    if (pp.size() > 8) pairs += fmt::format("; ... ({} pairs)", pp.size());
     throw std::runtime_error(fmt::format(
-        "calibrate: too few feature matches to calibrate anything ({} matches, {} inliers over {} camera "
-        "pairs); are the frames textureless, or do they not belong to this rig?",
-        res.matches, res.inliers, res.pairs));
+        "calibrate: too few feature matches to calibrate anything: fewer than 2 cameras have {} matched "
+        "observations ({}){}{}; are the frames textureless, do the cameras see different scenes, or do the "
+        "frames not belong to this rig?",
+        opt.min_observations, cams, pairs.empty() ? "" : "; ", pairs));
+  }
   if (!res.uncalibrated_ids.empty()) {
     std::string ids;
     for (int id : res.uncalibrated_ids) ids += (ids.empty() ? "" : ", ") + std::to_string(id);
@@ -379,11 +438,11 @@ std::vector<double> squared_errors(BundleBlocks& b, const std::vector<std::vecto
       const Eigen::Matrix2d& w = weighted ? o.weight : id;
       bool ok;
       if (b.on_tube[ti])
-        ok = TubeCost{{obs, w, b.r_nom[i], nominal.cameras[i].position_mm}, b.tube_r}(
-            b.delta[i].data(), b.fcc_block(i), b.k_block(i), b.uv[ti].data(), b.axis.data(), r);
+        ok = TubeCost{{obs, w, b.r_nom[i], b.c[i]}, b.tube_r}(b.delta[i].data(), b.fcc_block(i), b.k_block(i),
+                                                              b.uv[ti].data(), b.axis.data(), r);
       else if (b.near)
-        ok = NearCost{obs, w, b.r_nom[i], nominal.cameras[i].position_mm}(
-            b.delta[i].data(), b.fcc_block(i), b.k_block(i), b.points[ti].data(), r);
+        ok = NearCost{obs, w, b.r_nom[i], b.centre(i)}(b.delta[i].data(), b.fcc_block(i), b.k_block(i),
+                                                       b.points[ti].data(), r);
       else
         ok = FarCost{obs, w, b.r_nom[i]}(b.delta[i].data(), b.fcc_block(i), b.k_block(i), b.points[ti].data(),
                                          r);
@@ -480,6 +539,7 @@ void write_solution(BundleBlocks& b, const std::vector<std::vector<TrackObservat
     c.frame.v = r.row(2).transpose();
     const double* f = b.fcc_block(i);
     c.in.fu = f[0], c.in.fv = f[1], c.in.cu = f[2], c.in.cv = f[3];
+    c.position_mm = b.centre(i);
     const double* k = b.k_block(i);
     for (int j = 0; j < 5; ++j) c.in.k[j] = k[j];
   }

@@ -30,6 +30,14 @@ struct BundleBlocks {
   bool share_intrinsics = false;              // one fcc block for all cameras (share_focal or share_center)
   bool share_distortion = false;              // one k block for all cameras
   std::vector<int> k_const, fcc_const;        // entries held (radial_terms, estimate_* options)
+  std::vector<Vec3> c;                        // per camera: the start's centre, mm
+  bool position = false;                      // near field, estimate_position: centres estimated
+  int ref = 0;                                // the reference camera (position and rotation held)
+  std::vector<double> len;                    // per camera: distance from the reference's centre, mm
+                                              // (held; 0 = the camera does not move)
+  std::vector<std::array<double, 3>> dir;     // per camera: unit direction from the reference's centre
+  bool moves(int i) const;                    // camera i's centre is estimated
+  Vec3 centre(int i) const;                   // camera i's current centre, mm
   double* fcc_block(int i);
   double* k_block(int i);
 };

@@ -5,10 +5,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include <fmt/format.h>
 #include <opencv2/core/utility.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "omma/calib/bundle.h"
 #include "omma/calib/photometric.h"
@@ -50,6 +52,8 @@ bool CalibrationOptions::IsValid(std::string* why) const {
   if (!(tube_tolerance > 0 && tube_tolerance < 1) ||
       !(tube_tolerance_refined > 0 && tube_tolerance_refined < 1))
     return invalid(why, "tube_tolerance and tube_tolerance_refined must be in (0, 1)");
+  if (estimate_position && tube_diameter_mm > 0)
+    return invalid(why, "estimate_position cannot be combined with the calibration tube (tube_diameter_mm)");
   if (max_iterations < 1) return invalid(why, "max_iterations must be >= 1");
   if (min_observations < 0) return invalid(why, "min_observations must be >= 0");
   if (threads < 1) return invalid(why, "threads must be >= 1");
@@ -58,24 +62,27 @@ bool CalibrationOptions::IsValid(std::string* why) const {
 
 namespace {
 
-// Step 2 of calibrate_rig: matches between the overlapping cameras (pms), the scene model (auto: the
-// consensus over all pairs) under which every pair keeps its inliers, and the counts in res.
-SceneModel match_pairs(const Rig& nominal, const std::vector<CameraFeatures>& feats,
-                       const CalibrationOptions& opt, std::vector<PairMatches>& pms,
+// Step 2 of calibrate_rig: matches between the overlapping cameras in every shot (pms[shot]), the
+// scene model (auto: the consensus over all pairs of all shots) under which every pair keeps its
+// inliers, and the counts in res.
+SceneModel match_pairs(const Rig& nominal, const std::vector<std::vector<CameraFeatures>>& feats,
+                       const CalibrationOptions& opt, std::vector<std::vector<PairMatches>>& pms,
                        CalibrationSummary& res) {
   const auto pairs = overlapping_pairs(nominal, deg2rad(opt.overlap_margin_deg));
   res.pairs = static_cast<int>(pairs.size());
   long rot_total = 0, ess_total = 0;
+  pms.assign(feats.size(), {});
   {
-    Progress progress("calibrate: matching", pairs.size());
-    for (const auto& [a, b] : pairs) {
-      PairMatches pm = match_pair(nominal, a, b, feats[a], feats[b], opt.scene, opt.match);
-      res.matches += pm.putative;
-      rot_total += pm.rotation_inliers;
-      ess_total += pm.essential_inliers;
-      pms.push_back(std::move(pm));
-      progress.step();
-    }
+    Progress progress("calibrate: matching", pairs.size() * feats.size());
+    for (size_t s = 0; s < feats.size(); ++s)
+      for (const auto& [a, b] : pairs) {
+        PairMatches pm = match_pair(nominal, a, b, feats[s][a], feats[s][b], opt.scene, opt.match);
+        res.matches += pm.putative;
+        rot_total += pm.rotation_inliers;
+        ess_total += pm.essential_inliers;
+        pms[s].push_back(std::move(pm));
+        progress.step();
+      }
   }
   SceneModel scene = opt.scene;
   if (scene == SceneModel::kAuto) {
@@ -83,13 +90,12 @@ SceneModel match_pairs(const Rig& nominal, const std::vector<CameraFeatures>& fe
     scene = ess_total > opt.near_ratio * rot_total ? SceneModel::kNear : SceneModel::kFar;
     spdlog::info("calibrate: consensus over all pairs: rotation-only {}, essential matrix {} -> {} scene",
                  rot_total, ess_total, to_string(scene));
-    // All pairs use the one chosen model.
-    for (auto& pm : pms) pm.choose(scene, opt.match.min_inliers);
-  } else {
-    for (auto& pm : pms) pm.choose(scene, opt.match.min_inliers);
   }
+  // All pairs use the one chosen model.
+  for (auto& shot : pms)
+    for (auto& pm : shot) pm.choose(scene, opt.match.min_inliers);
   res.scene = scene;
-  if (scene == SceneModel::kNear && opt.tube_diameter_mm <= 0) {
+  if (scene == SceneModel::kNear && opt.tube_diameter_mm <= 0 && !opt.estimate_position) {
     res.warnings.push_back(
         "near-field scene (parallax): scene points with camera positions fixed at nominal; the mean focal "
         "length "
@@ -101,10 +107,50 @@ SceneModel match_pairs(const Rig& nominal, const std::vector<CameraFeatures>& fe
         "for accurate intrinsics");
     spdlog::warn("calibrate: {}", res.warnings.back());
   }
-  for (const auto& pm : pms) res.inliers += static_cast<int>(pm.inliers.size());
-  spdlog::info("calibrate: {} cameras, {} overlapping pairs, {} matches, {} RANSAC inliers, {} scene",
-               nominal.cameras.size(), res.pairs, res.matches, res.inliers, to_string(scene));
+  for (size_t p = 0; p < pairs.size(); ++p) {
+    PairReport rep;
+    rep.cam_a = nominal.cameras[pairs[p].first].id;
+    rep.cam_b = nominal.cameras[pairs[p].second].id;
+    for (const auto& shot : pms) {
+      rep.matches += shot[p].putative;
+      rep.inliers += static_cast<int>(shot[p].inliers.size());
+    }
+    res.inliers += rep.inliers;
+    res.per_pair.push_back(rep);
+  }
+  spdlog::info(
+      "calibrate: {} cameras, {} overlapping pairs, {} shot(s), {} matches, {} RANSAC inliers, {} scene",
+      nominal.cameras.size(), res.pairs, feats.size(), res.matches, res.inliers, to_string(scene));
   return scene;
+}
+
+void check_frames(const Rig& nominal, const std::vector<cv::Mat>& frames, const std::string& where) {
+  const int n = static_cast<int>(nominal.cameras.size());
+  if (static_cast<int>(frames.size()) != n)
+    throw std::invalid_argument(
+        fmt::format("calibrate: {}{} frames for a rig of {} cameras", where, frames.size(), n));
+  for (int i = 0; i < n; ++i)
+    if (frames[i].cols != nominal.cameras[i].in.width || frames[i].rows != nominal.cameras[i].in.height)
+      throw std::invalid_argument(fmt::format("calibrate: {}frame of camera {} is {}x{}, the rig says {}x{}",
+                                              where, nominal.cameras[i].id, frames[i].cols, frames[i].rows,
+                                              nominal.cameras[i].in.width, nominal.cameras[i].in.height));
+}
+
+std::vector<CameraFeatures> detect_all(const std::vector<cv::Mat>& frames, const CalibrationOptions& opt) {
+  std::vector<CameraFeatures> feats(frames.size());
+  Progress progress("calibrate: features", frames.size());
+  for (size_t i = 0; i < frames.size(); ++i) {
+    feats[i] = detect_features(frames[i], opt.features);
+    progress.step();
+  }
+  return feats;
+}
+
+void log_tracks(const std::vector<std::vector<TrackObservation>>& tracks) {
+  std::vector<int> hist(6, 0);
+  for (const auto& t : tracks) ++hist[std::min<size_t>(t.size(), 5)];
+  spdlog::info("calibrate: {} tracks, by length 2: {}, 3: {}, 4: {}, 5+: {}", tracks.size(), hist[2], hist[3],
+               hist[4], hist[5]);
 }
 
 // The subpixel refinement rounds of calibrate_rig: align every observation (dense: new ones from
@@ -150,43 +196,103 @@ CalibrationSummary calibrate_rig(const Rig& nominal, const std::vector<cv::Mat>&
   std::string why;
   if (!opt.IsValid(&why)) throw std::invalid_argument("calibrate: " + why);
   const int n = static_cast<int>(nominal.cameras.size());
-  if (static_cast<int>(frames.size()) != n)
-    throw std::invalid_argument(
-        fmt::format("calibrate: {} frames for a rig of {} cameras", frames.size(), n));
   if (n < 2) throw std::invalid_argument("calibrate: the rig needs at least 2 cameras");
-  for (int i = 0; i < n; ++i)
-    if (frames[i].cols != nominal.cameras[i].in.width || frames[i].rows != nominal.cameras[i].in.height)
-      throw std::invalid_argument(fmt::format("calibrate: frame of camera {} is {}x{}, the rig says {}x{}",
-                                              nominal.cameras[i].id, frames[i].cols, frames[i].rows,
-                                              nominal.cameras[i].in.width, nominal.cameras[i].in.height));
+  check_frames(nominal, frames, "");
   CalibrationSummary res;
   res.rig = nominal;
 
   // 1. Features.
-  std::vector<CameraFeatures> feats(n);
-  {
-    Progress progress("calibrate: features", n);
-    for (int i = 0; i < n; ++i) {
-      feats[i] = detect_features(frames[i], opt.features);
-      progress.step();
-    }
-  }
+  std::vector<std::vector<CameraFeatures>> feats{detect_all(frames, opt)};
   // 2. Pairwise matching between overlapping cameras, and the scene model.
-  std::vector<PairMatches> pms;
+  std::vector<std::vector<PairMatches>> pms;
   const SceneModel scene = match_pairs(nominal, feats, opt, pms, res);
   // 3. Tracks (union-find over keypoints), tracks seen twice by one camera are dropped.
-  std::vector<std::vector<TrackObservation>> tracks = build_tracks(feats, pms);
-
-  {
-    std::vector<int> hist(6, 0);
-    for (const auto& t : tracks) ++hist[std::min<size_t>(t.size(), 5)];
-    spdlog::info("calibrate: {} tracks, by length 2: {}, 3: {}, 4: {}, 5+: {}", tracks.size(), hist[2],
-                 hist[3], hist[4], hist[5]);
-  }
+  std::vector<std::vector<TrackObservation>> tracks = build_tracks(feats[0], pms[0]);
+  log_tracks(tracks);
   SolveState st;
   res = solve_tracks(nominal, nominal, std::move(tracks), scene, opt, std::move(res), &st);
-  if (opt.refine_rounds > 0) refine_rounds(nominal, frames, feats, scene, opt, st, res);
+  if (opt.refine_rounds > 0) refine_rounds(nominal, frames, feats[0], scene, opt, st, res);
   return res;
+}
+
+ShotMode parse_shot_mode(const std::string& name) {
+  if (name == "average") return ShotMode::kAverage;
+  if (name == "pool") return ShotMode::kPool;
+  if (name == "auto") return ShotMode::kAuto;
+  throw std::invalid_argument("unknown shot mode '" + name + "' (expected pool, average or auto)");
+}
+
+std::string to_string(ShotMode m) {
+  return m == ShotMode::kAverage ? "average" : m == ShotMode::kPool ? "pool" : "auto";
+}
+
+double min_shot_psnr_db(const std::vector<std::vector<cv::Mat>>& sets) {
+  double lowest = std::numeric_limits<double>::infinity();
+  auto gray8 = [](const cv::Mat& m) {
+    cv::Mat g = m;
+    if (g.channels() == 3) cv::cvtColor(g, g, cv::COLOR_BGR2GRAY);
+    if (g.channels() == 4) cv::cvtColor(g, g, cv::COLOR_BGRA2GRAY);
+    if (g.depth() == CV_16U) g.convertTo(g, CV_8U, 1.0 / 257);
+    return g;
+  };
+  for (size_t s = 1; s < sets.size(); ++s) {
+    if (sets[s].size() != sets[0].size())
+      throw std::invalid_argument(fmt::format("shots differ: shot {} has {} frames, shot 0 has {}", s,
+                                              sets[s].size(), sets[0].size()));
+    for (size_t i = 0; i < sets[s].size(); ++i) {
+      if (sets[s][i].size() != sets[0][i].size())
+        throw std::invalid_argument(
+            fmt::format("shots differ: camera index {} is {}x{} in shot {} but {}x{} in "
+                        "shot 0",
+                        i, sets[s][i].cols, sets[s][i].rows, s, sets[0][i].cols, sets[0][i].rows));
+      lowest = std::min(lowest, cv::PSNR(gray8(sets[0][i]), gray8(sets[s][i])));
+    }
+  }
+  return lowest;
+}
+
+bool shots_differ(const std::vector<std::vector<cv::Mat>>& sets) {
+  return min_shot_psnr_db(sets) < kShotsDifferPsnrDb;
+}
+
+CalibrationSummary calibrate_shots(const Rig& nominal, const std::vector<std::vector<cv::Mat>>& sets,
+                                   ShotMode mode, const CalibrationOptions& opt) {
+  if (sets.empty()) throw std::invalid_argument("calibrate: no shots");
+  if (mode == ShotMode::kAuto) {
+    const double psnr = min_shot_psnr_db(sets);
+    mode = psnr < kShotsDifferPsnrDb ? ShotMode::kPool : ShotMode::kAverage;
+    spdlog::info("calibrate: {} shot(s), lowest PSNR between shots {:.1f} dB -> {}", sets.size(), psnr,
+                 to_string(mode));
+  }
+  if (mode == ShotMode::kAverage || sets.size() == 1) {
+    CalibrationSummary r = calibrate_rig(nominal, average_frame_sets(sets), opt);
+    r.shots = 1;
+    return r;
+  }
+  std::string why;
+  if (!opt.IsValid(&why)) throw std::invalid_argument("calibrate: " + why);
+  if (nominal.cameras.size() < 2) throw std::invalid_argument("calibrate: the rig needs at least 2 cameras");
+  for (size_t s = 0; s < sets.size(); ++s) check_frames(nominal, sets[s], fmt::format("shot {}: ", s));
+  CalibrationSummary res;
+  res.rig = nominal;
+  res.shots = static_cast<int>(sets.size());
+  // 1.-3. per shot: features, matches, tracks; a scene point belongs to one shot.
+  std::vector<std::vector<CameraFeatures>> feats;
+  for (const auto& frames : sets) feats.push_back(detect_all(frames, opt));
+  std::vector<std::vector<PairMatches>> pms;
+  const SceneModel scene = match_pairs(nominal, feats, opt, pms, res);
+  std::vector<std::vector<TrackObservation>> tracks;
+  for (size_t s = 0; s < sets.size(); ++s) {
+    auto t = build_tracks(feats[s], pms[s]);
+    tracks.insert(tracks.end(), std::make_move_iterator(t.begin()), std::make_move_iterator(t.end()));
+  }
+  log_tracks(tracks);
+  if (opt.refine_rounds > 0 || (scene == SceneModel::kNear && opt.dense_refine)) {
+    res.warnings.push_back(
+        "pooled shots: the subpixel refinement is not run (keypoint positions as detected)");
+    spdlog::warn("calibrate: {}", res.warnings.back());
+  }
+  return solve_tracks(nominal, nominal, std::move(tracks), scene, opt, std::move(res));
 }
 
 std::vector<cv::Mat> average_frame_sets(const std::vector<std::vector<cv::Mat>>& sets) {

@@ -15,6 +15,12 @@
 //     5 mm dome, so a distant scene is seen along parallel rays: rotation-only.
 //   * near field (parallax, e.g. the 35 mm colon tube): a homogeneous point X = (P, h) on S^3 and
 //     the camera centres c_i FIXED at their nominal positions: w = P - h c_i (mm).
+//   * near field with camera positions estimated (CalibrationOptions::estimate_position, a rig with a
+//     real baseline, e.g. a stereo pair at 0.5-3 m): c_i = c_ref + |c_i - c_ref| * dir_i, dir_i on
+//     S^2 (SphereManifold<3>). Gauge: the reference camera (the first with observations) keeps its
+//     nominal position AND rotation; every other camera keeps its nominal DISTANCE from the
+//     reference (the scale: the baseline length the user measured), only its direction moves; the
+//     rotation prior is not used. Not with the calibration tube.
 //   The scene model is chosen per run (auto: near when the essential-matrix consensus, summed over
 //   all camera pairs, exceeds the rotation-only one by near_ratio).
 //
@@ -38,6 +44,13 @@
 // passes: rotations and points with nominal intrinsics (a warm start), everything free, then
 // rejection and the final solve. Nothing is rejected after the warm start: with nominal
 // intrinsics the edge observations that determine them look like outliers.
+//
+// Several shots (calibrate_shots). kAverage: a static rig AND a static scene; the frame sets are
+// averaged (average_frame_sets) and calibrated as one. kPool: a static rig, a scene that may change
+// between shots (a chessboard moved in front of a stereo pair): features, matches and feature tracks
+// per shot (a scene point belongs to one shot), and one bundle adjustment over all tracks of all
+// shots; the scene model (auto) from the consensus summed over all shots and pairs. kAuto: pool
+// when the shots' frames differ (shots_differ), else average.
 //
 // Subpixel refinement (refine_rounds, subpixel.h). SIFT keypoints of one scene point in two cameras
 // disagree by a few tenths of a pixel (SIFT is not affine invariant). After the first solve every
@@ -89,6 +102,9 @@ struct CalibrationOptions {
   double overlap_margin_deg = 0;  // pairs need nominal cones intersecting by more than this
 
   bool estimate_rotation = true;
+  bool estimate_position = false;    // near field: camera centres move on spheres about the reference
+                                     // camera's (see "near field with camera positions estimated");
+                                     // set prior_mean_focal = 0 to let the focal lengths move too
   bool estimate_focal = true;        // fu, fv
   bool estimate_center = true;       // cu, cv
   int radial_terms = 1;              // how many radial coefficients to estimate: 0..3 = k1, k2, k5
@@ -144,11 +160,51 @@ struct CalibrationOptions {
   bool IsValid(std::string* why = nullptr) const;
 };
 
+// Options for a rig with a real baseline seen at 0.5-3 m (a stereo pair calibrated from pooled
+// shots of a changing scene): near field, camera positions estimated (the baseline direction),
+// k1 and k2 per camera (strong barrel distortion), focal lengths and principal points HELD at the
+// nominal ones, RANSAC threshold 8 px (the start knows no distortion: ~50 px at the corners of a
+// k1 = -0.27 lens, mostly common to both views), 200 iterations, no subpixel refinement.
+// Why the intrinsics are held: a static two-camera rig gives, however many shots are pooled, one
+// epipolar geometry (the fundamental matrix, 7 numbers) plus the distortion; with nearly parallel
+// optical axes the focal lengths are not determined by it (Bougnoux's degeneracy: on OpenCV's stereo
+// samples, free focal lengths run 16-45 % away, even from the true principal points and distortion)
+// and a principal point offset dc trades against the relative rotation by dc / f rad (free principal
+// points run 45-130 px away). Measured there (13 shots, start 5 deg / 5 deg / focal 3 % / principal
+// points at the image centre, 23 and 12 px off): relative rotation 1.33 deg, baseline direction
+// 0.68 deg, k1 -0.26 / -0.31 (chessboard -0.27 / -0.28), RMS 0.33 px; the rotation's floor is the
+// start's relative principal point error (~11 px / 536 px = 1.2 deg). From the chessboard's
+// intrinsics instead: 0.076 deg, 0.63 deg. Everything free: focal 50 % off, rotation 14 deg.
+// self_ratio 0.7: the chessboard's squares match each other (ratio test 0.8: 220 of 332 matches on
+// the board wrong, 101 of 200 RANSAC inliers, mostly along the epipolar lines); 0.7 leaves 48 of
+// 92 and 27 of 69 (stereo_real_test.cc, `omma real stereo-calib`).
+inline CalibrationOptions stereo_calibration_options() {
+  CalibrationOptions o;
+  o.scene = SceneModel::kNear;
+  o.estimate_position = true;
+  o.prior_mean_focal = 0;
+  o.estimate_focal = false;
+  o.estimate_center = false;
+  o.radial_terms = 2;
+  o.match.ransac_threshold_px = 8;
+  o.match.self_ratio = 0.7;
+  o.max_iterations = 200;
+  o.refine_rounds = 0;
+  o.dense_refine = false;
+  return o;
+}
+
 struct CameraReport {
   int id = 0;
   double rms_px = 0;  // reprojection RMS over this camera's observations
   int matches = 0;    // observations (feature track members) of this camera used in the fit
   bool calibrated = true;
+};
+
+struct PairReport {
+  int cam_a = 0, cam_b = 0;  // camera ids
+  int matches = 0;           // after the ratio test, summed over shots
+  int inliers = 0;           // after RANSAC with the chosen scene model, summed over shots
 };
 
 struct CalibrationSummary {
@@ -163,6 +219,8 @@ struct CalibrationSummary {
   double rms_px = 0;                    // final reprojection RMS, pixels
   double initial_rms_px = 0;            // RMS with the nominal rig (same observations), pixels
   std::vector<CameraReport> per_camera;
+  std::vector<PairReport> per_pair;   // every matched pair (overlapping nominal cones)
+  int shots = 1;                      // shots whose tracks went into the adjustment
   std::vector<int> uncalibrated_ids;  // cameras with too few matches (kept nominal)
   std::vector<std::string> warnings;
 };
@@ -171,6 +229,26 @@ struct CalibrationSummary {
 // enough matches). `frames` are in rig order (see omma/core/frames.h load_frames).
 CalibrationSummary calibrate_rig(const Rig& nominal, const std::vector<cv::Mat>& frames,
                                  const CalibrationOptions& opt = {});
+
+enum class ShotMode { kAverage, kPool, kAuto };
+ShotMode parse_shot_mode(const std::string& name);  // "average", "pool", "auto"
+std::string to_string(ShotMode m);
+
+// PSNR (dB, 8-bit scale on the gray images) between shot 0's frame and every other shot's frame of
+// the same camera: the lowest over all cameras and shots (+infinity for one shot). Sizes must agree.
+double min_shot_psnr_db(const std::vector<std::vector<cv::Mat>>& sets);
+// kAuto's test: the shots differ (a changing scene) when min_shot_psnr_db < kShotsDifferPsnrDb.
+// Measured: simulated shots of a static scene (sensor noise only): 37.2 dB (lake, 3 shots), 40.7 dB
+// (tube, 2 shots); OpenCV's real stereo shots 1-3 (a chessboard moved between them): 8.9 dB. Very
+// noisy static shots (sigma ~10 of 255) would fall below 28 dB: pass --shots average for those.
+constexpr double kShotsDifferPsnrDb = 28;
+bool shots_differ(const std::vector<std::vector<cv::Mat>>& sets);
+
+// calibrate_rig on several shots (`sets`: one frame set per shot, rig order) in the given mode
+// (see "Several shots" above). Pooled: the subpixel refinement is not run (refine_rounds and
+// dense_refine are ignored, a warning says so). Throws as calibrate_rig and average_frame_sets.
+CalibrationSummary calibrate_shots(const Rig& nominal, const std::vector<std::vector<cv::Mat>>& sets,
+                                   ShotMode mode, const CalibrationOptions& opt = {});
 
 // Several shots of a static scene: the frame sets averaged in linear light (sRGB decoded,
 // averaged, encoded again as 16-bit sRGB, CV_16UC3), which divides the sensor noise by sqrt(shots)

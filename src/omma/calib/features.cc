@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <numeric>
 #include <random>
@@ -27,6 +28,7 @@ bool FeatureOptions::IsValid(std::string* why) const {
 
 bool MatchOptions::IsValid(std::string* why) const {
   if (!(ratio > 0 && ratio <= 1)) return invalid(why, "ratio must be in (0, 1]");
+  if (!(self_ratio >= 0 && self_ratio <= 1)) return invalid(why, "self_ratio must be in [0, 1]");
   if (!(overlap_margin_deg >= 0 && overlap_margin_deg < 180))
     return invalid(why, "overlap_margin_deg must be in [0, 180)");
   if (!(ransac_threshold_px > 0)) return invalid(why, "ransac_threshold_px must be > 0");
@@ -132,8 +134,25 @@ Mat3 fit_rotation(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
 namespace {
 
 // Ratio test + mutual nearest neighbours between the keypoint subsets ia (of a) and ib (of b).
+// Per row of d: the distance to its nearest OTHER row (its twin in the same image; +inf if none).
+std::vector<float> twin_distance(const cv::Mat& d) {
+  std::vector<float> out(static_cast<size_t>(d.rows), std::numeric_limits<float>::infinity());
+  if (d.rows < 2) return out;
+  cv::BFMatcher matcher(cv::NORM_L2);
+  std::vector<std::vector<cv::DMatch>> m;
+  matcher.knnMatch(d, d, m, 2);
+  for (const auto& v : m)
+    for (const auto& x : v)
+      if (x.trainIdx != x.queryIdx) {
+        out[size_t(x.queryIdx)] = x.distance;
+        break;
+      }
+  return out;
+}
+
 std::vector<Match> ratio_matches(const CameraFeatures& fa, const CameraFeatures& fb,
-                                 const std::vector<int>& ia, const std::vector<int>& ib, double ratio) {
+                                 const std::vector<int>& ia, const std::vector<int>& ib, double ratio,
+                                 double self_ratio) {
   std::vector<Match> out;
   if (ia.size() < 2 || ib.size() < 2) return out;
   cv::Mat da(static_cast<int>(ia.size()), fa.descriptors.cols, CV_32F);
@@ -144,10 +163,15 @@ std::vector<Match> ratio_matches(const CameraFeatures& fa, const CameraFeatures&
   std::vector<std::vector<cv::DMatch>> ab, ba;
   matcher.knnMatch(da, db, ab, 2);
   matcher.knnMatch(db, da, ba, 1);
+  std::vector<float> twin_a, twin_b;
+  if (self_ratio > 0) twin_a = twin_distance(da), twin_b = twin_distance(db);
   for (const auto& m : ab) {
     if (m.size() < 2 || m[0].distance > ratio * m[1].distance) continue;
     const int qa = m[0].queryIdx, qb = m[0].trainIdx;
     if (ba[qb].empty() || ba[qb][0].trainIdx != qa) continue;  // mutual nearest neighbours
+    if (self_ratio > 0 &&
+        (m[0].distance > self_ratio * twin_a[size_t(qa)] || m[0].distance > self_ratio * twin_b[size_t(qb)]))
+      continue;  // a keypoint with a look-alike in its own image (repetitive texture)
     out.push_back({ia[qa], ib[qb]});
   }
   return out;
@@ -176,9 +200,10 @@ PairMatches match_pair(const Rig& nominal, int cam_a, int cam_b, const CameraFea
   const CameraModel ma = nominal.cameras[cam_a].model();
   const CameraModel mb = nominal.cameras[cam_b].model();
   const double margin = deg2rad(opt.overlap_margin_deg);
-  const std::vector<Match> cand =
-      ratio_matches(fa, fb, in_overlap(ma, fa, mb, margin), in_overlap(mb, fb, ma, margin), opt.ratio);
+  const std::vector<Match> cand = ratio_matches(fa, fb, in_overlap(ma, fa, mb, margin),
+                                                in_overlap(mb, fb, ma, margin), opt.ratio, opt.self_ratio);
   pm.putative = static_cast<int>(cand.size());
+  pm.putative_set = cand;
   if (pm.putative < std::max(opt.min_inliers, 3)) return pm;
 
   const double f = 0.25 * (ma.in.fu + ma.in.fv + mb.in.fu + mb.in.fv);

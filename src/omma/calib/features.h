@@ -55,6 +55,10 @@ std::string to_string(SceneModel m);
 
 struct MatchOptions {
   double ratio = 0.8;              // Lowe's ratio test on the two nearest descriptors
+  double self_ratio = 0;           // repetitive texture (a chessboard's squares): a match is dropped
+                                   // when either keypoint has a twin in its OWN image whose descriptor
+                                   // distance is below match distance / self_ratio (an ambiguous
+                                   // keypoint); 0 = off
   double overlap_margin_deg = 8;   // only keypoints whose nominal direction lies inside the other
                                    // camera's cone widened by this are matched (tolerates the
                                    // assembly errors of the nominal rig)
@@ -72,9 +76,10 @@ struct Match {
 };
 
 struct PairMatches {
-  int cam_a = 0, cam_b = 0;    // rig indices
-  int putative = 0;            // after the ratio test (mutual nearest neighbours)
-  std::vector<Match> inliers;  // after RANSAC, with the model asked for (auto: see match_pair)
+  int cam_a = 0, cam_b = 0;         // rig indices
+  int putative = 0;                 // after the ratio test (mutual nearest neighbours)
+  std::vector<Match> putative_set;  // those matches
+  std::vector<Match> inliers;       // after RANSAC, with the model asked for (auto: see match_pair)
   std::vector<Match> rotation_set, essential_set;  // consensus sets of both models
   int rotation_inliers = 0;                        // consensus of the rotation-only model
   int essential_inliers = 0;         // consensus of the essential-matrix model (near field), 0 if not run
