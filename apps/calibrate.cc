@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include "apps/command.h"
+#include "omma/calib/initial_pose.h"
 #include "omma/calib/photometric.h"
 #include "omma/core/frames.h"
 #include "omma/core/log.h"
@@ -32,7 +33,7 @@ struct CalibrateArgs {
   double self_ratio = 0;
   double loss_scale = 1.0, ransac_px = 5, prior_deg = 5, prior_mean_focal = 0.002, tube = 0;
   bool tube_tilt = false;
-  bool json = false, photometric = false, no_geometric = false;
+  bool json = false, photometric = false, no_geometric = false, initial_pose = false;
 };
 
 // "per-camera" | "shared" | "fixed" -> (estimate, share)
@@ -46,6 +47,35 @@ void parse_mode(const std::string& what, const std::string& mode, bool* estimate
   else
     throw std::invalid_argument(
         fmt::format("--{} must be per-camera, shared or fixed (got '{}')", what, mode));
+}
+// --initial-pose: the rig's cameras oriented from the images of one shot (calib/initial_pose.h), with
+// their intrinsics, ids and photometric models kept; positions on the rig's dome along each axis.
+Rig with_initial_pose(const Rig& rig, const std::vector<cv::Mat>& frames, nlohmann::json* report) {
+  std::vector<Intrinsics> intrinsics;
+  for (const auto& c : rig.cameras) intrinsics.push_back(c.in);
+  calib::InitialPoseOptions po;
+  po.dome_radius_mm = rig.dome.radius_mm;
+  const auto t0 = std::chrono::steady_clock::now();
+  const calib::InitialPoseSummary s = calib::initial_pose(frames, intrinsics, po);
+  Rig out = rig;
+  for (size_t i = 0; i < out.cameras.size(); ++i) {
+    out.cameras[i].frame = s.rig.cameras[i].frame;
+    out.cameras[i].position_mm = s.rig.cameras[i].position_mm;
+  }
+  out.validate();
+  nlohmann::json pairs = nlohmann::json::array();
+  for (const auto& p : s.pairs) {
+    if (!p.in_tree) continue;
+    pairs.push_back({{"cameras", {rig.cameras[p.cam_a].id, rig.cameras[p.cam_b].id}},
+                     {"matches", p.matches},
+                     {"inliers", p.inliers},
+                     {"rms_px", p.rms_px}});
+    spdlog::info("calibrate: initial pose: cameras {} and {}: {} matches, {} inliers, RMS {:.2f} px",
+                 rig.cameras[p.cam_a].id, rig.cameras[p.cam_b].id, p.matches, p.inliers, p.rms_px);
+  }
+  for (const auto& w : s.warnings) spdlog::warn("calibrate: initial pose: {}", w);
+  *report = {{"pairs", pairs}, {"seconds", seconds_since(t0)}};
+  return out;
 }
 }  // namespace
 
@@ -144,15 +174,26 @@ void add_calibrate_command(CLI::App& root) {
   cmd->add_flag(
       "--no-geometric", a.no_geometric,
       "Keep the rig's geometry as given (already calibrated); only the photometric calibration runs");
+  cmd->add_flag(
+      "--initial-pose", a.initial_pose,
+      "Estimate every camera's orientation from the images first (calib/initial_pose.h: SIFT between\n"
+      "every pair without a prior, RANSAC on the rotation, chained from camera 0 looking along +z), keeping\n"
+      "the rig's intrinsics: for cameras whose poses nobody measured, e.g. a rig from `omma rig new` with\n"
+      "sizes and focal lengths only");
   cmd->add_flag("--json", a.json, "Print one JSON object on stdout");
   cmd->callback([prior_mean_focal] {
     set_json_mode(a.json);
-    const Rig nominal = design::load_rig_or_builtin(a.rig);
+    Rig nominal = design::load_rig_or_builtin(a.rig);
     const bool photometric = a.photometric || !a.flat.empty();
     if (a.no_geometric && !photometric)
       throw std::invalid_argument("--no-geometric leaves nothing to do: add --photometric or --flat DIR");
     std::vector<std::filesystem::path> paths(a.frames.begin(), a.frames.end());
     const auto sets = load_frame_sets(paths, nominal);
+    nlohmann::json initial = nullptr;
+    if (a.initial_pose) {
+      if (a.no_geometric) throw std::invalid_argument("--initial-pose and --no-geometric exclude each other");
+      nominal = with_initial_pose(nominal, sets.front(), &initial);
+    }
     std::vector<std::vector<cv::Mat>> flats;
     if (!a.flat.empty()) flats = load_frame_sets({a.flat}, nominal);
     calib::CalibrationOptions opt;
@@ -259,6 +300,7 @@ void add_calibrate_command(CLI::App& root) {
                   {"per_camera", per},
                   {"geometric_seconds", geometric_s},
                   {"photometric", pj},
+                  {"initial_pose", initial},
                   {"out", a.out}});
     } else {
       if (!a.no_geometric)

@@ -542,6 +542,17 @@ void write_solution(BundleBlocks& b, const std::vector<std::vector<TrackObservat
     c.position_mm = b.centre(i);
     const double* k = b.k_block(i);
     for (int j = 0; j < 5; ++j) c.in.k[j] = k[j];
+    try {
+      validate_camera(c);
+    } catch (const std::exception& e) {
+      // The matches did not hold the model (e.g. distortion from one narrow overlap): say so and how
+      // to ask for less, rather than write a lens that folds back.
+      throw std::runtime_error(fmt::format(
+          "calibrate: the adjustment gave camera {} a model that is not a lens ({}): the matches do not "
+          "determine that many parameters; ask for fewer (--distortion fixed, --center fixed, --focal shared) "
+          "or give more overlap",
+          c.id, e.what()));
+    }
   }
   res.rig.validate();
 }

@@ -88,6 +88,19 @@ SceneModel match_pairs(const Rig& nominal, const std::vector<std::vector<CameraF
   if (scene == SceneModel::kAuto) {
     // Parallax shows as matches that no rotation explains but an essential matrix does.
     scene = ess_total > opt.near_ratio * rot_total ? SceneModel::kNear : SceneModel::kFar;
+    // Cameras that share one centre (a rig made from sizes and focal lengths, rig new without pos=)
+    // cannot explain parallax with fixed positions: the near model would be degenerate there.
+    double spread_mm = 0;
+    for (const auto& c : nominal.cameras)
+      spread_mm = std::max(spread_mm, (c.position_mm - nominal.cameras.front().position_mm).norm());
+    if (scene == SceneModel::kNear && spread_mm < 1e-6 && !opt.estimate_position) {
+      scene = SceneModel::kFar;
+      res.warnings.push_back(
+          "the images show parallax, but the rig's cameras share one centre: far-field model (rotation "
+          "only), which folds the parallax into the cameras' intrinsics; give the cameras' positions and "
+          "--position estimate to model it");
+      spdlog::warn("calibrate: {}", res.warnings.back());
+    }
     spdlog::info("calibrate: consensus over all pairs: rotation-only {}, essential matrix {} -> {} scene",
                  rot_total, ess_total, to_string(scene));
   }
