@@ -549,7 +549,8 @@ void write_solution(BundleBlocks& b, const std::vector<std::vector<TrackObservat
       // to ask for less, rather than write a lens that folds back.
       throw std::runtime_error(fmt::format(
           "calibrate: the adjustment gave camera {} a model that is not a lens ({}): the matches do not "
-          "determine that many parameters; ask for fewer (--distortion fixed, --center fixed, --focal shared) "
+          "determine that many parameters; ask for fewer (--distortion fixed, --center fixed, --focal "
+          "shared) "
           "or give more overlap",
           c.id, e.what()));
     }
