@@ -178,7 +178,8 @@ struct OmmaImpl {
   Clock::time_point oldest_used;
   double push_ms_sum = 0;
   long push_count = 0;
-  size_t dropped_warned = 0;
+  std::vector<char> dropped_warned;             // per entry of the engine's dropped_cameras
+  std::vector<Clock::time_point> dropped_seen;  // when on_progress first saw that entry
   std::mutex stats_mutex;
   std::string stats_json = "{}";
   ~OmmaImpl() {
@@ -388,6 +389,8 @@ class SrcSink : public omma::live::Sink {
 
 // ---- Statistics and warnings (from the engine's render loop). ----
 
+constexpr std::chrono::milliseconds kEndedGrace{1000};
+
 void on_progress(GstOmmaStitch* self, const nlohmann::json& j) {
   OmmaImpl* impl = self->impl;
   const nlohmann::json& w = j.at("window");
@@ -413,8 +416,17 @@ void on_progress(GstOmmaStitch* self, const nlohmann::json& j) {
       "push-latency-ms", G_TYPE_DOUBLE, push_ms, "cameras-live", G_TYPE_INT, live, "dropped-cameras",
       G_TYPE_INT, int(dropped.size()), "frames", G_TYPE_INT64, gint64(s["frames"].get<long>()), nullptr);
   gst_element_post_message(GST_ELEMENT(self), gst_message_new_element(GST_OBJECT(self), st));
-  for (; impl->dropped_warned < dropped.size(); ++impl->dropped_warned) {
-    const nlohmann::json& d = dropped[impl->dropped_warned];
+  // A drop is warned at once, except a camera whose stream simply ended: that waits kEndedGrace with
+  // other cameras still live, because the end of a whole stream reaches the pads one by one (on a
+  // loaded machine across progress ticks) and is no camera lost; the last pads' end stops the engine.
+  const Clock::time_point now = Clock::now();
+  impl->dropped_seen.resize(dropped.size(), now);
+  impl->dropped_warned.resize(dropped.size(), 0);
+  for (size_t i = 0; i < dropped.size(); ++i) {
+    const nlohmann::json& d = dropped[i];
+    if (impl->dropped_warned[i]) continue;
+    if (d.at("reason") == "ended" && (live == 0 || now - impl->dropped_seen[i] < kEndedGrace)) continue;
+    impl->dropped_warned[i] = 1;
     const std::string text = "ommastitch: camera " + std::to_string(d.at("id").get<int>()) + " (sink_" +
                              std::to_string(d.at("index").get<int>()) +
                              ") dropped: " + d.at("reason").get<std::string>() +
@@ -443,10 +455,10 @@ void engine_main(GstOmmaStitch* self) {
     const omma::live::EngineSummary st = omma::live::run_engine(impl->rig, std::move(sources), sinks, eo);
     GST_INFO_OBJECT(self, "engine ended: %ld panoramas", st.frames);
     if (!impl->stop) {
-      // Cameras that failed (not those that simply ended) and were not reported yet (on_progress
-      // reported the first dropped_warned of them).
-      for (size_t i = impl->dropped_warned; i < st.dropped_cameras.size(); ++i)
-        if (const auto& d = st.dropped_cameras[i]; d.reason != "ended") {
+      // Cameras that failed (not those that simply ended) and were not reported yet by on_progress.
+      for (size_t i = 0; i < st.dropped_cameras.size(); ++i)
+        if (const auto& d = st.dropped_cameras[i];
+            d.reason != "ended" && (i >= impl->dropped_warned.size() || !impl->dropped_warned[i])) {
           const std::string text = "ommastitch: camera " + std::to_string(d.id) + " (sink_" +
                                    std::to_string(d.index) + ") dropped: " + d.reason;
           GST_ELEMENT_WARNING(self, STREAM, FAILED, ("%s", text.c_str()), (nullptr));
@@ -847,7 +859,8 @@ bool configure(GstOmmaStitch* self) {
   impl->out_frames = 0;
   impl->push_ms_sum = 0;
   impl->push_count = 0;
-  impl->dropped_warned = 0;
+  impl->dropped_warned.clear();
+  impl->dropped_seen.clear();
   impl->oldest_used = {};
   {
     std::lock_guard<std::mutex> lock(impl->stats_mutex);
