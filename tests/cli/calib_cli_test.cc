@@ -3,10 +3,8 @@
 // photographs from OpenCV's samples (testing/real_data.h).
 #include <fstream>
 
-#include <Eigen/Geometry>
 #include <fmt/format.h>
 #include <gtest/gtest.h>
-#include <opencv2/calib3d.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -14,6 +12,7 @@
 #include "omma/core/rig.h"
 #include "omma/sim/perturb.h"
 #include "omma/testing/real_data.h"
+#include "omma/testing/real_stereo.h"
 #include "omma/testing/test_scenes.h"
 #include "tests/cli/cli_util.h"
 
@@ -156,110 +155,31 @@ TEST(CalibCli, PtoExportImportRoundTripAndBadInput) {
 
 // ---- A real stereo rig (OpenCV's samples left/right01..14, testing/real_data.h), pooled shots ----
 
-// The chessboard truth of the real pair (cv::calibrateCamera per camera, cv::stereoCalibrate with
-// the intrinsics fixed, 9x6 inner corners, 25 mm squares): x_r = R x_l + T; and the start rig a user
-// would write (focal 3 % long, principal point at the centre, no distortion, the right camera's
-// rotation and baseline direction 5 deg off), dome frame = the left camera's OpenCV frame.
-struct RealStereo {
-  cv::Mat k[2], d[2];
-  Mat3 r;
-  Vec3 t;
-  std::vector<int> ids;
-  std::vector<cv::Mat> img[2];
-};
-
-RealStereo real_stereo() {
-  RealStereo rs;
-  const fs::path dir = testing::opencv_samples_dir();
-  std::vector<cv::Point3f> grid;
-  for (int y = 0; y < 6; ++y)
-    for (int x = 0; x < 9; ++x) grid.emplace_back(25.f * x, 25.f * y, 0.f);
-  std::vector<std::vector<cv::Point3f>> obj;
-  std::vector<std::vector<cv::Point2f>> pts[2];
-  for (int s = 1; s <= 14; ++s) {
-    if (!fs::exists(dir / fmt::format("left{:02d}.jpg", s))) continue;  // left10 / right10 are missing
-    cv::Mat g[2] = {cv::imread((dir / fmt::format("left{:02d}.jpg", s)).string(), cv::IMREAD_GRAYSCALE),
-                    cv::imread((dir / fmt::format("right{:02d}.jpg", s)).string(), cv::IMREAD_GRAYSCALE)};
-    if (g[0].empty() || g[1].empty()) continue;
-    rs.ids.push_back(s), rs.img[0].push_back(g[0]), rs.img[1].push_back(g[1]);
-    std::vector<cv::Point2f> c[2];
-    bool ok = true;
-    for (int cam = 0; cam < 2 && ok; ++cam) {
-      ok = cv::findChessboardCorners(g[cam], {9, 6}, c[cam],
-                                     cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE);
-      if (ok)
-        cv::cornerSubPix(g[cam], c[cam], {11, 11}, {-1, -1},
-                         {cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 30, 0.01});
-    }
-    if (ok) obj.push_back(grid), pts[0].push_back(c[0]), pts[1].push_back(c[1]);
-  }
-  for (int cam = 0; cam < 2; ++cam) {
-    std::vector<cv::Mat> rv, tv;
-    cv::calibrateCamera(obj, pts[cam], {640, 480}, rs.k[cam], rs.d[cam], rv, tv);
-  }
-  cv::Mat r, t, e, f;
-  cv::stereoCalibrate(obj, pts[0], pts[1], rs.k[0], rs.d[0], rs.k[1], rs.d[1], {640, 480}, r, t, e, f,
-                      cv::CALIB_FIX_INTRINSIC);
-  for (int i = 0; i < 3; ++i) {
-    rs.t[i] = t.at<double>(i);
-    for (int j = 0; j < 3; ++j) rs.r(i, j) = r.at<double>(i, j);
-  }
-  return rs;
-}
-
-Mat3 rows_uvt(const RigCamera& c) {
-  Mat3 m;
-  m.row(0) = c.frame.u.transpose(), m.row(1) = c.frame.v.transpose(), m.row(2) = c.frame.t.transpose();
-  return m;
-}
-
-Rig real_stereo_start(const RealStereo& rs) {
-  Rig rig;
-  rig.name = "stereo-start";
-  for (int cam = 0; cam < 2; ++cam) {
-    RigCamera c;
-    c.id = cam;
-    c.in.width = 640, c.in.height = 480;
-    c.in.fu = 1.03 * rs.k[cam].at<double>(0, 0), c.in.fv = 1.03 * rs.k[cam].at<double>(1, 1);
-    c.in.cu = 320, c.in.cv = 240;
-    c.in.aov = deg2rad(80);
-    Mat3 r = Mat3::Identity();
-    if (cam == 1) {
-      const Vec3 axis = Vec3(1, 0, 1).normalized();
-      r = Eigen::AngleAxisd(deg2rad(5), axis).matrix() * rs.r;
-      const Vec3 b = -rs.r.transpose() * rs.t;
-      c.position_mm = Eigen::AngleAxisd(deg2rad(5), b.cross(axis).normalized()).matrix() * b;
-    }
-    c.frame.u = r.row(0).transpose(), c.frame.v = r.row(1).transpose(), c.frame.t = r.row(2).transpose();
-    rig.cameras.push_back(c);
-  }
-  return rig;
-}
-
-// Relative rotation and baseline direction errors of a rig against the chessboard truth, degrees.
-std::pair<double, double> stereo_errors(const Rig& rig, const RealStereo& rs) {
-  const Mat3 rel = rows_uvt(rig.cameras[1]) * rows_uvt(rig.cameras[0]).transpose();
-  const Vec3 b = rows_uvt(rig.cameras[0]) * (rig.cameras[1].position_mm - rig.cameras[0].position_mm);
-  return {rad2deg(Eigen::AngleAxisd(rel * rs.r.transpose()).angle()),
-          rad2deg(angle_between(b, -rs.r.transpose() * rs.t))};
-}
-
 // `omma calibrate` with pooled shots (auto: the board moves, the shots differ) and estimated
 // positions on frames folders made from 5 real pairs (1, 3, 5, 7, 9), focal lengths and principal
 // points held (a static pair does not determine them: calibrate.h stereo_calibration_options).
 TEST(CalibCli, RealStereoPooledShots) {
   if (!fs::exists(testing::opencv_samples_dir() / "left01.jpg")) GTEST_SKIP() << "opencv-doc not installed";
-  const RealStereo rs = real_stereo();
+  // The pairs and their chessboard truth, and the start a user would write: focal 3 % long,
+  // principal point at the centre, no distortion, the right camera's rotation and baseline direction
+  // 5 deg off about (1, 0, 1) (testing/real_stereo.h: x_r = R x_l + T, dome frame = the left
+  // camera's OpenCV frame).
+  const testing::StereoPairs rs = testing::load_stereo_pairs(testing::opencv_samples_dir());
+  const testing::StereoTruth truth = testing::stereo_chessboard_truth(rs);
   const fs::path dir = temp_dir("stereo");
-  const Rig start = real_stereo_start(rs);
+  testing::StereoStartOptions so;
+  so.axis = Vec3(1, 0, 1);
+  so.baseline_axis = Vec3(1, 0, 1).normalized();  // this test's start to the last bit (unit axis in b x a)
+  so.name = "stereo-start";
+  const Rig start = testing::stereo_start_rig(truth, so);
   save_rig(start, dir / "rig.json");
   std::string frames;
   for (size_t s = 0; s < rs.ids.size(); ++s) {
     if (rs.ids[s] > 9 || rs.ids[s] % 2 == 0) continue;
     const fs::path shot = dir / fmt::format("shot_{:02d}", rs.ids[s]);
     fs::create_directories(shot);
-    cv::imwrite((shot / "cam_00.png").string(), rs.img[0][s]);
-    cv::imwrite((shot / "cam_01.png").string(), rs.img[1][s]);
+    cv::imwrite((shot / "cam_00.png").string(), rs.left[s]);
+    cv::imwrite((shot / "cam_01.png").string(), rs.right[s]);
     frames += " --frames " + shot.string();
   }
   const std::string common = " --rig " + (dir / "rig.json").string() +
@@ -274,8 +194,10 @@ TEST(CalibCli, RealStereoPooledShots) {
   EXPECT_LT(j["rms_px"].get<double>(), 0.6);
   EXPECT_GT(j["tracks"].get<int>(), 500);
   const Rig cal = load_rig(dir / "cal.json");
-  const auto [rot0, base0] = stereo_errors(start, rs);
-  const auto [rot, base] = stereo_errors(cal, rs);
+  const testing::StereoErrors err0 = testing::stereo_errors(start, truth);
+  const testing::StereoErrors err = testing::stereo_errors(cal, truth);
+  const double rot0 = err0.relative_rotation_deg, base0 = err0.baseline_direction_deg;
+  const double rot = err.relative_rotation_deg, base = err.baseline_direction_deg;
   std::printf(
       "start: rotation %.3f deg, baseline %.3f deg; pooled: rotation %.3f deg, baseline %.3f deg, k1 %.3f / "
       "%.3f\n",
@@ -288,7 +210,7 @@ TEST(CalibCli, RealStereoPooledShots) {
   // The cameras see different scenes: a clear error that names them and their matches.
   const fs::path bad = dir / "bad";
   fs::create_directories(bad);
-  cv::imwrite((bad / "cam_00.png").string(), rs.img[0][0]);
+  cv::imwrite((bad / "cam_00.png").string(), rs.left[0]);
   cv::Mat other = cv::imread((testing::opencv_samples_dir() / "aloeL.jpg").string());
   cv::resize(other, other, {640, 480});
   cv::imwrite((bad / "cam_01.png").string(), other);

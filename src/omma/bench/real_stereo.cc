@@ -4,11 +4,11 @@
 // calibration of the same images (cv::calibrateCamera per camera, then cv::stereoCalibrate with the
 // intrinsics fixed), with COLMAP's mapper beside it.
 //
-// Conventions. cv::stereoCalibrate's R, T map left-camera coordinates to right-camera coordinates
-// (x_r = R x_l + T, OpenCV axes x right, y down, z forward). The rig's dome frame is the left
-// camera's OpenCV frame: the left camera has t = +z, u = +x, v = +y and sits at the origin; the right
-// camera's rows (u, v, t) are the rows of R and its centre is -R^T T (mm: 25 mm squares). OpenCV's
-// pixel centres are integers: omma's cu = cx + 0.5.
+// The pairs, the chessboard truth, the perturbed start and the errors against the truth are the
+// test fixture testing/real_stereo.h, which states the conventions (x_r = R x_l + T; the dome frame
+// is the left camera's OpenCV frame; omma's cu = OpenCV's cx + 0.5).
+#include "omma/testing/real_stereo.h"
+
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
@@ -32,141 +32,27 @@
 namespace omma::bench {
 namespace {
 namespace fs = std::filesystem;
+using testing::StereoTruth;
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-// The chessboard truth: per-camera intrinsics (OpenCV), the relative pose, and the RMS values.
-struct StereoTruth {
-  cv::Mat k[2], d[2];  // camera matrices (CV_64F 3x3), distortion (k1 k2 p1 p2 k3)
-  cv::Mat r, t;        // x_r = R x_l + T, mm
-  double rms_mono[2] = {0, 0}, rms_stereo = 0;
-  int views = 0;
-  std::vector<std::vector<cv::Point2f>> corners[2];  // per shot (empty: board not found in both)
-};
-
-StereoTruth chessboard_truth(const std::vector<cv::Mat>& left, const std::vector<cv::Mat>& right) {
-  const cv::Size board(9, 6);
-  const double square_mm = 25;
-  std::vector<cv::Point3f> grid;
-  for (int y = 0; y < board.height; ++y)
-    for (int x = 0; x < board.width; ++x) grid.emplace_back(float(x * square_mm), float(y * square_mm), 0.f);
-  std::vector<std::vector<cv::Point3f>> obj;
-  std::vector<std::vector<cv::Point2f>> pts[2], t_corners[2];
-  for (size_t s = 0; s < left.size(); ++s) {
-    std::vector<cv::Point2f> c[2];
-    bool ok = true;
-    for (int cam = 0; cam < 2 && ok; ++cam) {
-      const cv::Mat& g = cam ? right[s] : left[s];
-      ok = cv::findChessboardCorners(g, board, c[cam],
-                                     cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE);
-      if (ok)
-        cv::cornerSubPix(g, c[cam], cv::Size(11, 11), cv::Size(-1, -1),
-                         cv::TermCriteria(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 30, 0.01));
-    }
-    for (int cam = 0; cam < 2; ++cam) t_corners[cam].push_back(ok ? c[cam] : std::vector<cv::Point2f>{});
-    if (!ok) continue;
-    obj.push_back(grid);
-    pts[0].push_back(c[0]);
-    pts[1].push_back(c[1]);
-  }
-  if (obj.size() < 3)
-    throw std::runtime_error("real stereo-calib: the chessboard was found in fewer than 3 pairs");
-  StereoTruth t;
-  t.views = static_cast<int>(obj.size());
-  t.corners[0] = t_corners[0];
-  t.corners[1] = t_corners[1];
-  const cv::Size size = left[0].size();
-  for (int cam = 0; cam < 2; ++cam) {
-    std::vector<cv::Mat> rv, tv;
-    t.rms_mono[cam] = cv::calibrateCamera(obj, pts[cam], size, t.k[cam], t.d[cam], rv, tv);
-  }
-  cv::Mat e, f;
-  t.rms_stereo = cv::stereoCalibrate(obj, pts[0], pts[1], t.k[0], t.d[0], t.k[1], t.d[1], size, t.r, t.t, e,
-                                     f, cv::CALIB_FIX_INTRINSIC);
-  return t;
-}
-
-Mat3 rot(const Vec3& axis, double deg) { return Eigen::AngleAxisd(deg2rad(deg), axis.normalized()).matrix(); }
-
-// The right camera's rows (u, v, t) relative to the left camera's, as OpenCV's R.
-Mat3 relative_rotation(const Rig& rig) {
-  auto m = [&](int i) {
-    Mat3 r;
-    r.row(0) = rig.cameras[i].frame.u.transpose();
-    r.row(1) = rig.cameras[i].frame.v.transpose();
-    r.row(2) = rig.cameras[i].frame.t.transpose();
-    return r;
-  };
-  return m(1) * m(0).transpose();
-}
-
 double rotation_angle_deg(const Mat3& r) { return rad2deg(Eigen::AngleAxisd(r).angle()); }
 
-// Errors of a rig against the truth: relative rotation, baseline direction, focal, principal point.
+// Errors of a rig against the truth (testing::stereo_errors), and the distortion found.
 nlohmann::json rig_errors(const Rig& rig, const StereoTruth& t) {
-  Mat3 r_true;
-  Vec3 t_true;
-  cv::cv2eigen(t.r, r_true);
-  cv::cv2eigen(t.t, t_true);
-  const Vec3 b_true = -r_true.transpose() * t_true;
-  Mat3 m0;
-  m0.row(0) = rig.cameras[0].frame.u.transpose();
-  m0.row(1) = rig.cameras[0].frame.v.transpose();
-  m0.row(2) = rig.cameras[0].frame.t.transpose();
-  const Vec3 b = m0 * (rig.cameras[1].position_mm - rig.cameras[0].position_mm);
+  const testing::StereoErrors e = testing::stereo_errors(rig, t);
   nlohmann::json j;
-  j["relative_rotation_error_deg"] = rotation_angle_deg(relative_rotation(rig) * r_true.transpose());
-  j["baseline_direction_error_deg"] = rad2deg(angle_between(b, b_true));
+  j["relative_rotation_error_deg"] = e.relative_rotation_deg;
+  j["baseline_direction_error_deg"] = e.baseline_direction_deg;
   for (int cam = 0; cam < 2; ++cam) {
-    const auto& in = rig.cameras[cam].in;
-    const double fx = t.k[cam].at<double>(0, 0), fy = t.k[cam].at<double>(1, 1);
-    const double cx = t.k[cam].at<double>(0, 2) + 0.5, cy = t.k[cam].at<double>(1, 2) + 0.5;
     const std::string name = cam ? "right" : "left";
-    j["focal_error_" + name + "_pct"] = 100 * 0.5 * (std::abs(in.fu / fx - 1) + std::abs(in.fv / fy - 1));
-    j["principal_point_error_" + name + "_px"] = std::hypot(in.cu - cx, in.cv - cy);
-    j["k1_" + name] = in.k[0];
+    j["focal_error_" + name + "_pct"] = e.focal_pct[cam];
+    j["principal_point_error_" + name + "_px"] = e.principal_point_px[cam];
+    j["k1_" + name] = rig.cameras[cam].in.k[0];
   }
   return j;
-}
-
-// The start a user would give: focal lengths 3 % long, principal point at the image centre, no
-// distortion, the right camera's rotation 5 deg off (about `axis`) and its baseline direction 5 deg
-// off (about an axis normal to it); the baseline length as measured (the truth's, the scale gauge).
-Rig start_rig(const StereoTruth& t, const Vec3& axis, double focal_rel = 1.03, double pose_deg = 5) {
-  Mat3 r_true;
-  Vec3 t_true;
-  cv::cv2eigen(t.r, r_true);
-  cv::cv2eigen(t.t, t_true);
-  Rig rig;
-  rig.name = "opencv-stereo-start";
-  rig.dome.radius_mm = 100;
-  for (int cam = 0; cam < 2; ++cam) {
-    RigCamera c;
-    c.id = cam;
-    c.in.width = 640;
-    c.in.height = 480;
-    c.in.fu = focal_rel * t.k[cam].at<double>(0, 0);
-    c.in.fv = focal_rel * t.k[cam].at<double>(1, 1);
-    c.in.cu = 320;
-    c.in.cv = 240;
-    c.in.k = {0, 0, 0, 0, 0};
-    c.in.aov = deg2rad(80);
-    Mat3 r = Mat3::Identity();
-    if (cam == 1) {
-      r = rot(axis, pose_deg) * r_true;
-      const Vec3 b = -r_true.transpose() * t_true;
-      const Vec3 normal = b.cross(axis).norm() > 1e-6 ? b.cross(axis) : b.unitOrthogonal();
-      c.position_mm = rot(normal, pose_deg) * b;
-    }
-    c.frame.u = r.row(0).transpose();
-    c.frame.v = r.row(1).transpose();
-    c.frame.t = r.row(2).transpose();
-    rig.cameras.push_back(c);
-  }
-  rig.validate();
-  return rig;
 }
 
 // The chessboard's repetitive texture in matching: in every shot whose board was found, the SIFT
@@ -353,11 +239,8 @@ nlohmann::json run_colmap(const std::vector<cv::Mat>& left, const std::vector<cv
       "principal points at the image centres (ba_refine_principal_point off); registration varies run to run";
   j["registered_images"] = registered;
   j["images"] = 2 * ids.size();
-  Mat3 r_true;
-  Vec3 t_true;
-  cv::cv2eigen(truth.r, r_true);
-  cv::cv2eigen(truth.t, t_true);
-  const Vec3 b_true = -r_true.transpose() * t_true;
+  const Mat3& r_true = truth.r;
+  const Vec3 b_true = truth.right_centre_mm();
   // Relative rotation per shot with both images registered, averaged (chordal mean).
   Mat3 sum = Mat3::Zero();
   Vec3 bsum = Vec3::Zero();
@@ -399,7 +282,7 @@ void write_rectified(const Rig& rig, const cv::Mat& left, const cv::Mat& right, 
     d[cam] =
         (cv::Mat_<double>(1, 5) << in.k[0], in.k[1], in.k[3], in.k[2], in.k[4]);  // omma k3 = p2, k4 = p1
   }
-  const Mat3 r = relative_rotation(rig);
+  const Mat3 r = testing::stereo_relative_rotation(rig);
   const Vec3 t = -r * (rig.cameras[1].position_mm - rig.cameras[0].position_mm);
   cv::Mat rc, tc;
   cv::eigen2cv(r, rc);
@@ -426,25 +309,15 @@ nlohmann::json real_stereo_calibration(const RealOptions& opt) {
   const fs::path data = opt.data_dir.empty() ? testing::opencv_samples_dir() : opt.data_dir;
   const fs::path out = opt.out_dir.empty() ? fs::temp_directory_path() / "omma_real_stereo" : opt.out_dir;
   fs::create_directories(out);
-  std::vector<cv::Mat> left, right;
-  std::vector<int> ids;
-  for (int s = 1; s <= 14; ++s) {
-    const fs::path lp = data / fmt::format("left{:02d}.jpg", s),
-                   rp = data / fmt::format("right{:02d}.jpg", s);
-    if (!fs::exists(lp) || !fs::exists(rp)) continue;  // left10 / right10 are missing
-    cv::Mat l = cv::imread(lp.string(), cv::IMREAD_GRAYSCALE),
-            r = cv::imread(rp.string(), cv::IMREAD_GRAYSCALE);
-    if (l.empty() || r.empty()) throw std::runtime_error("real stereo-calib: cannot read " + lp.string());
-    left.push_back(l), right.push_back(r), ids.push_back(s);
-  }
+  const testing::StereoPairs pairs = testing::load_stereo_pairs(data);
+  const std::vector<cv::Mat>&left = pairs.left, &right = pairs.right;
+  const std::vector<int>& ids = pairs.ids;
   if (left.size() < 3)
     throw std::runtime_error("real stereo-calib: fewer than 3 stereo pairs in " + data.string());
   // The truth.
   auto t0 = std::chrono::steady_clock::now();
-  const StereoTruth truth = chessboard_truth(left, right);
+  const StereoTruth truth = testing::stereo_chessboard_truth(pairs);
   const double truth_s = seconds_since(t0);
-  Mat3 r_true;
-  cv::cv2eigen(truth.r, r_true);
   nlohmann::json j;
   j["case"] = "stereo-calib";
   j["shots"] = ids.size();
@@ -456,21 +329,19 @@ nlohmann::json real_stereo_calibration(const RealOptions& opt) {
                 {"fx_right", truth.k[1].at<double>(0, 0)},
                 {"k1_left", truth.d[0].at<double>(0)},
                 {"k1_right", truth.d[1].at<double>(0)},
-                {"relative_rotation_deg", rotation_angle_deg(r_true)},
-                {"baseline_mm", cv::norm(truth.t)},
+                {"relative_rotation_deg", rotation_angle_deg(truth.r)},
+                {"baseline_mm", truth.t.norm()},
                 {"rms_left_px", truth.rms_mono[0]},
                 {"rms_right_px", truth.rms_mono[1]},
                 {"rms_stereo_px", truth.rms_stereo},
                 {"time_s", truth_s}};
   // omma: pooled shots from the perturbed start.
-  const Rig start = start_rig(truth, Vec3(1, 1, 0));
-  std::vector<std::vector<cv::Mat>> sets;
-  for (size_t s = 0; s < left.size(); ++s) {
-    cv::Mat l3, r3;
-    cv::cvtColor(left[s], l3, cv::COLOR_GRAY2BGR);
-    cv::cvtColor(right[s], r3, cv::COLOR_GRAY2BGR);
-    sets.push_back({l3, r3});
-  }
+  testing::StereoStartOptions so;
+  so.axis = Vec3(1, 1, 0);
+  so.name = "opencv-stereo-start";
+  so.dome_radius_mm = 100;
+  const Rig start = testing::stereo_start_rig(truth, so);
+  const std::vector<std::vector<cv::Mat>> sets = testing::stereo_shot_sets(pairs);
   j["start"] = rig_errors(start, truth);
   calib::CalibrationOptions co = calib::stereo_calibration_options();
   co.threads = opt.threads;
@@ -500,14 +371,7 @@ nlohmann::json real_stereo_calibration(const RealOptions& opt) {
     // The same pooled adjustment from the chessboard's intrinsics (focal, principal point,
     // distortion as a start; k1, k2 still estimated), the pose 5 deg off: what the pose estimation
     // reaches when the intrinsics are known (e.g. each camera calibrated once beforehand).
-    Rig known = start;
-    for (int cam = 0; cam < 2; ++cam) {
-      auto& in = known.cameras[cam].in;
-      const double* d = truth.d[cam].ptr<double>();
-      in.fu = truth.k[cam].at<double>(0, 0), in.fv = truth.k[cam].at<double>(1, 1);
-      in.cu = truth.k[cam].at<double>(0, 2) + 0.5, in.cv = truth.k[cam].at<double>(1, 2) + 0.5;
-      in.k = {d[0], d[1], d[3], d[2], d[4]};  // OpenCV (k1 k2 p1 p2 k3) -> omma k3 = p2, k4 = p1
-    }
+    const Rig known = testing::with_truth_intrinsics(start, truth);
     t0 = std::chrono::steady_clock::now();
     const auto rk = calib::calibrate_shots(known, sets, calib::ShotMode::kPool, co);
     j["omma_known_intrinsics"] = rig_errors(rk.rig, truth);
