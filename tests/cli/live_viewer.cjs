@@ -45,6 +45,10 @@ const { chromium } = require(path.join(webDir, 'node_modules', 'playwright-core'
     const f0 = result.loaded.frames;
     await page.waitForFunction((f) => window.omma.frames >= f + 5, f0, { timeout: 20000 });
     await page.waitForTimeout(300);
+    // The stats line polls /stats.json once a second: on a loaded machine frames can arrive before
+    // its first answer. Wait for it (the test then checks what it says).
+    await page.waitForFunction(() => document.getElementById('s').textContent.includes('latency'), null,
+                               { timeout: 10000 }).catch(() => {});
     result.later = await state();
     await page.screenshot({ path: path.join(outDir, 'later.png') });
     // A full window (2 s) of the displayed rate.
