@@ -2,15 +2,19 @@
 #include "omma/sim/simulate.h"
 
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <iostream>
 #include <memory>
+#include <optional>
+#include <vector>
 
 #include <fmt/format.h>
 
 #include "apps/command.h"
 #include "omma/core/grid.h"
 #include "omma/core/io.h"
+#include "omma/core/parse.h"
 #include "omma/core/rig.h"
 #include "omma/design/prototype.h"
 
@@ -24,7 +28,29 @@ struct SimulateArgs {
   int supersample = 3, truth_supersample = 0, bits = 10, shots = 1;
   double vignetting = 0.5, color_gain = 0.10, electrons = 4000, read_noise = 2.0, exposure = 1.0;
   double dome_z = 0;
+  std::string dome_at;  // "X,Y,Z" mm
 };
+
+// "--dome-at X,Y,Z": three numbers in mm, each within +-kMaxSceneMm.
+Vec3 parse_dome_at(const std::string& text) {
+  std::vector<double> v;
+  size_t start = 0;
+  while (true) {
+    const size_t comma = text.find(',', start);
+    const std::string part =
+        text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+    const std::optional<double> x = parse_double(part);
+    if (!x || !(std::abs(*x) <= sim::kMaxSceneMm))
+      throw std::invalid_argument(fmt::format(
+          "--dome-at must be X,Y,Z: three numbers of mm within +-{}, got '{}'", sim::kMaxSceneMm, text));
+    v.push_back(*x);
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  if (v.size() != 3)
+    throw std::invalid_argument(fmt::format("--dome-at must be X,Y,Z (three numbers, mm), got '{}'", text));
+  return Vec3(v[0], v[1], v[2]);
+}
 
 void run_simulate(const SimulateArgs& a) {
   set_json_mode(a.json);
@@ -54,7 +80,7 @@ void run_simulate(const SimulateArgs& a) {
   } else if (a.raw) {
     o.effects.bits = a.bits;
   }
-  o.pose.translation_mm = Vec3(0, 0, a.dome_z);
+  o.pose.translation_mm = a.dome_at.empty() ? Vec3(0, 0, a.dome_z) : parse_dome_at(a.dome_at);
   o.progress = !a.json;
   if (a.shots < 1 || a.shots > 1000)
     throw std::invalid_argument(fmt::format("--shots must be 1..1000, got {}", a.shots));
@@ -119,7 +145,9 @@ void add_simulate_command(CLI::App& root) {
          "Scene: photo:PATH (far-field 360x180 equirect photo), colon (procedural tube), "
          "usaf[:DIST_MM] (USAF 1951 chart, default 25 mm ahead), checker[:RADIUS_MM] (textured sphere, "
          "default 100 mm), tube[:DIAMETER_MM] (the thesis's textured calibration tube, default 35 mm), "
-         "flat[:LEVEL] (uniformly lit white target, for flat-field photometric calibration)")
+         "flat[:LEVEL] (uniformly lit white target, for flat-field photometric calibration), room (a "
+         "corridor around the rig, objects 0.5-10 m, data/scenes/room.json built in), room:PATH.json (a room "
+         "file of one's own, format in data/scenes/README.md)")
       ->required();
   cmd->add_option("--out", a.out, "Output frames folder (created; all or nothing)")->required();
   cmd->add_option("--truth-size", a.truth_size, "Ground-truth panorama size WxH (pixels)")
@@ -153,8 +181,13 @@ void add_simulate_command(CLI::App& root) {
       ->capture_default_str();
   cmd->add_flag("--ideal", a.ideal,
                 "Ideal cameras: no vignetting, gains, noise or quantisation (--supersample still applies)");
-  cmd->add_option("--dome-z", a.dome_z, "Move the dome along the scene z axis by this many mm")
-      ->capture_default_str();
+  auto* dome_z = cmd->add_option("--dome-z", a.dome_z, "Move the dome along the scene z axis by this many mm")
+                     ->capture_default_str();
+  cmd->add_option(
+         "--dome-at", a.dome_at,
+         "Put the dome (the rig centre) at X,Y,Z mm in the scene frame, e.g. 1500,0,0 for 1.5 m along "
+         "the room's corridor (the rig keeps its orientation)")
+      ->excludes(dome_z);
   cmd->add_option(
          "--shots", a.shots,
          "Exposures of the (static) scene, 1..1000: the same rig and colour gains, fresh sensor noise per "

@@ -36,7 +36,7 @@ double SimMotion::offset(double t) const { return amplitude() * (1 - std::cos(2 
 sim::DomePose SimMotion::pose(double t) const {
   sim::DomePose pose;
   if (translate)
-    pose.translation_mm = Vec3(0, 0, offset(t));
+    pose.translation_mm = offset(t) * axis;
   else
     pose.rotation = Eigen::AngleAxisd(deg2rad(offset(t)), Vec3::UnitZ()).toRotationMatrix();
   return pose;
@@ -100,8 +100,10 @@ SimLoop::SimLoop(const Rig& rig, std::shared_ptr<const sim::Scene> scene, bool t
   SimCameraOptions opt = opt_in;
   std::string why;
   if (!opt.IsValid(&why)) throw SourceError("source 'sim:" + spec_ + "': " + why);
-  motion_.translate = translate;
-  motion_.speed = speed.value_or(translate ? 5.0 : 10.0);
+  const std::optional<sim::Scene::Travel> travel = scene_->travel();
+  motion_.translate = translate || travel.has_value();
+  if (travel) motion_.axis = travel->direction;
+  motion_.speed = speed.value_or(travel ? travel->speed_mm_s : motion_.translate ? 5.0 : 10.0);
   if (!(motion_.speed >= 0 && motion_.speed <= kMaxSimSpeed))
     throw SourceError(fmt::format("source 'sim:{}': the speed must be in [0, {}], got {}", spec_,
                                   kMaxSimSpeed, motion_.speed));

@@ -15,8 +15,10 @@
 //
 // The motion is periodic with period T and smooth (continuous position and velocity), so the
 // loop has no seam: colon, the dome moves along the tube axis z(t) = A (1 - cos(2 pi t / T)) / 2;
-// other scenes, it turns about the dome axis by the angle a(t) = A (1 - cos(2 pi t / T)) / 2; the
-// peak speed is pi A / T = `speed` (mm/s or deg/s), so A = speed T / pi.
+// a scene that says how it is travelled (Scene::travel, e.g. the room: along its corridor, +x), the
+// dome moves the same way along that direction; other scenes, it turns about the dome axis by the
+// angle a(t) = A (1 - cos(2 pi t / T)) / 2; the peak speed is pi A / T = `speed` (mm/s or deg/s),
+// so A = speed T / pi.
 //
 // A camera read late (busy machine) delivers the newest frame already captured, as a sensor
 // writing into a latest-frame buffer would.
@@ -40,7 +42,8 @@ namespace omma::live {
 
 // The dome's periodic motion (see the file comment).
 struct SimMotion {
-  bool translate = false;           // along the scene z axis (colon) or turning about the dome axis
+  bool translate = false;           // along `axis` (colon, room) or turning about the dome axis
+  Vec3 axis = Vec3::UnitZ();        // unit direction of the translation, scene frame
   double speed = 10;                // peak speed, mm/s (translate) or deg/s, at most kMaxSimSpeed
   double period_s = 2;              // T
   double amplitude() const;         // A: mm or deg
@@ -51,12 +54,14 @@ struct SimMotion {
 // Create with std::make_shared (its sources share it).
 class SimLoop : public std::enable_shared_from_this<SimLoop> {
  public:
-  // `scene` as sim::make_scene takes it (colon, photo:PATH, usaf[:MM], checker[:MM]); `speed` the
-  // peak speed (default: 5 mm/s for the colon, 10 deg/s for the others). Draws the cameras' clocks
+  // `scene` as sim::make_scene takes it (colon, room, photo:PATH, usaf[:MM], checker[:MM]); `speed`
+  // the peak speed (default: 5 mm/s for the colon, the scene's own (Scene::travel) for the room,
+  // 300 mm/s, 10 deg/s for the others). Draws the cameras' clocks
   // and renders the loop (in parallel, progress on stderr). Throws SourceError for a bad scene or
   // options.
   SimLoop(const Rig& rig, const std::string& scene, std::optional<double> speed, const SimCameraOptions& opt);
   // Any scene; `translate`: the dome moves along the scene's z axis (mm/s) instead of turning (deg/s).
+  // A scene with Scene::travel() moves along its direction (default speed its speed) either way.
   SimLoop(const Rig& rig, std::shared_ptr<const sim::Scene> scene, bool translate,
           std::optional<double> speed, const SimCameraOptions& opt);
 

@@ -14,7 +14,9 @@
 //   sim:SCENE[@SPEED]   (all cameras) the simulator (sim/): SCENE = colon (the dome moving back and
 //                       forth along the colon, peak SPEED mm/s, default 5), photo:PATH, usaf,
 //                       checker (turning back and forth about the dome axis, peak SPEED deg/s,
-//                       default 10); ideal cameras (no noise), one ray per pixel. The cameras
+//                       default 10), room[:PATH.json] (the rig moving back and forth along the
+//                       room's corridor, +x, peak SPEED mm/s, default 300: sim/room.h); ideal
+//                       cameras (no noise), one ray per pixel. The cameras
 //                       free-run at their own rates with their own phase and jitter (sim_loop.h):
 //                       a loop of the motion is pre-rendered at start-up, then played back
 //   gst:PIPELINE        any GStreamer pipeline ending in raw video of the camera's size (gst.h)

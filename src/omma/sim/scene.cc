@@ -11,6 +11,7 @@
 
 #include "omma/core/grid.h"
 #include "omma/core/parse.h"
+#include "omma/sim/room.h"
 #include "omma/sim/usaf.h"
 
 namespace omma::sim {
@@ -202,10 +203,14 @@ std::unique_ptr<Scene> make_scene(const std::string& spec) {
     return make_tube_scene(p);
   }
   if (kind == "flat") return make_flat_scene(has_arg ? parse_number(arg, spec) : 0.6);
+  if (kind == "room") {
+    if (has_arg && arg.empty())
+      throw SceneError("scene 'room:' needs a path: room:PATH.json (or plain room)");
+    return make_room_scene(arg);
+  }
   throw SceneError(
       fmt::format("unknown scene '{}' (use photo:PATH, colon, usaf[:DISTANCE_MM], checker[:RADIUS_MM], "
-                  "tube[:DIAMETER_MM] or "
-                  "flat[:LEVEL])",
+                  "tube[:DIAMETER_MM], flat[:LEVEL], room or room:PATH.json)",
                   spec));
 }
 

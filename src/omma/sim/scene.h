@@ -12,6 +12,7 @@
 
 #include <limits>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -45,6 +46,14 @@ class Scene {
   }
   // The spec this scene was made from (e.g. "colon", "photo:/path/louvre.jpg").
   virtual std::string spec() const = 0;
+  // How an animated rig moves through this scene (the live sim: source, live/sim_loop.h): back and
+  // forth along `direction` (unit vector, scene frame) at the default peak speed `speed_mm_s`;
+  // nullopt (the default): the scene says nothing (the colon travels along z, others turn).
+  struct Travel {
+    Vec3 direction = Vec3::UnitZ();
+    double speed_mm_s = 5;
+  };
+  virtual std::optional<Travel> travel() const { return std::nullopt; }
 };
 
 // Far-field equirectangular 360 x 180 deg photograph (any size, 8- or 16-bit, 1 or 3 channels):
@@ -111,7 +120,8 @@ std::unique_ptr<Scene> make_tube_scene(const TubeParams& params = {});
 std::unique_ptr<Scene> make_flat_scene(double level = 0.6);
 
 // Parses a scene spec: "photo:PATH", "colon", "usaf[:DIST_MM]", "checker[:RADIUS_MM]",
-// "tube[:DIAMETER_MM]", "flat[:LEVEL]". Throws
+// "tube[:DIAMETER_MM]", "flat[:LEVEL]", "room" (the built-in room: a corridor around the rig with
+// objects from 0.5 to 10 m, sim/room.h), "room:PATH" (a room file, format in sim/room.h). Throws
 // SceneError with the list of valid specs for anything else, or if the photo cannot be read.
 std::unique_ptr<Scene> make_scene(const std::string& spec);
 
