@@ -13,6 +13,7 @@
 #include <tbb/parallel_for.h>
 
 #include "apps/command.h"
+#include "apps/depth_spec.h"
 #include "omma/core/frames.h"
 #include "omma/core/grid.h"
 #include "omma/core/io.h"
@@ -20,7 +21,9 @@
 #include "omma/core/parse.h"
 #include "omma/core/rig.h"
 #include "omma/design/prototype.h"
+#include "omma/io/depth_pano.h"
 #include "omma/io/metadata.h"
+#include "omma/io/point_cloud.h"
 #include "omma/isp/isp.h"
 #include "omma/isp/photometric.h"
 #include "omma/pano/maps.h"
@@ -35,6 +38,11 @@ struct StitchArgs {
   std::string boundary, boundary_overlay, single_camera, coverage;
   std::string depth = "inf", depth_out;
   std::string depth_pitch;  // --depth-pitch: DEG or "camera"; empty = the sweep's default (1.33 deg)
+  // 3D export (io/point_cloud.h, io/depth_pano.h): the coloured point cloud X = q + D w as PLY, every
+  // ply_step-th pixel, without those below ply_min_confidence (--depth estimate); the 16-bit depth PNG.
+  std::string ply, depth_pano;
+  int ply_step = 1;
+  double ply_min_confidence = 0;
   double threshold = 0.2;
   bool json = false;
   // --raw: develop DIR/cam_XX_raw.png with the ISP (thesis §5.1.2, appendix A) before stitching.
@@ -46,117 +54,6 @@ struct StitchArgs {
 
 std::filesystem::path overlay_path_for(const std::filesystem::path& boundary) {
   return boundary.parent_path() / (boundary.stem().string() + "_overlay" + boundary.extension().string());
-}
-
-// --depth: the projection surface (pano/surface.h). Returns the depth map (empty for inf) and facts for
-// the JSON summary.
-struct DepthChoice {
-  cv::Mat depth;
-  nlohmann::json info;
-};
-
-// Parses "NEAR,FAR,STEPS" (any suffix may be left out).
-pano::PlaneSweepOptions parse_sweep(const std::string& text) {
-  pano::PlaneSweepOptions so;
-  if (text.empty()) return so;
-  std::vector<double> v;
-  size_t start = 0;
-  while (start <= text.size()) {
-    const size_t comma = text.find(',', start);
-    const std::string part =
-        text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
-    const std::optional<double> x = parse_double(part);  // core/parse.h
-    if (!x) throw std::invalid_argument("--depth estimate:NEAR,FAR,STEPS: '" + part + "' is not a number");
-    v.push_back(*x);
-    if (comma == std::string::npos) break;
-    start = comma + 1;
-  }
-  if (v.size() > 3)
-    throw std::invalid_argument("--depth estimate:NEAR,FAR,STEPS takes at most three numbers");
-  if (v.size() > 0) so.near_mm = v[0];
-  if (v.size() > 1) so.far_mm = v[1];
-  if (v.size() > 2) {
-    if (v[2] != std::floor(v[2]) || !(v[2] >= 2 && v[2] <= pano::kMaxSteps))
-      throw std::invalid_argument(
-          fmt::format("--depth estimate: STEPS must be a whole number 2..{}, got {}", pano::kMaxSteps, v[2]));
-    so.steps = static_cast<int>(v[2]);
-  }
-  std::string why;
-  if (!so.IsValid(&why)) throw std::invalid_argument("--depth estimate: " + why);
-  return so;
-}
-
-// --depth-pitch: the sweep grid's pitch in degrees, or "camera" (the finest camera's pixel pitch at its
-// centre, pano::camera_pitch_deg). Sets pitch_deg with factor 0 (the coarse factor nearest to it).
-void apply_depth_pitch(const std::string& pitch, const Rig& rig, pano::PlaneSweepOptions& so) {
-  if (pitch.empty()) return;
-  if (pitch == "camera") {
-    so.pitch_deg = pano::camera_pitch_deg(rig);
-  } else {
-    const std::optional<double> deg = parse_double(pitch);  // core/parse.h
-    if (!deg || !(*deg > 0) || !(*deg <= 90))
-      throw std::invalid_argument("--depth-pitch must be an angle in (0, 90] degrees or 'camera', got '" +
-                                  pitch + "'");
-    so.pitch_deg = *deg;
-  }
-  so.factor = 0;
-}
-
-DepthChoice choose_depth(const std::string& spec, const std::string& pitch, const Rig& rig,
-                         const std::vector<cv::Mat>& frames, const PanoGrid& grid) {
-  const bool estimate = spec == "estimate" || spec.rfind("estimate:", 0) == 0;
-  if (!pitch.empty() && !estimate)
-    throw std::invalid_argument("--depth-pitch applies to --depth estimate only, got --depth " + spec);
-  DepthChoice d;
-  auto after = [&](const std::string& prefix) { return spec.substr(prefix.size()); };
-  if (spec == "inf") {
-    d.info = {{"mode", "inf"}};
-  } else if (spec.rfind("sphere:", 0) == 0) {
-    const std::optional<double> parsed = parse_double(after("sphere:"));  // core/parse.h
-    if (!parsed) throw std::invalid_argument("--depth sphere:R needs a radius in mm, got '" + spec + "'");
-    const double r = *parsed;
-    d.depth = pano::sphere_depth(rig, grid, r);
-    d.info = {{"mode", "sphere"}, {"radius_mm", r}};
-  } else if (spec.rfind("truth:", 0) == 0) {
-    d.depth = pano::read_depth(after("truth:"), grid);
-    pano::check_depth_outside_dome(d.depth, rig, grid, Vec3::Zero(), "depth file " + after("truth:"));
-    d.info = {{"mode", "truth"}, {"file", after("truth:")}};
-  } else if (estimate) {
-    pano::PlaneSweepOptions so = parse_sweep(spec == "estimate" ? "" : after("estimate:"));
-    apply_depth_pitch(pitch, rig, so);
-    const pano::DepthSweep sweep(rig, grid, so);
-    const pano::DepthEstimate e = sweep.estimate(frames);
-    // A range that excludes the scene piles the confident estimates up at one of its ends.
-    // (at infinity the far end is the scene's own place: only a finite FAR can exclude it)
-    if (e.confident > 0 && (e.at_near > 0.5 || (std::isfinite(so.far_mm) && e.at_far > 0.5)))
-      throw std::invalid_argument(
-          fmt::format("--depth {}: the sweep range {}..{} mm excludes the scene: {:.0f} % of the confident "
-                      "directions lie at "
-                      "its {} end (widen NEAR,FAR)",
-                      spec, so.near_mm, so.far_mm, 100 * std::max(e.at_near, e.at_far),
-                      e.at_near > e.at_far ? "near" : "far"));
-    if (e.confident == 0)
-      spdlog::warn(
-          "--depth estimate: no direction could be measured; the prior distance {:.1f} mm is used everywhere",
-          e.prior_mm);
-    d.depth = e.depth;
-    d.info = {
-        {"mode", "estimate"},
-        {"near_mm", so.near_mm},
-        {"far_mm", so.far_mm},
-        {"steps", so.steps},
-        {"coarse", {sweep.coarse_grid().width, sweep.coarse_grid().height}},
-        {"pitch_deg", so.pitch_deg},
-        {"prior_mm", e.prior_mm},
-        {"confident_fraction", double(e.confident) / sweep.coarse_grid().width / sweep.coarse_grid().height},
-        {"at_near", e.at_near},
-        {"at_far", e.at_far},
-        {"mean_confidence", cv::mean(e.confidence)[0]}};
-  } else {
-    throw std::invalid_argument(
-        "--depth must be inf, sphere:R, truth:FILE or estimate[:NEAR,FAR,STEPS], got '" + spec + "'");
-  }
-  return d;
 }
 
 // The panorama grid of --projection and --size (default: 1080x1080 vr180, 1920x512 equirect (the
@@ -204,6 +101,42 @@ std::vector<cv::Mat> stitch_frames(const StitchArgs& a, const Rig& rig, bool pho
   return frames;
 }
 
+// --ply, --ply-step, --ply-min-confidence, --depth-pano: checked before any work.
+void check_export_args(const StitchArgs& a) {
+  const bool estimate = is_estimate_spec(a.depth);
+  if ((!a.ply.empty() || !a.depth_pano.empty()) && a.depth == "inf")
+    throw std::invalid_argument(
+        "--ply and --depth-pano need a finite depth: --depth estimate, sphere:R or truth:FILE (with "
+        "--depth inf every direction is at infinity)");
+  if (!a.ply.empty() && lower_extension(a.ply) != ".ply")
+    throw std::invalid_argument("--ply names a .ply file, got '" + a.ply + "'");
+  if (a.ply_step < 1) throw std::invalid_argument(fmt::format("--ply-step must be >= 1, got {}", a.ply_step));
+  if (!(a.ply_min_confidence >= 0 && a.ply_min_confidence <= 1))
+    throw std::invalid_argument(
+        fmt::format("--ply-min-confidence must be in [0, 1], got {}", a.ply_min_confidence));
+  if (a.ply_min_confidence > 0 && !estimate)
+    throw std::invalid_argument(
+        "--ply-min-confidence applies to --depth estimate only (the other surfaces have no confidence), got "
+        "--depth " +
+        a.depth);
+  if ((a.ply_step != 1 || a.ply_min_confidence > 0) && a.ply.empty())
+    throw std::invalid_argument("--ply-step and --ply-min-confidence apply to --ply");
+  auto same = [](const std::string& x, const std::string& y) {
+    return std::filesystem::path(x).lexically_normal() == std::filesystem::path(y).lexically_normal();
+  };
+  if (!a.depth_pano.empty() &&
+      (same(a.depth_pano, a.out) ||
+       same(std::filesystem::path(a.depth_pano).replace_extension(".tiff").string(), a.out)))
+    throw std::invalid_argument("--depth-pano '" + a.depth_pano +
+                                "' (and its .tiff) must not be the panorama --out");
+  if (!a.depth_pano.empty() && !a.depth_out.empty() && same(a.depth_pano, a.depth_out))
+    throw std::invalid_argument("--depth-pano and --depth-out name the same file '" + a.depth_pano + "'");
+  if (!a.depth_pano.empty() && lower_extension(a.depth_pano) != ".png")
+    throw std::invalid_argument(
+        "--depth-pano names a .png file (16-bit, mm; the float data go beside it as .tiff), got '" +
+        a.depth_pano + "'");
+}
+
 void run_stitch(const StitchArgs& a) {
   set_json_mode(a.json);
   // Validate everything before any work or output.
@@ -211,6 +144,7 @@ void run_stitch(const StitchArgs& a) {
   const PanoGrid grid = stitch_grid(a);
   check_image_format(a.out, grid.width, grid.height);
   if (!(a.threshold >= 0 && a.threshold <= 1)) throw std::invalid_argument("--threshold must be in [0, 1]");
+  check_export_args(a);
   const Rig rig = design::load_rig_or_builtin(a.rig);
   if (rig.cameras.empty()) throw std::invalid_argument("rig " + a.rig + " has no cameras");
   const bool photometric = has_photometric(rig) && !a.no_photometric;
@@ -247,7 +181,14 @@ void run_stitch(const StitchArgs& a) {
     coverage = pano::coverage_map(rig, grid, opt.blend.search, opt.depth);
   if (!a.single_camera.empty()) single = pano::single_camera_map(coverage);
 
-  io::write_panorama(a.out, to_u8(pano_img), grid);  // JPEG/PNG with the 360-degree XMP
+  const cv::Mat pano_u8 = to_u8(pano_img);
+  const std::string out_ext = lower_extension(a.out);
+  const bool embed_depth =
+      !a.depth_pano.empty() && (out_ext == ".jpg" || out_ext == ".jpeg" || out_ext == ".png");
+  if (embed_depth)
+    io::write_panorama_with_depth(a.out, pano_u8, depth.depth, grid);  // + Google's depth map (GDepth)
+  else
+    io::write_panorama(a.out, pano_u8, grid);  // JPEG/PNG with the 360-degree XMP
   if (!a.boundary.empty()) {
     write_image(a.boundary, to_u8(boundary));
     write_image(
@@ -266,16 +207,50 @@ void run_stitch(const StitchArgs& a) {
     write_image(a.depth_out, pano::depth_colormap(d, 0, 0, "depth (" + a.depth + ")"));
   }
 
+  // 3D export: the point cloud and the depth panorama (16-bit PNG with its XMP, float TIFF beside it).
+  nlohmann::json exported = nlohmann::json::object();
+  const io::DepthRange range = io::depth_range(depth.depth);
+  if (!a.ply.empty()) {
+    io::PointCloudOptions po;
+    po.q = opt.blend.search.q;
+    po.step = a.ply_step;
+    po.min_confidence = a.ply_min_confidence;
+    io::PointCloud cloud = io::depth_to_points(depth.depth, pano_u8, grid, po, depth.estimate.confidence);
+    cloud.comments.push_back(fmt::format(
+        "omma stitch --depth {} --method {}: {}x{} {} panorama, every {} pixel(s)", a.depth,
+        pano::to_string(method), grid.width, grid.height, to_string(grid.projection), a.ply_step));
+    io::write_ply(a.ply, cloud, po.q);
+    exported["ply"] = {{"file", a.ply},
+                       {"points", cloud.size()},
+                       {"step", a.ply_step},
+                       {"min_confidence", a.ply_min_confidence}};
+    if (!a.json) std::cout << fmt::format("{}: {} points (mm, rig frame)\n", a.ply, cloud.size());
+  }
+  if (!a.depth_pano.empty()) {
+    const std::filesystem::path tiff = std::filesystem::path(a.depth_pano).replace_extension(".tiff");
+    io::write_depth_png(a.depth_pano, depth.depth, grid);
+    pano::write_depth(tiff, depth.depth);
+    exported["depth_pano"] = {
+        {"file", a.depth_pano}, {"data", tiff.string()}, {"gdepth_in_panorama", embed_depth}};
+  }
+  if (!depth.depth.empty())
+    exported["depth_range"] = {
+        {"near_mm", range.near_mm},
+        {"far_mm", range.far_mm},
+        {"finite_fraction", double(range.finite) / (double(grid.width) * grid.height)}};
+
   nlohmann::json icp_json = std::isfinite(icp) ? nlohmann::json(icp) : nlohmann::json(nullptr);
   if (a.json) {
-    print_json({{"method", pano::to_string(method)},
-                {"width", grid.width},
-                {"height", grid.height},
-                {"ms", ms},
-                {"depth", depth.info},
-                {"depth_ms", depth_ms},
-                {"photometric", photometric},
-                {"inter_camera_psnr_db", icp_json}});
+    nlohmann::json summary = {{"method", pano::to_string(method)},
+                              {"width", grid.width},
+                              {"height", grid.height},
+                              {"ms", ms},
+                              {"depth", depth.info},
+                              {"depth_ms", depth_ms},
+                              {"photometric", photometric},
+                              {"inter_camera_psnr_db", icp_json}};
+    summary.update(exported);  // ply, depth_pano, depth_range
+    print_json(summary);
   } else {
     std::cout << fmt::format("{}: {}x{} {} panorama by {} in {:.0f} ms, inter-camera PSNR {:.2f} dB\n", a.out,
                              grid.width, grid.height, to_string(grid.projection), pano::to_string(method), ms,
@@ -343,6 +318,25 @@ void add_stitch_command(CLI::App& root) {
       "--depth-out", a.depth_out,
       "Write the depth used as a colour picture with a legend (this name, e.g. depth.png) and as\n"
       "data beside it (same name, .tiff: 32-bit float mm, inf = infinity)");
+  cmd->add_option(
+      "--ply", a.ply,
+      "Write the 3D point cloud of the depth used (X = q + D w per pixel, mm, rig frame: origin the\n"
+      "dome centre, +z the dome axis) coloured by the panorama, as binary PLY (docs/guide/depth.md);\n"
+      "needs a finite --depth; `omma view3d FILE` shows it");
+  cmd->add_option("--ply-step", a.ply_step,
+                  "With --ply: keep every N-th pixel in each axis (N^2 fewer points)")
+      ->capture_default_str();
+  cmd->add_option(
+         "--ply-min-confidence", a.ply_min_confidence,
+         "With --ply and --depth estimate: leave out directions whose depth confidence is below C in "
+         "[0, 1]")
+      ->capture_default_str();
+  cmd->add_option(
+      "--depth-pano", a.depth_pano,
+      "Write the depth as a 360-degree depth panorama: a 16-bit PNG of whole millimetres along each ray\n"
+      "(0 = unknown or infinity, saturating at 65535 mm) with GPano and Google's depth-map XMP (GDepth),\n"
+      "the float data beside it (same name, .tiff); a JPEG or PNG --out also gets the depth map embedded\n"
+      "(GDepth RangeInverse, 16-bit PNG; JPEG: Extended XMP)");
   cmd->add_flag("--raw", a.raw,
                 "Read the raw Bayer frames DIR/cam_XX_raw.png (16-bit RGGB, 10-bit values) and develop each\n"
                 "with the ISP (demosaic, white balance, optional flat field) before stitching");
@@ -359,7 +353,10 @@ void add_stitch_command(CLI::App& root) {
       "has one: frames in linear light divided by gain x falloff; with --raw it replaces --awb)");
   cmd->add_flag(
       "--json", a.json,
-      "Print one JSON object {method, width, height, ms, depth, depth_ms, inter_camera_psnr_db} on stdout");
+      "Print one JSON object {method, width, height, ms, depth, depth_ms, inter_camera_psnr_db; with a\n"
+      "finite depth depth_range {near_mm, far_mm, finite_fraction}; ply {file, points, step, "
+      "min_confidence};\n"
+      "depth_pano {file, data, gdepth_in_panorama}} on stdout");
   cmd->callback([] { run_stitch(a); });
 }
 

@@ -23,6 +23,7 @@
 #include "omma/core/io.h"
 #include "omma/design/prototype.h"
 #include "omma/io/pano_file.h"
+#include "omma/io/point_cloud.h"
 #include "omma/io/recording.h"
 #include "omma/isp/color.h"
 #include "omma/isp/demosaic.h"
@@ -544,6 +545,46 @@ void add_io(py::module_& m) {
       "slowest camera's own rate, as `omma record`). Returns the summary dict (frames, dropped per\n"
       "camera, bytes, seconds, mb_per_s, error); an early stop (disk full) warns and sets 'error'. Ctrl-C\n"
       "(SIGINT) stops the recording cleanly, then raises KeyboardInterrupt.");
+
+  m.def(
+      "write_ply",
+      [](const py::object& path, const py::object& depth, const py::object& colour,
+         const std::string& projection, const py::object& q, int step, double min_confidence,
+         const py::object& confidence) {
+        auto floats = [](const py::object& a, const std::string& what) {
+          const auto d = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(a);
+          if (!d || d.ndim() != 2) throw py::value_error(what + " must be a float (H, W) array");
+          return cv::Mat(int(d.shape(0)), int(d.shape(1)), CV_32FC1, const_cast<float*>(d.data())).clone();
+        };
+        const cv::Mat D = floats(depth, "depth");
+        ImageSpec spec;
+        spec.allow_u16 = spec.allow_f32 = false;
+        spec.allow_bgra = true;
+        const cv::Mat C = mat_from_array(colour, "colour", spec);
+        io::PointCloudOptions o;
+        o.step = step;
+        o.min_confidence = min_confidence;
+        if (!q.is_none()) {
+          const auto v = q.cast<std::vector<double>>();
+          if (v.size() != 3) throw py::value_error("q must be (x, y, z) in mm");
+          o.q = Vec3(v[0], v[1], v[2]);
+        }
+        const cv::Mat conf = confidence.is_none() ? cv::Mat() : floats(confidence, "confidence");
+        const PanoGrid grid{parse_projection(projection), D.cols, D.rows};
+        const io::PointCloud cloud = io::depth_to_points(D, C, grid, o, conf);
+        io::write_ply(py::str(py::module_::import("os").attr("fspath")(path)).cast<std::string>(), cloud,
+                      o.q);
+        return cloud.size();
+      },
+      py::arg("path"), py::arg("depth"), py::arg("colour"), py::arg("projection") = "vr180",
+      py::arg("q") = py::none(), py::arg("step") = 1, py::arg("min_confidence") = 0.0,
+      py::arg("confidence") = py::none(),
+      "Writes the coloured point cloud of a panorama's depth as binary PLY, as `omma stitch --ply`\n"
+      "(io/point_cloud.h): X = q + D w per pixel in mm in the rig frame (+z the dome axis), float x y z and\n"
+      "uchar red green blue. depth: float32 (H, W) mm along each pixel's direction from q (inf: no point);\n"
+      "colour: the (H, W[, 3|4]) uint8 panorama (BGR, as cv2) of the same grid (projection); every step-th\n"
+      "pixel in each axis; confidence: optional float32 (H, W), pixels below min_confidence left out.\n"
+      "Written atomically. Returns the number of points.");
 
   m.def(
       "render", &render_files, py::arg("input"), py::arg("out"), py::arg("rig") = py::none(),

@@ -16,6 +16,11 @@
 #include <spdlog/spdlog.h>
 #include <zlib.h>
 
+extern "C" {
+#include <libavutil/base64.h>
+#include <libavutil/md5.h>
+}
+
 #include "omma/core/io.h"
 #include "omma/io/tiff_writer.h"
 
@@ -206,6 +211,75 @@ void write_panorama(const fs::path& path, const cv::Mat& image, const PanoGrid& 
     out.write(bytes.data(), std::streamsize(bytes.size()));
     if (!out.flush()) throw IoError("cannot write image '" + path.string() + "'");
   });
+}
+
+// ---- Additions for depth panoramas (depth_pano.h) -------------------------------------------------
+
+std::string base64_encode(std::string_view bytes) {
+  if (bytes.size() > size_t(INT32_MAX / 4 * 3 - 3)) throw IoError("base64: data too large");
+  std::string out(AV_BASE64_SIZE(bytes.size()), '\0');  // with its terminating NUL
+  if (!av_base64_encode(out.data(), int(out.size()), reinterpret_cast<const uint8_t*>(bytes.data()),
+                        int(bytes.size())))
+    throw IoError("base64: cannot encode");
+  out.resize(out.size() - 1);
+  return out;
+}
+
+std::string gpano_description(const PanoGrid& grid) {
+  if (!photo_sphere_layout(grid)) return {};
+  const std::string packet = gpano_xmp(grid);
+  const size_t begin = packet.find("  <rdf:Description");
+  const std::string close = "</rdf:Description>\n";
+  const size_t end = packet.find(close, begin);
+  return packet.substr(begin, end + close.size() - begin);
+}
+
+std::string xmp_packet(const std::string& descriptions) {
+  return "<?xpacket begin=\"\xEF\xBB\xBF\" id=\"W5M0MpCehiHzreSzNTczkc9d\"?>\n"
+         "<x:xmpmeta xmlns:x=\"adobe:ns:meta/\" x:xmptk=\"omma\">\n"
+         " <rdf:RDF xmlns:rdf=\"http://www.w3.org/1999/02/22-rdf-syntax-ns#\">\n" +
+         descriptions +
+         " </rdf:RDF>\n"
+         "</x:xmpmeta>\n"
+         "<?xpacket end=\"w\"?>";
+}
+
+std::string extended_xmp_guid(const std::string& extended) {
+  uint8_t digest[16];
+  av_md5_sum(digest, reinterpret_cast<const uint8_t*>(extended.data()), extended.size());
+  std::string hex;
+  for (uint8_t b : digest) hex += fmt::format("{:02X}", b);
+  return hex;
+}
+
+std::string embed_xmp_jpeg_extended(std::string_view jpg, const std::string& xmp,
+                                    const std::string& extended) {
+  static constexpr std::string_view kNs("http://ns.adobe.com/xmp/extension/\0", 35);
+  if (extended.size() > UINT32_MAX) throw IoError("cannot add extended XMP: larger than 4 GB");
+  const std::string with_standard = embed_xmp_jpeg(jpg, xmp);
+  // The extended segments go right after the standard one: find its end again.
+  size_t at = 2;
+  if (uint8_t(with_standard[at]) == 0xFF && uint8_t(with_standard[at + 1]) == 0xE0)
+    at += 2 + ((uint8_t(with_standard[at + 2]) << 8) | uint8_t(with_standard[at + 3]));
+  at += 2 + ((uint8_t(with_standard[at + 2]) << 8) | uint8_t(with_standard[at + 3]));  // the XMP APP1
+  const std::string guid = extended_xmp_guid(extended);
+  const size_t head = kNs.size() + 32 + 4 + 4;
+  const size_t portion = 0xFFFF - 2 - head;  // a segment's length counts itself
+  std::string segs;
+  for (size_t off = 0; off < extended.size(); off += portion) {
+    const size_t n = std::min(portion, extended.size() - off);
+    segs += "\xFF\xE1";
+    put_u16(segs, uint16_t(2 + head + n));
+    segs.append(kNs);
+    segs += guid;
+    put_u32(segs, uint32_t(extended.size()));
+    put_u32(segs, uint32_t(off));
+    segs.append(extended, off, n);
+  }
+  std::string out = with_standard.substr(0, at);
+  out += segs;
+  out.append(with_standard, at, std::string::npos);
+  return out;
 }
 
 }  // namespace omma::io

@@ -92,4 +92,28 @@ void write_panorama(const std::filesystem::path& path, const cv::Mat& image, con
 // Throws IoError if `path` is not an MP4/MOV/MKV/WebM file with a video track.
 void add_spherical_video_metadata(const std::filesystem::path& path, const PanoGrid& grid);
 
+// ---- Additions for depth panoramas (depth_pano.h) -------------------------------------------------
+
+// Base64 (RFC 4648 alphabet, with '=' padding) of `bytes`: XMP's binary properties (GDepth:Data).
+std::string base64_encode(std::string_view bytes);
+
+// The rdf:Description element of gpano_xmp(grid) (the GPano fields alone, to share a packet with
+// other namespaces), or "" when the grid's pixels are not square (no warning).
+std::string gpano_description(const PanoGrid& grid);
+// A whole XMP packet (xpacket wrapper, x:xmpmeta, rdf:RDF, as gpano_xmp writes) around `descriptions`
+// (rdf:Description elements).
+std::string xmp_packet(const std::string& descriptions);
+
+// JPEG Extended XMP (XMP spec part 3, 1.1.3.1), for packets beyond one APP1 segment's 64 KB:
+// extended_xmp_guid is the GUID of an extended packet (`extended`: an x:xmpmeta serialization without
+// the xpacket wrapper): its MD5 as 32 upper-case hex digits, which the standard packet names in
+// xmpNote:HasExtendedXMP (namespace http://ns.adobe.com/xmp/note/). embed_xmp_jpeg_extended inserts
+// `xmp` (the standard packet) as embed_xmp does and `extended` after it, split into APP1 segments of
+// "http://ns.adobe.com/xmp/extension/\0", the GUID, the extended packet's full length and the
+// portion's offset (4 bytes each, big-endian), then the portion. Throws IoError if `jpg` is not a JPEG
+// or the standard packet does not fit one segment.
+std::string extended_xmp_guid(const std::string& extended);
+std::string embed_xmp_jpeg_extended(std::string_view jpg, const std::string& xmp,
+                                    const std::string& extended);
+
 }  // namespace omma::io

@@ -1,0 +1,44 @@
+// The projection surface a command is given on its command line (--depth of omma stitch, render and
+// refocus): "inf", "sphere:R", "truth:FILE" or "estimate[:NEAR,FAR,STEPS]" (pano/surface.h,
+// pano/plane_sweep.h), with --depth-pitch for the estimate's grid.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+
+#include "omma/core/grid.h"
+#include "omma/core/rig.h"
+#include "omma/pano/plane_sweep.h"
+
+namespace omma::app {
+
+// The depth map (CV_32FC1 of the grid, mm from the dome centre; empty for inf) and the facts for a
+// --json summary ("mode", and for an estimate its range, grid, confidence).
+struct DepthChoice {
+  cv::Mat depth;
+  nlohmann::json info;
+  pano::DepthEstimate estimate;  // filled for "estimate" (confidence, coarse grid)
+};
+
+// The --depth texts every command accepts, for --help.
+extern const char* const kDepthSpecHelp;
+
+// Parses "NEAR,FAR,STEPS" (any suffix may be left out) into sweep options; throws
+// std::invalid_argument naming --depth estimate.
+pano::PlaneSweepOptions parse_sweep(const std::string& text);
+// --depth-pitch: DEG or "camera" (pano::camera_pitch_deg); sets pitch_deg with factor 0.
+void apply_depth_pitch(const std::string& pitch, const Rig& rig, pano::PlaneSweepOptions& so);
+// Is `spec` an estimate ("estimate" or "estimate:...")?
+bool is_estimate_spec(const std::string& spec);
+// The surface of `spec` on `grid`; frames are needed for an estimate only. `base` gives the sweep's
+// other options (its near/far/steps are replaced by the spec's when it names them). Throws
+// std::invalid_argument with the option's name for anything malformed or a range that excludes the
+// scene.
+DepthChoice choose_depth(const std::string& spec, const std::string& pitch, const Rig& rig,
+                         const std::vector<cv::Mat>& frames, const PanoGrid& grid,
+                         const pano::PlaneSweepOptions* base = nullptr);
+
+}  // namespace omma::app
