@@ -73,7 +73,9 @@ const std::map<std::string, std::vector<const char*>>& examples_table() {
        {"omma simulate --rig thesis-24 --scene colon --out frames",
         "omma simulate --rig thesis-24 --scene checker --raw --out raw_frames",
         "omma simulate --rig gigaeye-44 --scene photo:../shared/data/lake.jpg --projection equirect-100 "
-        "--out giga"}},
+        "--out giga",
+        "omma simulate --rig gigaeye-44-skip3 --scene room --projection equirect-100 --truth-size 1800x480 "
+        "--dome-at 500,0,0 --out room   # a near scene, 0.5-10 m"}},
       {"link", {"omma link encode frames/cam_00_raw.png cam0.bin", "omma link decode cam0.bin --json"}},
       {"link encode",
        {"omma link encode frames/cam_00_raw.png cam0.bin",
@@ -107,6 +109,10 @@ const std::map<std::string, std::vector<const char*>>& examples_table() {
         "omma stitch --rig calibrated.json --frames frames --method linear --projection equirect "
         "--size 1920x480 --out pano.jpg",
         "omma stitch --rig thesis-24 --frames frames --depth estimate --depth-out depth.png --out pano.png"}},
+      {"view3d",
+       {"omma stitch --rig thesis-24 --frames frames --depth estimate --ply cloud.ply --depth-pano depth.png "
+        "--out pano.jpg",
+        "omma view3d cloud.ply --out view3d        # open view3d/index.html: drag to turn, wheel to zoom"}},
       {"eval",
        {"omma eval --pano pano.png --truth frames/truth.png",
         "omma eval --pano pano.png --truth frames/truth.png --rig thesis-24 --json"}},
@@ -115,7 +121,14 @@ const std::map<std::string, std::vector<const char*>>& examples_table() {
       {"render",
        {"omma render giga --rig gigaeye-44 --size 9000x2400 --out pano.tif",
         "omma render rec --rig gigaeye-44 --out out/pano_{set}.jpg --size 4000x1000",
-        "mpirun -np 4 omma render rec --size 17700x4650 --split tiles --out big.tif"}},
+        "mpirun -np 4 omma render rec --size 17700x4650 --split tiles --out big.tif",
+        "omma render room --size 9000x2400 --depth estimate --out near.tif   # near scene: depth per frame "
+        "set"}},
+      {"refocus",
+       {"omma refocus --rig thesis-24 --frames frames --focus 15 20 40 --out refocus.png --stack stack.png",
+        "omma refocus --rig gigaeye-44-skip3 --frames room --focus 1410 --combine median --projection "
+        "equirect-100 --size 1800x500 --out through_grid.png",
+        "omma refocus --rig thesis-24 --frames frames --focus-depth estimate --out all_in_focus.png"}},
       {"record",
        {"omma record --rig thesis-24 --source sim:colon --duration 3 --out rec",
         "omma record --rig thesis-24 --source sim:checker --frames 30 --fps 20 --out rec --json"}},
@@ -147,7 +160,8 @@ const std::map<std::string, std::vector<const char*>>& examples_table() {
        {"omma hw import hw_tables imported.json", "omma hw import hw_tables back.json --compare thesis-24"}},
       {"demo",
        {"omma demo", "omma demo --scene checker --out demo_checker",
-        "omma demo --rig gigaeye-44 --out giga_demo"}},
+        "omma demo --rig gigaeye-44 --out giga_demo",
+        "omma demo --rig gigaeye-44 --scene room --out giga_room   # near scene: depth, refocus, 3D"}},
       {"meta",
        {"omma meta pano.mp4                          # what 360-degree metadata the file carries",
         "ffmpeg -i pano.mp4 -c:v libx264 re.mp4 && omma meta re.mp4 --projection vr180"}},

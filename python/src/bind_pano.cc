@@ -13,6 +13,7 @@
 #include "omma/io/metadata.h"
 #include "omma/pano/maps.h"
 #include "omma/pano/quality.h"
+#include "omma/pano/refocus.h"
 #include "omma/pano/stitch.h"
 
 namespace omma::py {
@@ -70,6 +71,47 @@ void add_pano(py::module_& m) {
       "gray.\n"
       "method: nn | linear | gaussian | mrf | mrf-spherical | sad; projection: vr180 | equirect | "
       "equirect-full.");
+  m.def(
+      "refocus",
+      [](const Rig& rig, const py::object& frames, double focus_mm, const py::object& focus_depth,
+         const py::object& aperture_mm, const std::string& shape, const std::string& combine,
+         const std::string& projection, const py::object& size, bool progress) {
+        pano::RefocusOptions o;
+        o.grid = grid_from(projection, size);
+        o.focus_mm = focus_mm;
+        if (!focus_depth.is_none()) {
+          // Millimetres (inf allowed: refocus checks the values), not an image in [0, 1].
+          const auto d = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(focus_depth);
+          if (!d || d.ndim() != 2) throw py::value_error("focus_depth must be a float (H, W) array of mm");
+          o.focus_depth =
+              cv::Mat(int(d.shape(0)), int(d.shape(1)), CV_32FC1, const_cast<float*>(d.data())).clone();
+        }
+        o.aperture_mm =
+            aperture_mm.is_none() ? std::numeric_limits<double>::infinity() : aperture_mm.cast<double>();
+        o.shape = pano::parse_aperture_shape(shape);
+        o.combine = pano::parse_refocus_combine(combine);
+        o.progress = progress;
+        std::vector<py::object> keep;
+        const std::vector<cv::Mat> f = frames_from_python(frames, rig, {}, &keep);
+        pano::RefocusSummary r;
+        {
+          py::gil_scoped_release release;
+          r = pano::refocus(rig, f, o);
+        }
+        return array_from_mat(r.image);
+      },
+      py::arg("rig"), py::arg("frames"), py::arg("focus_mm") = 1000.0, py::arg("focus_depth") = py::none(),
+      py::arg("aperture_mm") = py::none(), py::arg("shape") = "gaussian", py::arg("combine") = "mean",
+      py::arg("projection") = "vr180", py::arg("size") = py::make_tuple(1080, 1080),
+      py::arg("progress") = false,
+      "Synthetic-aperture refocusing, as `omma refocus`: float32 (H, W, 3) BGR in [0, 1].\n"
+      "focus_mm: the focal sphere's distance from the rig centre (mm; inf allowed), or focus_depth: a "
+      "float32 "
+      "(H, W) depth map in mm (a focal surface).\n"
+      "aperture_mm: the synthetic aperture's radius (a camera's weight exp(-r^2/2A^2), r its distance from "
+      "the ray; None or inf = every camera alike, 0 = the nearest camera); shape: gaussian | box; combine: "
+      "mean | "
+      "median.");
   m.attr("METHODS") = [] {
     std::vector<std::string> names;
     for (auto meth : pano::all_methods()) names.push_back(pano::to_string(meth));
