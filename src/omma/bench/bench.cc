@@ -89,21 +89,28 @@ Workload omma_depth_workload(const Rig& rig, const render::MapOptions& opt,
                              const std::vector<cv::Mat>& frames) {
   render::DepthRenderOptions o;
   o.map = opt;
+  o.map.min_weight = render::kEngineDepthMinWeight;  // as the live engine (engine.cc)
   auto dr = std::make_shared<render::DepthRenderer>(rig, o);
   auto store = std::make_shared<render::FrameStore>(dr->layout());
   for (size_t c = 0; c < frames.size(); ++c) store->set(int(c), frames[c]);
-  auto fr = std::make_shared<std::vector<cv::Mat>>(frames);
+  // The estimate sees a different frame set every panorama (two random sets in turn: no result of
+  // one panorama can be reused for the next); the render's cost does not depend on the frames' content.
+  auto fr = std::make_shared<std::vector<std::vector<cv::Mat>>>(
+      std::vector<std::vector<cv::Mat>>{frames, testing::random_frames(rig, 43)});
   auto out = std::make_shared<cv::Mat>();
+  auto n = std::make_shared<size_t>(0);
   Workload w;
   w.name = "omma-" + pano::to_string(opt.method) + "-depth-" + size_tag(opt.grid);
-  w.run = [dr, store, fr, out] { dr->render(*store, *fr, *out); };
+  w.run = [dr, store, fr, out, n] { dr->render(*store, (*fr)[(*n)++ % fr->size()], *out); };
   const PanoGrid& cg = dr->sweep().coarse_grid();
   w.info = {{"bytes_per_pixel", dr->bytes_per_pixel()},
             {"taps_per_pixel", double(dr->taps()) / (double(opt.grid.width) * opt.grid.height)},
             {"compile_s", dr->compile_seconds()},
             {"depth_grid", fmt::format("{}x{}", cg.width, cg.height)},
             {"depth_candidates", dr->sweep().options().steps},
-            {"depth_every_frame", true}};
+            {"depth_every_frame", true},
+            {"depth_frames_change", true},
+            {"depth_min_weight", o.map.min_weight}};
   return w;
 }
 
@@ -427,7 +434,8 @@ nlohmann::json BenchRatio::to_json() const {
     j["memcpy_bound_over_ours"] = bound_over, j["target_within_2x_bound_met"] = bound_over <= 2;
   if (name.rfind("omma-mrf-1080x1080", 0) == 0) j["target_400fps_met"] = fps >= 400;
   if (vs_static > 0) j["vs_static"] = vs_static;
-  if (name == "omma-mrf-depth-1080x1080") j["target_25fps_met"] = fps >= 25;
+  if (name == "omma-mrf-depth-1080x1080")  // the first target (25) and the present one (56, on 2 cores)
+    j["target_25fps_met"] = fps >= 25, j["target_56fps_met"] = fps >= 56;
   // What the correction costs is the photometric workload against the same frame
   // entry without it (store); against the plain render (no frames entering at all) for reference.
   if (vs_plain > 0) j["vs_plain_render"] = vs_plain, j["vs_plain_render_rounds"] = vs_plain_rounds;

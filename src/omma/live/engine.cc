@@ -368,6 +368,7 @@ class RenderLoop {
     if (opt_.depth) {
       render::DepthRenderOptions dopt;
       dopt.map = mopt_;
+      dopt.map.min_weight = render::kEngineDepthMinWeight;
       dopt.sweep = opt_.depth_sweep;
       dopt.threads = opt_.threads;
       depth_ = std::make_unique<render::DepthRenderer>(rig_, dopt);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -660,14 +661,23 @@ DepthEstimate DepthSweep::estimate(const std::vector<cv::Mat>& frames_in, const 
   const int W = m.coarse.width, H = m.coarse.height;
   if (!previous.empty() && (previous.type() != CV_32FC1 || previous.cols != W || previous.rows != H))
     throw std::invalid_argument("depth sweep: the previous estimate is not on this sweep's coarse grid");
+  DepthEstimate out;
+  auto t = std::chrono::steady_clock::now();
+  auto lap = [&](double& ms) {
+    const auto now = std::chrono::steady_clock::now();
+    ms = std::chrono::duration<double, std::milli>(now - t).count();
+    t = now;
+  };
   // Gray levels, blurred to the coarse pitch (the guide of the edge-aware penalty), and their band-pass
   // (minus a blur band_ratio times wider: the signal that is matched).
   std::vector<cv::Mat> gray, band;
   m.gray_levels(frames_in, gray, band);
+  lap(out.timing.gray_ms);
   // Cost volume, candidate-major while it is filled: num = sum w (1 - zncc), den = sum w.
   std::vector<float> num, den;
   cv::Mat guide;
   m.pair_costs(gray, band, num, den, guide);
+  lap(out.timing.cost_ms);
   // Final cost C(u, k), pixel-major; evidence per pixel.
   std::vector<float> evidence;
   std::vector<float> C = m.final_costs(num, den, previous, evidence);
@@ -677,13 +687,14 @@ DepthEstimate DepthSweep::estimate(const std::vector<cv::Mat>& frames_in, const 
   const std::vector<float> S =
       detail::aggregate_sgm(C, W, H, o.steps, guide, o.p1, o.p2, o.edge_gray, o.paths);
   C = {};
+  lap(out.timing.aggregate_ms);
   // Winner, sub-candidate refinement, confidence; the fallback towards the prior.
   cv::Mat s_best, conf;
   std::vector<int> kbest;
   m.winners(S, evidence, s_best, conf, kbest);
-  DepthEstimate out;
   m.fallback(s_best, conf, kbest, out);
   if (upsample) m.upsample_to_output(out);
+  lap(out.timing.rest_ms);
   return out;
 }
 

@@ -132,6 +132,11 @@ struct DepthEstimate {
   // the farthest (a sweep range that excludes the scene piles the estimate up at its ends).
   double at_near = 0, at_far = 0;
   long confident = 0;  // number of those directions
+  // Wall time of estimate()'s phases, ms: gray levels and band-pass; the pair costs (remap of the
+  // layers, ZNCC); final costs and aggregation; winners, fallback and upsampling.
+  struct Timing {
+    double gray_ms = 0, cost_ms = 0, aggregate_ms = 0, rest_ms = 0;
+  } timing;
 };
 
 // The sweep's geometry for one rig, output grid and options, computed once (per camera and

@@ -17,6 +17,10 @@
 // sample (fractions in 1/128) from the frame store (compiled_map.h's row pairs: one 12-byte neighbourhood).
 // A tap whose moved position leaves its camera's image or cone is dropped and the remaining
 // weights renormalised. Per pixel, s is the coarse inverse depth interpolated bilinearly.
+// Kernel: tile by tile (compiled_map.h's kTileW x kTileH); inside a tile the taps are grouped by camera
+// (structure of arrays) so that AVX2 moves 8 taps of one camera at a time with its constants broadcast,
+// then the neighbourhoods are summed with the store prefetched a few taps ahead; a portable scalar
+// kernel elsewhere (DepthRenderOptions::simd). Both sum the same integer bilinear terms.
 //
 // Static mrf reweighting by depth is not redone per frame: the weights are those at reference_mm
 // (the reference stitcher recomputes the contributors at every pixel's own depth); measured against
@@ -34,12 +38,21 @@
 namespace omma::render {
 
 // The sweep the engine runs every frame: the reference's (pano::PlaneSweepOptions defaults) on a coarser
-// grid with fewer candidates and paths, and the temporal term (measured in depth_render_test.cc and
-// docs/results/depth_table.md: speed per frame and PSNR against `omma stitch --depth estimate`).
+// grid (2 deg) with fewer candidates (16) and paths (4), a 3x3 patch, and the temporal term. Measured
+// on the colon (4 seeds, against the truth; docs/results/depth_table.md, "Engine"): 16 candidates and
+// the 3x3 patch +0.03 dB over 32 candidates and 5x5 at 40 % of the estimate's time; 12 candidates
+// -0.2 dB, a 2.5 deg grid -0.2 dB, 3 deg -0.4 dB.
 pano::PlaneSweepOptions engine_sweep_options();
+// The engine's MapOptions::min_weight for the depth-adaptive map: taps lighter than 0.15 of a pixel
+// dropped (1.60 -> 1.33 taps per pixel at vr180 1080x1080 on thesis-24). Measured on the colon (4
+// seeds, vr180 270x270 against the truth): +0.06 dB over 0.05, the render about 20 % faster.
+inline constexpr double kEngineDepthMinWeight = 0.15;
 
 struct DepthRenderOptions {
-  MapOptions map;  // grid, method (not sad), params (observer q), min_weight
+  // grid, method (not sad), params (observer q), min_weight, and window: a band map (MapOptions::window)
+  // covers only that window of the grid, its pixel (c, r) being grid pixel (window.x + c, window.y + r),
+  // with the whole grid's taps (mrf neighbours outside the window included); empty = the whole grid.
+  MapOptions map;
   pano::PlaneSweepOptions sweep =
       engine_sweep_options();  // the per-frame estimate (its temporal_weight is used between frames)
   double reference_mm = 22;    // the surface the static weights are computed on (the colon wall)
@@ -47,6 +60,12 @@ struct DepthRenderOptions {
   // (1 = none). With sweep.temporal_weight it keeps the wall's depth from flickering with the noise.
   double temporal_alpha = 0.35;
   int threads = 0;  // 0 = all
+  // false: no pano::DepthSweep is built (its memory and compile time saved); render() then needs a
+  // fixed_inverse every call and sweep() throws std::logic_error.
+  bool estimate = true;
+  // false: the portable scalar tile kernel even where the CPU has AVX2 (the same pixels up to the order
+  // of the float sums; for tests).
+  bool simd = true;
   bool IsValid(std::string* why = nullptr) const;
 };
 
@@ -54,6 +73,7 @@ struct DepthFrameStats {
   double estimate_ms = 0, render_ms = 0;
   double mean_depth_mm = 0;  // harmonic mean over the coarse grid
   double mean_confidence = 0;
+  pano::DepthEstimate::Timing sweep;  // the estimate's phases (zero with a fixed depth)
 };
 
 class DepthRenderer {
@@ -64,13 +84,19 @@ class DepthRenderer {
   ~DepthRenderer();
 
   // One panorama: estimates the depth from `frames` (one per camera, BGR 8-bit, rig order: the same
-  // frames as in `store`) unless `fixed_inverse` is given (coarse grid, 1/mm), then renders from
-  // `store` into `out` (CV_8UC3, grid-sized).
+  // frames as in `store`) unless `fixed_inverse` is given, then renders from `store` into `out`
+  // (CV_8UC3, the window's size: map.window, or the grid). fixed_inverse: CV_32FC1 inverse depth (1/mm,
+  // 0 = infinity) on a coarse grid of the WHOLE panorama grid, W' x H' with grid.width / W' =
+  // grid.height / H' = an integer factor f, its pixel (c, r) looking at the centre of the output's f x f
+  // block (as DepthSweep's coarse grid); it is interpolated bilinearly onto every output pixel (grid x
+  // at coarse (x + 0.5) / f - 0.5, clamped; cv::resize's INTER_LINEAR); the renderer keeps a reference to
+  // it (not a copy) until the next call. `frames` is not read then (may
+  // be empty). Throws std::invalid_argument on a wrong fixed_inverse, or none with estimate = false.
   DepthFrameStats render(const FrameStore& store, const std::vector<cv::Mat>& frames, cv::Mat& out,
                          const cv::Mat& fixed_inverse = {});
 
-  // The last estimate (coarse grid): inverse depth (1/mm) and confidence; and the depth upsampled to
-  // the output grid (mm).
+  // The last estimate (coarse grid; the fixed inverse depth when one was given): inverse depth (1/mm)
+  // and confidence; and the depth interpolated onto the output (window-sized, mm, +inf where s = 0).
   const cv::Mat& coarse_inverse() const;
   const cv::Mat& coarse_confidence() const;
   cv::Mat depth() const;
@@ -78,7 +104,8 @@ class DepthRenderer {
   void reset();
 
   const StoreLayout& layout() const;
-  const pano::DepthSweep& sweep() const;
+  const pano::DepthSweep& sweep() const;  // throws std::logic_error with estimate = false
+  bool estimates() const;                 // whether a sweep was built (options.estimate)
   size_t taps() const;
   double bytes_per_pixel() const;
   double compile_seconds() const;
