@@ -14,6 +14,7 @@
 #include <tbb/global_control.h>
 
 #include "apps/command.h"
+#include "apps/depth_spec.h"
 #include "apps/split_render.h"
 #include "omma/core/frames.h"
 #include "omma/core/io.h"
@@ -27,6 +28,7 @@
 #include "omma/io/tiff_writer.h"
 #include "omma/isp/photometric.h"
 #include "omma/pano/quality.h"
+#include "omma/pano/surface.h"
 #include "omma/render/pano_render.h"
 
 namespace omma::app {
@@ -37,8 +39,9 @@ struct RenderArgs {
   std::string input, rig, size = "9000x2400", projection = "equirect-100", method = "mrf", out, sets, truth;
   std::string demosaic = "hybrid", awb = "grayworld";
   std::string split = "sets", manifest, rank0 = "works";
-  std::string incomplete = "hold";  // io::IncompletePolicy
-  double hold_max_age_ms = 0;       // 0: two frame-set periods
+  std::string incomplete = "hold";         // io::IncompletePolicy
+  std::string depth = "inf", depth_pitch;  // --depth (apps/depth_spec.h), --depth-pitch
+  double hold_max_age_ms = 0;              // 0: two frame-set periods
   int band_rows = 256, repeat = 1, bits = 12, threads = 0, window = 0;
   bool no_cache = false, stream_maps = false, json = false, raw = false, no_resume = false,
        no_photometric = false;
@@ -90,6 +93,7 @@ class RenderJob : public dist::Job {
       throw std::invalid_argument(
           fmt::format("--sets {} outside the recording's {} frame sets", a_.sets, rec_->frame_sets()));
     if (recording_) plan_frame_sets();
+    if (o_.estimate_depth) apply_depth_pitch(a_.depth_pitch, rig_, o_.sweep);
   }
   // Sets lacking cameras: --incomplete (io::plan_frame_sets; deterministic, the same on every rank).
   void plan_frame_sets() {
@@ -133,9 +137,18 @@ class RenderJob : public dist::Job {
             {"photometric", !a_.no_photometric},
             {"incomplete", io::incomplete_policy_name(incomplete_.policy)},
             {"hold_max_age_ms", a_.hold_max_age_ms},
-            {"min_weight", o_.min_weight}};
+            {"min_weight", o_.min_weight},
+            {"depth", a_.depth},
+            {"depth_pitch", a_.depth_pitch}};
   }
-  void setup() override { renderer_ = std::make_unique<render::PanoRenderer>(rig_, o_); }
+  void setup() override {
+    renderer_ = std::make_unique<render::PanoRenderer>(rig_, o_);
+    // A fixed surface (sphere:R, truth:FILE): once, for every frame set.
+    if (o_.depth && !o_.estimate_depth) {
+      const DepthChoice d = choose_depth(a_.depth, "", rig_, {}, o_.grid);
+      renderer_->set_depth(d.depth);
+    }
+  }
   // Reads and develops frame set i into the renderer (read and develop times).
   dist::ItemTimes load(int64_t i) {
     dist::ItemTimes t;
@@ -156,8 +169,16 @@ class RenderJob : public dist::Job {
       t.read = seconds(t0, t1);
       t.develop = seconds(t1, clock::now());
     }
+    if (o_.estimate_depth) {
+      t.develop += renderer_->estimate_seconds();  // the depth is estimated from the developed frames
+      depth_seconds_ += renderer_->estimate_seconds();
+      ++depth_estimates_;
+    }
     return t;
   }
+  // The depth estimates so far (this process): count and seconds.
+  int depth_estimates() const { return depth_estimates_; }
+  double depth_seconds() const { return depth_seconds_; }
   dist::ItemTimes run(int64_t i) override {
     dist::ItemTimes t = load(i);
     const auto t0 = clock::now();
@@ -186,6 +207,8 @@ class RenderJob : public dist::Job {
   int64_t first_ = 0, last_ = 0;
   std::vector<cv::Mat> gains_;  // flat-gain maps of the rig's photometric model (empty: none)
   std::unique_ptr<render::PanoRenderer> renderer_;
+  int depth_estimates_ = 0;
+  double depth_seconds_ = 0;
 };
 
 // What one run of `omma render` did, for its summary.
@@ -235,6 +258,26 @@ RenderSetup parse_render_args(const dist::Comm& comm, const RenderArgs& a) {
   }
   o.band_rows = a.band_rows;
   o.resident_maps = !a.stream_maps;
+  // --depth: inf keeps the static band maps; any surface makes the bands depth-adaptive.
+  if (a.depth != "inf") {
+    if (o.offline) throw std::invalid_argument("--depth needs an engine method (not hq)");
+    o.depth = true;
+    if (is_estimate_spec(a.depth)) {
+      o.estimate_depth = true;
+      const pano::PlaneSweepOptions base = render::giga_sweep_options();
+      const std::string text = a.depth == "estimate" ? "" : a.depth.substr(std::string("estimate:").size());
+      o.sweep = text.empty() ? base : parse_sweep(text);
+      if (!text.empty()) {  // NEAR,FAR,STEPS replace the Giga-Eye defaults; the grid stays theirs
+        o.sweep.pitch_deg = base.pitch_deg;
+        o.sweep.factor = base.factor;
+      }
+    } else if (a.depth.rfind("sphere:", 0) != 0 && a.depth.rfind("truth:", 0) != 0) {
+      throw std::invalid_argument(
+          "--depth must be inf, sphere:R, truth:FILE or estimate[:NEAR,FAR,STEPS], got '" + a.depth + "'");
+    }
+  } else if (!a.depth_pitch.empty()) {
+    throw std::invalid_argument("--depth-pitch applies to --depth estimate only");
+  }
   if (a.no_cache) o.cache_dir.clear();
   o.progress = !a.json && root;
   iso.demosaic = isp::parse_demosaic(a.demosaic);
@@ -412,6 +455,11 @@ void report_render(const dist::Comm& comm, RenderJob& job, const RenderArgs& a, 
                 {"distributed", r.dist_json},
                 {"frame_sets", job.plan() ? job.plan()->to_json() : nlohmann::json(nullptr)},
                 {"quality", q},
+                {"depth",
+                 {{"mode", a.depth},
+                  {"estimates", job.depth_estimates()},
+                  {"estimate_seconds_per_panorama",
+                   job.depth_estimates() > 0 ? job.depth_seconds() / job.depth_estimates() : 0.0}}},
                 {"seconds", total}});
   } else {
     std::cout << fmt::format(
@@ -432,6 +480,12 @@ void report_render(const dist::Comm& comm, RenderJob& job, const RenderArgs& a, 
           "  frame sets: {} of {} complete; --incomplete {}: {} completed with held frames, {} skipped; 0 "
           "holes\n",
           p->complete, p->considered, io::incomplete_policy_name(p->policy), p->held_sets, p->skipped);
+    if (a.depth != "inf")
+      std::cout << fmt::format("  depth {}: {}\n", a.depth,
+                               job.depth_estimates() > 0
+                                   ? fmt::format("estimated {} time(s), {:.2f} s each", job.depth_estimates(),
+                                                 job.depth_seconds() / job.depth_estimates())
+                                   : std::string("fixed"));
     if (!q.is_null())
       std::cout << fmt::format("  against {}: PSNR {:.2f} dB, SSIM {:.4f}\n", a.truth,
                                q["psnr_db"].get<double>(), q["ssim"].get<double>());
@@ -533,6 +587,17 @@ void add_render_command(CLI::App& root) {
                   "--incomplete hold: oldest frame held, ms (0: two frame-set periods of the recording)")
       ->capture_default_str();
   cmd->add_option("--band-rows", a.band_rows, "Rows per band map")->capture_default_str();
+  cmd->add_option(
+         "--depth", a.depth,
+         std::string("Projection surface: inf keeps the static band maps (the far field); any other\n"
+                     "renders every band depth-adaptively (each tap moved to its camera's view of the\n"
+                     "surface point), e.g. for near scenes seen by Giga-Eye's cameras 200 mm apart:\n") +
+             kDepthSpecHelp +
+             "                        (render's default: 400,inf,32 on a 1 deg grid, estimated per frame "
+             "set)")
+      ->capture_default_str();
+  cmd->add_option("--depth-pitch", a.depth_pitch,
+                  "With --depth estimate: the sweep grid's pitch, DEG or 'camera' (default 1 deg)");
   cmd->add_flag("--stream-maps", a.stream_maps,
                 "Keep one band map in memory at a time (loaded from the cache)");
   cmd->add_flag("--no-cache", a.no_cache, "Do not read or write the map cache");

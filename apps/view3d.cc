@@ -3,6 +3,8 @@
 // three.js (npm `three`, embedded in omma at build time with the live page's web files,
 // live/web_assets.h), its PLYLoader and OrbitControls, the page's script (web/view3d.js) and the cloud;
 // the PLY is copied beside it. The page reports window.omma3d = {ready, points, bounds, ...}.
+#include "apps/view3d.h"
+
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -88,19 +90,20 @@ std::string expand(std::string_view tpl, const std::map<std::string, std::string
   return out;
 }
 
-void run_view3d(const View3dArgs& a) {
-  set_json_mode(a.json);
-  if (a.max_points < 1)
-    throw std::invalid_argument(fmt::format("--max-points must be >= 1, got {}", a.max_points));
-  if (!(a.point_size > 0 && a.point_size <= 64))
-    throw std::invalid_argument(fmt::format("--point-size must be in (0, 64] pixels, got {}", a.point_size));
-  const fs::path in(a.cloud);
+}  // namespace
+
+View3dPage write_view3d_page(const fs::path& in, const fs::path& dir, long long max_points, double point_size,
+                             const std::string& title_in) {
+  if (max_points < 1)
+    throw std::invalid_argument(fmt::format("--max-points must be >= 1, got {}", max_points));
+  if (!(point_size > 0 && point_size <= 64))
+    throw std::invalid_argument(fmt::format("--point-size must be in (0, 64] pixels, got {}", point_size));
   const std::vector<uint8_t> raw = read_file(in, kMaxDataFileBytes, "point cloud");
   std::string bytes(raw.begin(), raw.end());
   const io::PointCloud cloud = io::parse_ply(bytes, "point cloud " + in.string());  // checks it
   // Every stride-th point when the file has more than --max-points (the page holds them all in memory).
   const long long n = static_cast<long long>(cloud.size());
-  const long long stride = n > a.max_points ? (n + a.max_points - 1) / a.max_points : 1;
+  const long long stride = n > max_points ? (n + max_points - 1) / max_points : 1;
   long long shown = n;
   if (stride > 1) {
     io::PointCloud sub;
@@ -112,9 +115,9 @@ void run_view3d(const View3dArgs& a) {
     shown = static_cast<long long>(sub.size());
     bytes = io::encode_ply(sub);
   }
-  const std::string title = a.title.empty() ? in.filename().string() : a.title;
+  const std::string title = title_in.empty() ? in.filename().string() : title_in;
   nlohmann::json options = {
-      {"pointSize", a.point_size}, {"pointsInFile", n}, {"stride", stride}, {"title", title}};
+      {"pointSize", point_size}, {"pointsInFile", n}, {"stride", stride}, {"title", title}};
   std::string options_js = options.dump();
   // Inside a <script>: no "</script" and no template marker can appear in the JSON.
   for (const auto& [from, to] : {std::pair<std::string, std::string>{"<", "\\u003c"}, {"@", "\\u0040"}}) {
@@ -131,25 +134,38 @@ void run_view3d(const View3dArgs& a) {
                                             {"ORBIT_CONTROLS", b64(asset("/view3d/OrbitControls.js"))},
                                             {"VIEW3D_JS", b64(asset("/view3d/view3d.js"))},
                                             {"CLOUD", b64(bytes)}});
-  const fs::path dir(a.out);
   std::error_code ec;
   fs::create_directories(dir, ec);
-  if (!fs::is_directory(dir)) throw IoError("cannot create the folder '" + a.out + "'");
-  const fs::path index = dir / "index.html";
-  write_text_atomically(index, page);
-  const fs::path copy = dir / in.filename();
-  if (!fs::exists(copy) || !fs::equivalent(copy, in))
-    write_text_atomically(copy, std::string(raw.begin(), raw.end()));
+  if (!fs::is_directory(dir)) throw IoError("cannot create the folder '" + dir.string() + "'");
+  View3dPage r;
+  r.index = dir / "index.html";
+  write_text_atomically(r.index, page);
+  r.ply = dir / in.filename();
+  if (!fs::exists(r.ply) || !fs::equivalent(r.ply, in))
+    write_text_atomically(r.ply, std::string(raw.begin(), raw.end()));
+  r.points = shown;
+  r.points_in_file = n;
+  r.stride = stride;
+  r.page_bytes = page.size();
+  return r;
+}
+
+namespace {
+
+void run_view3d(const View3dArgs& a) {
+  set_json_mode(a.json);
+  const View3dPage p = write_view3d_page(a.cloud, a.out, a.max_points, a.point_size, a.title);
   if (a.json) {
-    print_json({{"page", index.string()},
-                {"ply", copy.string()},
-                {"points", shown},
-                {"points_in_file", n},
-                {"stride", stride},
-                {"page_bytes", page.size()}});
+    print_json({{"page", p.index.string()},
+                {"ply", p.ply.string()},
+                {"points", p.points},
+                {"points_in_file", p.points_in_file},
+                {"stride", p.stride},
+                {"page_bytes", p.page_bytes}});
   } else {
-    std::cout << fmt::format("{}: {} points{} (open it in a browser; no network needed)\n", index.string(),
-                             shown, stride > 1 ? fmt::format(", one in {} of {}", stride, n) : "");
+    std::cout << fmt::format(
+        "{}: {} points{} (open it in a browser; no network needed)\n", p.index.string(), p.points,
+        p.stride > 1 ? fmt::format(", one in {} of {}", p.stride, p.points_in_file) : "");
   }
 }
 

@@ -1,9 +1,11 @@
 #include "omma/render/pano_render.h"
 
 #include <chrono>
+#include <cmath>
 #include <stdexcept>
 
 #include <fmt/format.h>
+#include <opencv2/imgproc.hpp>
 
 #include "omma/core/io.h"
 #include "omma/core/log.h"
@@ -13,13 +15,28 @@
 
 namespace omma::render {
 
+pano::PlaneSweepOptions giga_sweep_options() {
+  pano::PlaneSweepOptions o;
+  o.near_mm = 400;
+  o.pitch_deg = 1.0;
+  o.steps = 32;
+  return o;
+}
+
 bool PanoRenderOptions::IsValid(std::string* why) const {
   if (grid.width < 1 || grid.height < 1 || grid.width > 1 << 20 || grid.height > 1 << 20)
     return invalid(why,
                    fmt::format("panorama size {}x{} must be 1..1048576 per side", grid.width, grid.height));
   if (band_rows < 1) return invalid(why, "band_rows must be >= 1");
   if (!(min_weight >= 0 && min_weight < 0.5)) return invalid(why, "min_weight must be in [0, 0.5)");
-  if (!resident_maps && cache_dir.empty()) return invalid(why, "non-resident maps need a cache folder");
+  if (!resident_maps && cache_dir.empty() && !depth)
+    return invalid(why, "non-resident maps need a cache folder");
+  if (depth && offline) return invalid(why, "the offline blend (hq) has no depth-adaptive bands");
+  if (depth && method == pano::Method::kSad) return invalid(why, "depth-adaptive bands do not run sad");
+  if (estimate_depth && !depth) return invalid(why, "estimate_depth needs depth");
+  if (depth && !(reference_mm > 0 && std::isfinite(reference_mm)))
+    return invalid(why, "reference_mm must be a positive distance");
+  if (estimate_depth && !sweep.IsValid(why)) return false;
   return true;
 }
 
@@ -34,6 +51,22 @@ PanoRenderer::PanoRenderer(const Rig& rig, const PanoRenderOptions& options) : r
   if (opt_.offline) return;  // the offline blend needs no maps
   const auto t0 = std::chrono::steady_clock::now();
   const int n = bands();
+  if (opt_.depth) {
+    if (opt_.estimate_depth) sweep_ = std::make_unique<pano::DepthSweep>(rig_, opt_.grid, opt_.sweep);
+    depth_bands_.resize(n);
+    if (opt_.resident_maps) {
+      Progress progress("depth band maps", n, opt_.progress);
+      for (int i = 0; i < n; ++i) {
+        depth_bands_[i] = make_depth_band(i);
+        all_maps_ += size_t(depth_bands_[i]->bytes_per_pixel() * band(i).area());
+        progress.step();
+      }
+    }
+    largest_map_ = size_t(make_depth_band(0)->bytes_per_pixel() * band(0).area());
+    if (opt_.resident_maps) largest_map_ = std::min(largest_map_, all_maps_);
+    maps_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return;
+  }
   maps_.resize(n);
   map_files_.resize(n);
   Progress progress("band maps", n, opt_.progress);
@@ -51,6 +84,37 @@ PanoRenderer::PanoRenderer(const Rig& rig, const PanoRenderOptions& options) : r
 }
 
 PanoRenderer::~PanoRenderer() = default;
+
+std::unique_ptr<DepthRenderer> PanoRenderer::make_depth_band(int i) const {
+  DepthRenderOptions o;
+  o.map = band_options(i);
+  o.estimate = false;
+  o.reference_mm = opt_.reference_mm;
+  o.threads = opt_.render.threads;
+  return std::make_unique<DepthRenderer>(rig_, o);
+}
+
+void PanoRenderer::set_depth(const cv::Mat& depth_mm) {
+  if (!opt_.depth)
+    throw std::invalid_argument("render: set_depth needs depth-adaptive bands (options.depth)");
+  if (depth_mm.type() != CV_32FC1 || depth_mm.empty() || opt_.grid.width % depth_mm.cols != 0 ||
+      opt_.grid.height % depth_mm.rows != 0 ||
+      opt_.grid.width / depth_mm.cols != opt_.grid.height / depth_mm.rows)
+    throw std::invalid_argument(
+        fmt::format("render: the depth map ({}x{}) must be CV_32FC1 of the panorama's size {}x{} or an "
+                    "integer factor smaller",
+                    depth_mm.cols, depth_mm.rows, opt_.grid.width, opt_.grid.height));
+  cv::Mat inv(depth_mm.size(), CV_32FC1);
+  for (int r = 0; r < depth_mm.rows; ++r)
+    for (int c = 0; c < depth_mm.cols; ++c) {
+      const float d = depth_mm.at<float>(r, c);
+      if (!(d > 0))
+        throw std::invalid_argument(fmt::format("render: depth {} at ({}, {}) is not > 0 mm", d, c, r));
+      inv.at<float>(r, c) = std::isinf(d) ? 0.f : 1.f / d;
+    }
+  inverse_ = inv;
+  confidence_ = cv::Mat();
+}
 
 MapOptions PanoRenderer::band_options(int i) const {
   MapOptions mo;
@@ -78,6 +142,27 @@ void PanoRenderer::set_frames(const std::vector<cv::Mat>& frames) {
     frames_.resize(frames.size());
     for (size_t c = 0; c < frames.size(); ++c) frames_[c] = store_.camera(static_cast<int>(c));
   }
+  if (sweep_) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const pano::DepthEstimate e = sweep_->estimate(frames, {}, /*upsample=*/false);
+    // The sweep's coarse grid is the panorama's size / its factor, rounded; the depth bands take a grid
+    // an integer factor smaller exactly: the divisor of both sides nearest the sweep's factor, the
+    // estimate resampled onto it (bilinear: both grids span the whole panorama).
+    const PanoGrid& g = opt_.grid;
+    const double want = double(g.width) / e.coarse_inverse.cols;
+    int f = 1;
+    for (int d = 1; d <= std::min(g.width, g.height); ++d)
+      if (g.width % d == 0 && g.height % d == 0 && std::abs(d - want) < std::abs(f - want)) f = d;
+    const cv::Size size(g.width / f, g.height / f);
+    if (size == e.coarse_inverse.size()) {
+      inverse_ = e.coarse_inverse;
+      confidence_ = e.coarse_confidence;
+    } else {
+      cv::resize(e.coarse_inverse, inverse_, size, 0, 0, cv::INTER_LINEAR);
+      cv::resize(e.coarse_confidence, confidence_, size, 0, 0, cv::INTER_LINEAR);
+    }
+    estimate_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  }
 }
 
 const CompiledMap& PanoRenderer::band_map(int i, std::unique_ptr<CompiledMap>& scratch) const {
@@ -100,6 +185,11 @@ void PanoRenderer::render_band(int i, cv::Mat& out) {
     mo.params = opt_.params;
     mo.window = b;
     out = reference_render(rig_, mo, frames_);
+  } else if (opt_.depth) {
+    if (inverse_.empty()) throw std::logic_error("render: no depth for the depth-adaptive bands (set_depth)");
+    std::unique_ptr<DepthRenderer> scratch;
+    DepthRenderer& dr = depth_bands_[i] ? *depth_bands_[i] : *(scratch = make_depth_band(i));
+    dr.render(store_, {}, out, inverse_);
   } else {
     std::unique_ptr<CompiledMap> scratch;
     render::render(band_map(i, scratch), store_, out, opt_.render);

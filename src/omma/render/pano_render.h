@@ -13,6 +13,17 @@
 // Methods: the engine's (nn, linear, gaussian, mrf, mrf-spherical, sad: 8-bit fixed-point taps,
 // render.h) and kOffline ("hq"): render::reference_render's double-precision blend of every tap
 // (no dropped taps, no weight quantisation) per band, for a final master; about 100x slower.
+//
+// Depth (`depth = true`): near scenes seen by Giga-Eye's cameras 200 mm from its centre have
+// parallax, and one stitching distance ghosts everything else. Each band is then rendered by a
+// depth-adaptive map (depth_render.h: every tap moved to where its camera sees the pixel's surface
+// point, eq. 5.21-5.26 on X = q + D w, contributors.h) from ONE inverse-depth map of the whole
+// panorama per frame set, on a coarse grid (an integer factor f smaller than the panorama in both
+// axes): estimated in set_frames from the frames by pano::DepthSweep (`sweep`; its coarse grid is
+// the only whole-panorama state besides the store), or given by set_depth (a sphere, a true depth
+// file). Memory: the store, the coarse depth, the band depth maps (about 54 bytes per panorama pixel
+// resident, or one band's at a time with resident_maps = false, then compiled again for every
+// frame set: not cached on disk), one output band.
 #pragma once
 
 #include <filesystem>
@@ -24,11 +35,18 @@
 #include <opencv2/core.hpp>
 
 #include "omma/isp/isp.h"
+#include "omma/pano/plane_sweep.h"
 #include "omma/render/compiled_map.h"
+#include "omma/render/depth_render.h"
 #include "omma/render/frame_reader.h"
 #include "omma/render/render.h"
 
 namespace omma::render {
+
+// The sweep for Giga-Eye-scale rigs and near scenes (the depth of `omma render --depth estimate`):
+// candidates from 400 mm (twice Giga-Eye's 200 mm radius) to infinity, 32 of them, on a grid of 1 deg
+// (pano::PlaneSweepOptions documents every field; measured in docs/results/giga_depth.md).
+pano::PlaneSweepOptions giga_sweep_options();
 
 struct PanoRenderOptions {
   PanoGrid grid{Projection::kEquirect100, 9000, 2400};
@@ -41,6 +59,12 @@ struct PanoRenderOptions {
   std::filesystem::path cache_dir = default_cache_dir();  // empty: no cache (resident only)
   RenderOptions render;
   bool progress = true;  // progress bar on stderr while compiling maps
+  // Depth-adaptive bands (see the file comment; not with offline). estimate_depth: set_frames
+  // estimates the depth with `sweep` (else set_depth must be called before rendering).
+  bool depth = false;
+  bool estimate_depth = false;
+  pano::PlaneSweepOptions sweep = giga_sweep_options();
+  double reference_mm = 2000;  // the sphere the depth maps' static weights are computed on, mm
   bool IsValid(std::string* why = nullptr) const;
 };
 
@@ -65,6 +89,16 @@ class PanoRenderer {
   // Sets the developed frames (CV_8UC3 or anything FrameStore::set converts; rig order; one per
   // camera) into the store. Throws std::invalid_argument naming a camera of the wrong size.
   void set_frames(const std::vector<cv::Mat>& frames);
+  // Depth bands: the surface of the frames set next (or last): a depth map of the whole panorama, mm
+  // from q (+inf = infinity; CV_32FC1), at the panorama's size or a coarse grid an integer factor
+  // smaller in both axes (DepthSweep's convention: coarse pixel (c, r) looks at the centre of the
+  // panorama's f x f block). Throws std::invalid_argument without `depth`, or for another size.
+  void set_depth(const cv::Mat& depth_mm);
+  // The inverse depth (1/mm, coarse grid) the next render uses; its confidence when estimated (else
+  // empty); the estimate's time (s) for the frames last set.
+  const cv::Mat& coarse_inverse() const { return inverse_; }
+  const cv::Mat& coarse_confidence() const { return confidence_; }
+  double estimate_seconds() const { return estimate_seconds_; }
   // Renders the frames last set, band by band, into `sink`.
   void render(const BandSink& sink);
   // Renders band i only (rows band(i)) into `out` (CV_8UC3): the unit a distributed renderer splits
@@ -78,6 +112,7 @@ class PanoRenderer {
 
  private:
   const CompiledMap& band_map(int i, std::unique_ptr<CompiledMap>& scratch) const;
+  std::unique_ptr<DepthRenderer> make_depth_band(int i) const;
   Rig rig_;
   PanoRenderOptions opt_;
   FrameStore store_;
@@ -88,6 +123,11 @@ class PanoRenderer {
   size_t largest_map_ = 0, all_maps_ = 0;
   double maps_seconds_ = 0;
   int maps_from_cache_ = 0;
+  // Depth bands.
+  std::vector<std::unique_ptr<DepthRenderer>> depth_bands_;
+  std::unique_ptr<pano::DepthSweep> sweep_;
+  cv::Mat inverse_, confidence_;
+  double estimate_seconds_ = 0;
 };
 
 // Times of one frame set's way from a reader to a file (seconds): io::render_frame_set.
