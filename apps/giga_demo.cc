@@ -582,22 +582,14 @@ void run_giga_demo(const GigaDemoOptions& opts) {
   // the calibration of the far-field demo assume a far scene (rotation-only calibration).
   if (!sim::room_objects(*scene).empty()) {
     near_section(o, nominal, *scene, size, dir, r);
-    js["seconds"] = secs(t0);
-    write_text_atomically(dir / "report.md", md);
-    if (o.json) {
-      js["out"] = o.out;
-      print_json(js);
-    } else {
-      std::cout << md << "\ndemo written to " << fs::absolute(dir).string() << "/ (report.md)\n";
-    }
-    return;
+  } else {
+    io::RecordingReader rec(recording_section(o, nominal, truth_rig, *scene, dir, r));
+    isp::IspOptions iso;
+    iso.bits = 12;
+    iso.srgb = true;
+    const calib::CalibrationSummary cal = calibration_section(rec, nominal, truth_rig, spec, iso, dir, r);
+    panorama_section(rec, cal.rig, iso, *scene, size, dir, t0, !o.json, r);
   }
-  io::RecordingReader rec(recording_section(o, nominal, truth_rig, *scene, dir, r));
-  isp::IspOptions iso;
-  iso.bits = 12;
-  iso.srgb = true;
-  const calib::CalibrationSummary cal = calibration_section(rec, nominal, truth_rig, spec, iso, dir, r);
-  panorama_section(rec, cal.rig, iso, *scene, size, dir, t0, !o.json, r);
   js["seconds"] = secs(t0);
   write_text_atomically(dir / "report.md", md);
   if (o.json) {

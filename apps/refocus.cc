@@ -12,6 +12,7 @@
 
 #include "apps/command.h"
 #include "apps/depth_spec.h"
+#include "apps/grid_args.h"
 #include "omma/core/frames.h"
 #include "omma/core/io.h"
 #include "omma/core/parse.h"
@@ -37,23 +38,6 @@ double parse_mm(const std::string& text, const std::string& what) {
   if (!v || !(*v >= 0))
     throw std::invalid_argument(what + " must be a distance in mm or 'inf', got '" + text + "'");
   return *v;
-}
-
-PanoGrid refocus_grid(const RefocusArgs& a) {
-  PanoGrid grid;
-  grid.projection = parse_projection(a.projection);
-  if (a.size.empty()) {
-    grid.width = grid.projection == Projection::kVr180 ? 1080 : 1920;
-    grid.height = grid.projection == Projection::kVr180         ? 1080
-                  : grid.projection == Projection::kEquirect100 ? 533
-                                                                : 960;
-    if (grid.projection == Projection::kEquirect) grid.height = 512;
-  } else {
-    const Size2 s = parse_size(a.size);
-    grid.width = s.width;
-    grid.height = s.height;
-  }
-  return grid;
 }
 
 // OUT for one focus; OUT_<F>mm.EXT for each of several.
@@ -93,7 +77,7 @@ cv::Mat contact_sheet(const std::vector<cv::Mat>& images, const std::vector<std:
 void run_refocus(const RefocusArgs& a) {
   set_json_mode(a.json);
   // Everything is checked before any work.
-  const PanoGrid grid = refocus_grid(a);
+  const PanoGrid grid = grid_from_args(a.projection, a.size);
   check_image_format(a.out, grid.width, grid.height);
   pano::RefocusOptions base;
   base.grid = grid;

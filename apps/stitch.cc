@@ -14,6 +14,7 @@
 
 #include "apps/command.h"
 #include "apps/depth_spec.h"
+#include "apps/grid_args.h"
 #include "omma/core/frames.h"
 #include "omma/core/grid.h"
 #include "omma/core/io.h"
@@ -54,26 +55,6 @@ struct StitchArgs {
 
 std::filesystem::path overlay_path_for(const std::filesystem::path& boundary) {
   return boundary.parent_path() / (boundary.stem().string() + "_overlay" + boundary.extension().string());
-}
-
-// The panorama grid of --projection and --size (default: 1080x1080 vr180, 1920x512 equirect (the
-// thesis's grid, non-square pixels: no GPano, io/metadata.h), 1920x960 equirect-full, 1920x533
-// equirect-100 (square pixels)).
-PanoGrid stitch_grid(const StitchArgs& a) {
-  PanoGrid grid;
-  grid.projection = parse_projection(a.projection);
-  if (a.size.empty()) {
-    grid.width = grid.projection == Projection::kVr180 ? 1080 : 1920;
-    grid.height = grid.projection == Projection::kVr180         ? 1080
-                  : grid.projection == Projection::kEquirect    ? 512
-                  : grid.projection == Projection::kEquirect100 ? 533
-                                                                : 960;
-  } else {
-    const Size2 s = parse_size(a.size);
-    grid.width = s.width;
-    grid.height = s.height;
-  }
-  return grid;
 }
 
 // The frames to stitch: raw mosaics developed (with the rig's photometric model in place of the flat
@@ -141,7 +122,7 @@ void run_stitch(const StitchArgs& a) {
   set_json_mode(a.json);
   // Validate everything before any work or output.
   const pano::Method method = pano::parse_method(a.method);
-  const PanoGrid grid = stitch_grid(a);
+  const PanoGrid grid = grid_from_args(a.projection, a.size);
   check_image_format(a.out, grid.width, grid.height);
   if (!(a.threshold >= 0 && a.threshold <= 1)) throw std::invalid_argument("--threshold must be in [0, 1]");
   check_export_args(a);

@@ -207,6 +207,17 @@ inline void tile_inverse(const TileArgs& a, const cv::Rect& box, TileScratch& sc
   std::fill_n(sc.acc, size_t(box.area()) * 4, 0.f);
 }
 
+// The fallback taps of pixel p (render order) at inverse depth s: the cameras that see the direction
+// only at infinity, added where every one of the method's taps left its image at this depth.
+inline void add_fallbacks(const TileArgs& a, size_t p, float s, float* acc) {
+  for (const DTap* t = a.fb + a.ffirst[p]; t < a.fb + a.ffirst[p + 1]; ++t) {
+    const DCam& cam = a.cams[t->cam];
+    int off, ix, iy;
+    if (move_tap(cam, a.stride, s, t->pu, t->pv, t->wt, t->wb, off, ix, iy))
+      add_scalar(a.data + cam.base + off, ix, iy, t->weight, acc);
+  }
+}
+
 // The tile's output from the sums; the fallbacks (cameras that see the direction only at infinity)
 // only where every one of the method's taps left its image at this depth.
 inline void tile_finish(const TileArgs& a, const cv::Rect& box, size_t p0, TileScratch& sc) {
@@ -215,15 +226,7 @@ inline void tile_finish(const TileArgs& a, const cv::Rect& box, size_t p0, TileS
     for (int c = 0; c < box.width; ++c) {
       const int i = r * box.width + c;
       float* acc = sc.acc + 4 * i;
-      if (acc[3] == 0) {
-        const size_t p = p0 + i;
-        for (const DTap* t = a.fb + a.ffirst[p]; t < a.fb + a.ffirst[p + 1]; ++t) {
-          const DCam& cam = a.cams[t->cam];
-          int off, ix, iy;
-          if (move_tap(cam, a.stride, sc.s[i], t->pu, t->pv, t->wt, t->wb, off, ix, iy))
-            add_scalar(a.data + cam.base + off, ix, iy, t->weight, acc);
-        }
-      }
+      if (acc[3] == 0) add_fallbacks(a, p0 + i, sc.s[i], acc);
       if (acc[3] > 0) {
         const float inv = 1 / acc[3];
         for (int ch = 0; ch < 3; ++ch) o[3 * c + ch] = uint8_t(std::min(255.f, acc[ch] * inv + 0.5f));
@@ -403,13 +406,7 @@ __attribute__((flatten)) void depth_tile_avx2(const TileArgs& a, int tile, size_
       const int i = r * box.width + cc;
       float* acc = sc.acc + 4 * i;
       if (acc[3] == 0) {
-        const size_t p = p0 + i;
-        for (const DTap* t = a.fb + a.ffirst[p]; t < a.fb + a.ffirst[p + 1]; ++t) {
-          const DCam& cam = a.cams[t->cam];
-          int of, ix, iy;
-          if (move_tap(cam, a.stride, sc.s[i], t->pu, t->pv, t->wt, t->wb, of, ix, iy))
-            add_scalar(a.data + cam.base + of, ix, iy, t->weight, acc);
-        }
+        add_fallbacks(a, p0 + i, sc.s[i], acc);
         if (acc[3] == 0) {
           o[3 * cc + 0] = o[3 * cc + 1] = o[3 * cc + 2] = 0;
           continue;
