@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <iostream>
 #include <memory>
+#include <numeric>
 #include <optional>
 
 #include <fmt/format.h>
@@ -146,7 +147,14 @@ class RenderJob : public dist::Job {
     // A fixed surface (sphere:R, truth:FILE): once, for every frame set.
     if (o_.depth && !o_.estimate_depth) {
       const DepthChoice d = choose_depth(a_.depth, "", rig_, {}, o_.grid);
-      renderer_->set_depth(d.depth);
+      if (a_.depth.rfind("sphere:", 0) == 0 && rig_.cameras.size() > 0) {
+        // A sphere around the centre seen from it is one distance: the coarsest grid of the panorama.
+        const int g = std::gcd(o_.grid.width, o_.grid.height);
+        renderer_->set_depth(
+            cv::Mat(o_.grid.height / g, o_.grid.width / g, CV_32FC1, cv::Scalar(d.depth.at<float>(0, 0))));
+      } else {
+        renderer_->set_depth(d.depth);
+      }
     }
   }
   // Reads and develops frame set i into the renderer (read and develop times).

@@ -94,8 +94,11 @@ TEST_F(NearSim, RefocusStackAndBadInput) {
   ASSERT_EQ(j["outputs"].size(), 2u);
   EXPECT_TRUE(fs::exists(out("rf_00850mm.png")));
   EXPECT_TRUE(fs::exists(out("rf_02590mm.png")));
-  // Giga-Eye's overlaps: near 1.3-1.5 cameras per direction on a sphere 0.85-2.6 m away (measured 1.4).
-  for (const auto& o : j["outputs"]) EXPECT_GT(o["mean_cameras"].get<double>(), 1.1) << o;
+  // Giga-Eye's overlaps on spheres 0.85 and 2.59 m away: 2.04 and 2.78 cameras per direction on
+  // average (measured; 1.43 m: 2.46), fewer the nearer the sphere.
+  ASSERT_EQ(j["outputs"].size(), 2u);
+  EXPECT_GT(j["outputs"][0]["mean_cameras"].get<double>(), 1.6);
+  EXPECT_GT(j["outputs"][1]["mean_cameras"].get<double>(), j["outputs"][0]["mean_cameras"].get<double>());
   const std::string base =
       "refocus --rig gigaeye-44-skip5 --frames " + frames() + " --size 900x250 --out " + out("x.png");
   expect_error(run_omma(base + " --focus -5"), "--focus", "a negative focus");
