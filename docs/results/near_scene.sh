@@ -37,6 +37,14 @@ for depth in inf sphere:2000 "truth:$OUT/big/truth_depth.tiff" estimate; do
     2> "$OUT/big_$name.time"
 done
 
+# 3b. The full sensors: 44 x 2592x1944 (one ray per pixel), infinity and the estimate.
+"$OMMA" simulate --rig gigaeye-44 --scene room --supersample 1 --truth-supersample 1 --out "$OUT/full" \
+  --projection equirect-100 --truth-size 9000x2400 --json > "$OUT/full.sim.json"
+for depth in inf estimate; do
+  "$OMMA" render "$OUT/full" --size 9000x2400 --no-cache --depth "$depth" --out "$OUT/full_$depth.tif" \
+    --truth "$OUT/full/truth.png" --repeat 3 --json > "$OUT/full_$depth.json"
+done
+
 # 4. The same under mpirun, split by bands (every rank estimates the same depth).
 if command -v mpirun > /dev/null; then
   OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 mpirun --oversubscribe -np 2 "$OMMA" render "$OUT/big" --size 9000x2400 --no-cache --depth estimate \
