@@ -294,9 +294,11 @@ TEST(Refocus, ColonSharpestWhereInFocus) {
       std::printf("  [%.3f..%.3f) %ld px %.3f", b.from, b.to, b.pixels, b.energy_ratio);
     std::printf("\n");
     ASSERT_GT(bins[0].pixels, 2000) << focus;
-    for (size_t b = 1; b < bins.size(); ++b)
-      if (bins[b].pixels >= 2000)
+    for (size_t b = 1; b < bins.size(); ++b) {
+      if (bins[b].pixels >= 2000) {
         EXPECT_GT(bins[0].energy_ratio, 1.25 * bins[b].energy_ratio) << focus << " bin " << b;
+      }
+    }
   }
 }
 
