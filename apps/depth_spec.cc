@@ -69,15 +69,25 @@ void apply_depth_pitch(const std::string& pitch, const Rig& rig, pano::PlaneSwee
   so.factor = 0;
 }
 
-pano::PlaneSweepOptions parse_sweep(const std::string& text) { return parse_sweep_into(text, {}); }
-
 bool is_estimate_spec(const std::string& spec) {
   return spec == "estimate" || spec.rfind("estimate:", 0) == 0;
 }
 
+void check_depth_spec(const std::string& spec) {
+  if (spec != "inf" && spec.rfind("sphere:", 0) != 0 && spec.rfind("truth:", 0) != 0 &&
+      !is_estimate_spec(spec))
+    throw std::invalid_argument(
+        "--depth must be inf, sphere:R, truth:FILE or estimate[:NEAR,FAR,STEPS], got '" + spec + "'");
+}
+
+pano::PlaneSweepOptions parse_estimate_spec(const std::string& spec, pano::PlaneSweepOptions base) {
+  if (!is_estimate_spec(spec)) throw std::invalid_argument("--depth '" + spec + "' is not an estimate");
+  return parse_sweep_into(spec == "estimate" ? "" : spec.substr(std::string("estimate:").size()), base);
+}
+
 DepthChoice choose_depth(const std::string& spec, const std::string& pitch, const Rig& rig,
-                         const std::vector<cv::Mat>& frames, const PanoGrid& grid,
-                         const pano::PlaneSweepOptions* base) {
+                         const std::vector<cv::Mat>& frames, const PanoGrid& grid) {
+  check_depth_spec(spec);
   const bool estimate = is_estimate_spec(spec);
   if (!pitch.empty() && !estimate)
     throw std::invalid_argument("--depth-pitch applies to --depth estimate only, got --depth " + spec);
@@ -95,9 +105,8 @@ DepthChoice choose_depth(const std::string& spec, const std::string& pitch, cons
     d.depth = pano::read_depth(after("truth:"), grid);
     pano::check_depth_outside_dome(d.depth, rig, grid, Vec3::Zero(), "depth file " + after("truth:"));
     d.info = {{"mode", "truth"}, {"file", after("truth:")}};
-  } else if (estimate) {
-    pano::PlaneSweepOptions so = parse_sweep_into(spec == "estimate" ? "" : after("estimate:"),
-                                                  base ? *base : pano::PlaneSweepOptions{});
+  } else {  // an estimate (check_depth_spec)
+    pano::PlaneSweepOptions so = parse_estimate_spec(spec);
     apply_depth_pitch(pitch, rig, so);
     const pano::DepthSweep sweep(rig, grid, so);
     const pano::DepthEstimate e = sweep.estimate(frames);
@@ -128,9 +137,6 @@ DepthChoice choose_depth(const std::string& spec, const std::string& pitch, cons
         {"at_near", e.at_near},
         {"at_far", e.at_far},
         {"mean_confidence", cv::mean(e.confidence)[0]}};
-  } else {
-    throw std::invalid_argument(
-        "--depth must be inf, sphere:R, truth:FILE or estimate[:NEAR,FAR,STEPS], got '" + spec + "'");
   }
   return d;
 }

@@ -26,19 +26,20 @@ struct DepthChoice {
 // The --depth texts every command accepts, for --help.
 extern const char* const kDepthSpecHelp;
 
-// Parses "NEAR,FAR,STEPS" (any suffix may be left out) into sweep options; throws
-// std::invalid_argument naming --depth estimate.
-pano::PlaneSweepOptions parse_sweep(const std::string& text);
 // --depth-pitch: DEG or "camera" (pano::camera_pitch_deg); sets pitch_deg with factor 0.
 void apply_depth_pitch(const std::string& pitch, const Rig& rig, pano::PlaneSweepOptions& so);
 // Is `spec` an estimate ("estimate" or "estimate:...")?
 bool is_estimate_spec(const std::string& spec);
-// The surface of `spec` on `grid`; frames are needed for an estimate only. `base` gives the sweep's
-// other options (its near/far/steps are replaced by the spec's when it names them). Throws
-// std::invalid_argument with the option's name for anything malformed or a range that excludes the
-// scene.
+// Throws std::invalid_argument naming --depth unless `spec` is inf, sphere:..., truth:... or
+// estimate[:...] (the values after the colon are checked where they are used).
+void check_depth_spec(const std::string& spec);
+// The sweep of "estimate" or "estimate:NEAR,FAR,STEPS" (any suffix may be left out): `base` with the
+// values the spec names put in. Throws std::invalid_argument naming --depth estimate.
+pano::PlaneSweepOptions parse_estimate_spec(const std::string& spec, pano::PlaneSweepOptions base = {});
+// The surface of `spec` on `grid`; frames are needed for an estimate only (the sweep's defaults, with
+// what the spec and `pitch` name). Throws std::invalid_argument with the option's name for anything
+// malformed or a range that excludes the scene.
 DepthChoice choose_depth(const std::string& spec, const std::string& pitch, const Rig& rig,
-                         const std::vector<cv::Mat>& frames, const PanoGrid& grid,
-                         const pano::PlaneSweepOptions* base = nullptr);
+                         const std::vector<cv::Mat>& frames, const PanoGrid& grid);
 
 }  // namespace omma::app

@@ -7,7 +7,6 @@
 #include <filesystem>
 #include <iostream>
 #include <memory>
-#include <numeric>
 #include <optional>
 
 #include <fmt/format.h>
@@ -146,15 +145,10 @@ class RenderJob : public dist::Job {
     renderer_ = std::make_unique<render::PanoRenderer>(rig_, o_);
     // A fixed surface (sphere:R, truth:FILE): once, for every frame set.
     if (o_.depth && !o_.estimate_depth) {
-      const DepthChoice d = choose_depth(a_.depth, "", rig_, {}, o_.grid);
-      if (a_.depth.rfind("sphere:", 0) == 0 && rig_.cameras.size() > 0) {
-        // A sphere around the centre seen from it is one distance: the coarsest grid of the panorama.
-        const int g = std::gcd(o_.grid.width, o_.grid.height);
-        renderer_->set_depth(
-            cv::Mat(o_.grid.height / g, o_.grid.width / g, CV_32FC1, cv::Scalar(d.depth.at<float>(0, 0))));
-      } else {
-        renderer_->set_depth(d.depth);
-      }
+      // A sphere around the centre, seen from it, is one distance: the panorama's coarsest grid holds it.
+      const bool sphere = a_.depth.rfind("sphere:", 0) == 0;
+      renderer_->set_depth(
+          choose_depth(a_.depth, "", rig_, {}, sphere ? renderer_->coarsest_grid() : o_.grid).depth);
     }
   }
   // Reads and develops frame set i into the renderer (read and develop times).
@@ -267,21 +261,13 @@ RenderSetup parse_render_args(const dist::Comm& comm, const RenderArgs& a) {
   o.band_rows = a.band_rows;
   o.resident_maps = !a.stream_maps;
   // --depth: inf keeps the static band maps; any surface makes the bands depth-adaptive.
+  check_depth_spec(a.depth);
   if (a.depth != "inf") {
     if (o.offline) throw std::invalid_argument("--depth needs an engine method (not hq)");
     o.depth = true;
-    if (is_estimate_spec(a.depth)) {
+    if (is_estimate_spec(a.depth)) {  // NEAR,FAR,STEPS replace the Giga-Eye defaults
       o.estimate_depth = true;
-      const pano::PlaneSweepOptions base = render::giga_sweep_options();
-      const std::string text = a.depth == "estimate" ? "" : a.depth.substr(std::string("estimate:").size());
-      o.sweep = text.empty() ? base : parse_sweep(text);
-      if (!text.empty()) {  // NEAR,FAR,STEPS replace the Giga-Eye defaults; the grid stays theirs
-        o.sweep.pitch_deg = base.pitch_deg;
-        o.sweep.factor = base.factor;
-      }
-    } else if (a.depth.rfind("sphere:", 0) != 0 && a.depth.rfind("truth:", 0) != 0) {
-      throw std::invalid_argument(
-          "--depth must be inf, sphere:R, truth:FILE or estimate[:NEAR,FAR,STEPS], got '" + a.depth + "'");
+      o.sweep = parse_estimate_spec(a.depth, render::giga_sweep_options());
     }
   } else if (!a.depth_pitch.empty()) {
     throw std::invalid_argument("--depth-pitch applies to --depth estimate only");

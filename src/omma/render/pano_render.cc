@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <numeric>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -58,12 +59,14 @@ PanoRenderer::PanoRenderer(const Rig& rig, const PanoRenderOptions& options) : r
       Progress progress("depth band maps", n, opt_.progress);
       for (int i = 0; i < n; ++i) {
         depth_bands_[i] = make_depth_band(i);
-        all_maps_ += size_t(depth_bands_[i]->bytes_per_pixel() * band(i).area());
+        const size_t bytes = size_t(depth_bands_[i]->bytes_per_pixel() * band(i).area());
+        all_maps_ += bytes;
+        largest_map_ = std::max(largest_map_, bytes);
         progress.step();
       }
+    } else {  // compiled per frame set: band 0 (a full band) stands for the largest
+      largest_map_ = size_t(make_depth_band(0)->bytes_per_pixel() * band(0).area());
     }
-    largest_map_ = size_t(make_depth_band(0)->bytes_per_pixel() * band(0).area());
-    if (opt_.resident_maps) largest_map_ = std::min(largest_map_, all_maps_);
     maps_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return;
   }
@@ -114,6 +117,11 @@ void PanoRenderer::set_depth(const cv::Mat& depth_mm) {
     }
   inverse_ = inv;
   confidence_ = cv::Mat();
+}
+
+PanoGrid PanoRenderer::coarsest_grid() const {
+  const int g = std::gcd(opt_.grid.width, opt_.grid.height);
+  return PanoGrid{opt_.grid.projection, opt_.grid.width / g, opt_.grid.height / g};
 }
 
 MapOptions PanoRenderer::band_options(int i) const {

@@ -45,7 +45,7 @@ namespace omma::render {
 
 // The sweep for Giga-Eye-scale rigs and near scenes (the depth of `omma render --depth estimate`):
 // candidates from 400 mm (twice Giga-Eye's 200 mm radius) to infinity, 32 of them, on a grid of 1 deg
-// (pano::PlaneSweepOptions documents every field; measured in docs/results/giga_depth.md).
+// (pano::PlaneSweepOptions documents every field; measured in docs/results/near_scene.md).
 pano::PlaneSweepOptions giga_sweep_options();
 
 struct PanoRenderOptions {
@@ -94,6 +94,10 @@ class PanoRenderer {
   // smaller in both axes (DepthSweep's convention: coarse pixel (c, r) looks at the centre of the
   // panorama's f x f block). Throws std::invalid_argument without `depth`, or for another size.
   void set_depth(const cv::Mat& depth_mm);
+  // The coarsest grid set_depth takes: the panorama's size divided by the greatest common divisor of
+  // its sides (15 x 4 for 9000 x 2400). A sphere around the rig centre, seen from it, is one distance:
+  // set_depth(pano::sphere_depth(rig, coarsest_grid(), R)).
+  PanoGrid coarsest_grid() const;
   // The inverse depth (1/mm, coarse grid) the next render uses; its confidence when estimated (else
   // empty); the estimate's time (s) for the frames last set.
   const cv::Mat& coarse_inverse() const { return inverse_; }
