@@ -8,13 +8,13 @@
 #include <chrono>
 #include <filesystem>
 #include <iostream>
-#include <numeric>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 #include <opencv2/imgproc.hpp>
 
 #include "apps/command.h"
+#include "apps/sheet.h"
 #include "apps/view3d.h"
 #include "omma/calib/calibrate.h"
 #include "omma/calib/rig_diff.h"
@@ -189,6 +189,14 @@ calib::CalibrationSummary calibration_section(const io::RecordingReader& rec, co
   return cal;
 }
 
+// A preview of a panorama for measurement and pictures, area-averaged to the grid `small`
+// (1800 x 480 in the far-field section, the panorama's size / 5 in the near one).
+cv::Mat preview_of(const cv::Mat& full, const PanoGrid& small) {
+  cv::Mat p;
+  cv::resize(full, p, cv::Size(small.width, small.height), 0, 0, cv::INTER_AREA);
+  return p;
+}
+
 // The 21.6 MP panoramas from the recording with the calibrated rig (BigTIFF), against the truth.
 void panorama_section(const io::RecordingReader& rec, const Rig& rig, const isp::IspOptions& iso,
                       const sim::Scene& scene, const Size2& size, const fs::path& dir, clock::time_point t0,
@@ -213,8 +221,7 @@ void panorama_section(const io::RecordingReader& rec, const Rig& rig, const isp:
     render_s += io::render_frame_set(rec, s, renderer, iso, dir / fmt::format("pano_{:05d}.tif", s)).render;
   const cv::Mat pano = io::read_tiff_rows(dir / fmt::format("pano_{:05d}.tif", sets[0]));
   const PanoGrid small{Projection::kEquirect100, 1800, 480};
-  cv::Mat preview;
-  cv::resize(pano, preview, cv::Size(small.width, small.height), 0, 0, cv::INTER_AREA);
+  const cv::Mat preview = preview_of(pano, small);
   write_image(dir / "pano_preview.jpg", preview);
   const cv::Mat truth = sim::render_truth(scene, small, {}, 3);
   write_image(dir / "truth_preview.jpg", truth);
@@ -236,41 +243,18 @@ void panorama_section(const io::RecordingReader& rec, const Rig& rig, const isp:
 
 // ---- Near scenes: parallax at Giga-Eye's scale, refocusing, 3D ------------------------------------
 
-// The previews every figure of the near section is measured on: the panorama's size / 5 (1800 x 480
-// for 9000 x 2400), area-averaged from the full render.
-cv::Mat preview_of(const cv::Mat& full, const PanoGrid& small) {
-  cv::Mat p;
-  cv::resize(full, p, cv::Size(small.width, small.height), 0, 0, cv::INTER_AREA);
-  return p;
-}
-
-// A labelled crop of each image around `centre` (full-size pixels), side by side, 2 per row.
+// A crop of each image around `centre` (full-size pixels), all the same size, labelled, 2 per row.
 cv::Mat crops(const std::vector<cv::Mat>& images, const std::vector<std::string>& labels, const Vec2& centre,
               cv::Size size) {
-  std::vector<cv::Mat> tiles;
-  for (size_t i = 0; i < images.size(); ++i) {
-    const cv::Rect full(0, 0, images[i].cols, images[i].rows);
+  std::vector<cv::Mat> cut;
+  for (const cv::Mat& image : images) {
+    const cv::Rect full(0, 0, image.cols, image.rows);
     cv::Rect r(int(centre.x()) - size.width / 2, int(centre.y()) - size.height / 2, size.width, size.height);
     r.x = std::clamp(r.x, 0, full.width - r.width);
     r.y = std::clamp(r.y, 0, full.height - r.height);
-    cv::Mat t = images[i](r & full).clone();
-    cv::copyMakeBorder(t, t, 30, 4, 4, 4, cv::BORDER_CONSTANT, cv::Scalar::all(255));
-    cv::putText(t, labels[i], cv::Point(8, 22), cv::FONT_HERSHEY_SIMPLEX, 0.7, cv::Scalar::all(0), 2,
-                cv::LINE_AA);
-    tiles.push_back(t);
+    cut.push_back(image(r & full));
   }
-  std::vector<cv::Mat> rows;
-  for (size_t i = 0; i < tiles.size(); i += 2) {
-    cv::Mat row = tiles[i];
-    if (i + 1 < tiles.size())
-      cv::hconcat(tiles[i], tiles[i + 1], row);
-    else
-      cv::hconcat(tiles[i], cv::Mat(tiles[i].size(), tiles[i].type(), cv::Scalar::all(255)), row);
-    rows.push_back(row);
-  }
-  cv::Mat out;
-  cv::vconcat(rows, out);
-  return out;
+  return labelled_sheet(cut, labels, 2);
 }
 
 // The rig's view of a room object: the direction of its centre.
@@ -338,8 +322,7 @@ void near_section(const GigaDemoOptions& o, const Rig& rig, const sim::Scene& sc
   add("infinity", inf_full);
   size_t best = 0;
   for (double radius : {1000.0, 2000.0, 4000.0}) {
-    const int g = std::gcd(full.width, full.height);  // a sphere: one value on the coarsest grid
-    deep.set_depth(cv::Mat(full.height / g, full.width / g, CV_32FC1, cv::Scalar(radius)));
+    deep.set_depth(pano::sphere_depth(rig, deep.coarsest_grid(), radius));  // one distance
     add(fmt::format("sphere {:.0f} m", radius / 1000), deep.render_image());
     if (rows.back().psnr > rows[best].psnr || best == 0) best = rows.size() - 1;
   }
@@ -520,20 +503,7 @@ void near_section(const GigaDemoOptions& o, const Rig& rig, const sim::Scene& sc
     ro.aperture_mm = std::numeric_limits<double>::infinity();
     ro.combine = pano::RefocusCombine::kMean;
   }
-  // The stack as one picture.
-  {
-    std::vector<cv::Mat> tiles;
-    for (size_t i = 0; i < stack.size(); ++i) {
-      cv::Mat tile = stack[i].clone();
-      cv::copyMakeBorder(tile, tile, 30, 4, 4, 4, cv::BORDER_CONSTANT, cv::Scalar::all(255));
-      cv::putText(tile, labels[i], cv::Point(8, 22), cv::FONT_HERSHEY_SIMPLEX, 0.7, cv::Scalar::all(0), 2,
-                  cv::LINE_AA);
-      tiles.push_back(tile);
-    }
-    cv::Mat sheet;
-    cv::vconcat(tiles, sheet);
-    write_image(dir / "near_refocus_stack.jpg", sheet);
-  }
+  write_image(dir / "near_refocus_stack.jpg", labelled_sheet(stack, labels, 1));  // the stack as one picture
   md += fmt::format("\n![refocus stack](near_refocus_stack.jpg)\n\nRefocusing: {:.1f} s.\n\n", secs(t));
 
   // 3D: the estimated depth as a point cloud and a depth panorama.

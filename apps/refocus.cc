@@ -8,11 +8,11 @@
 #include <stdexcept>
 
 #include <fmt/format.h>
-#include <opencv2/imgproc.hpp>
 
 #include "apps/command.h"
 #include "apps/depth_spec.h"
 #include "apps/grid_args.h"
+#include "apps/sheet.h"
 #include "omma/core/frames.h"
 #include "omma/core/io.h"
 #include "omma/core/parse.h"
@@ -45,33 +45,6 @@ fs::path output_for(const fs::path& out, double focus_mm, bool several) {
   if (!several) return out;
   const std::string tag = std::isinf(focus_mm) ? "inf" : fmt::format("{:05.0f}mm", focus_mm);
   return out.parent_path() / (out.stem().string() + "_" + tag + out.extension().string());
-}
-
-// The focal stack side by side (each scaled to at most 480 px wide), labelled with its focus.
-cv::Mat contact_sheet(const std::vector<cv::Mat>& images, const std::vector<std::string>& labels) {
-  std::vector<cv::Mat> tiles;
-  for (size_t i = 0; i < images.size(); ++i) {
-    cv::Mat t;
-    const double s = std::min(1.0, 480.0 / images[i].cols);
-    cv::resize(images[i], t, cv::Size(), s, s, cv::INTER_AREA);
-    cv::copyMakeBorder(t, t, 28, 4, 4, 4, cv::BORDER_CONSTANT, cv::Scalar::all(255));
-    cv::putText(t, labels[i], cv::Point(8, 20), cv::FONT_HERSHEY_SIMPLEX, 0.6, cv::Scalar::all(0), 1,
-                cv::LINE_AA);
-    tiles.push_back(t);
-  }
-  const int cols = std::min<int>(4, int(tiles.size()));
-  std::vector<cv::Mat> rows;
-  for (size_t i = 0; i < tiles.size(); i += cols) {
-    std::vector<cv::Mat> row(tiles.begin() + i, tiles.begin() + std::min(tiles.size(), i + cols));
-    while (int(row.size()) < cols)
-      row.push_back(cv::Mat(tiles[0].size(), tiles[0].type(), cv::Scalar::all(255)));
-    cv::Mat r;
-    cv::hconcat(row, r);
-    rows.push_back(r);
-  }
-  cv::Mat sheet;
-  cv::vconcat(rows, sheet);
-  return sheet;
 }
 
 void run_refocus(const RefocusArgs& a) {
@@ -141,7 +114,7 @@ void run_refocus(const RefocusArgs& a) {
   }
   js["outputs"] = outputs;
   if (!a.stack.empty()) {
-    write_image(a.stack, contact_sheet(stack, labels));
+    write_image(a.stack, labelled_sheet(stack, labels, 4, 480));  // 4 per row
     js["stack"] = a.stack;
   }
   if (a.json) print_json(js);
